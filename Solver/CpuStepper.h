@@ -1,0 +1,58 @@
+// The CPU backends: Serial is the reference; OpenMP runs the very same per-particle functions
+// with the loops split over threads. Nothing is summed across particles inside a step, so the two
+// are bit-identical by construction.
+#pragma once
+
+#include "Equations.h"
+#include "Stepper.h"
+
+#include <vector>
+
+namespace pbf
+{
+
+template <class Real>
+class CpuStepper final : public Stepper
+{
+public:
+  CpuStepper(bool parallel, const Parameters& parameters, const ParticleBatch& initial);
+
+  void step() override;
+  void append(const ParticleBatch& batch) override;
+
+  std::size_t size() const override { return x_.size(); }
+  Backend backend() const override { return parallel_ ? Backend::OpenMP : Backend::Serial; }
+  Precision precision() const override;
+  std::string description() const override;
+
+  void read(Snapshot<float>& out) const override { copyOut(out); }
+  void read(Snapshot<double>& out) const override { copyOut(out); }
+
+  Statistics statistics() const override;
+
+private:
+  template <class Out>
+  void copyOut(Snapshot<Out>& out) const;
+  template <class Stage>
+  void forEachParticle(Stage&& stage);
+  FluidView<Real> view();
+  void sortByCell();             // keys from p_, counting sort, gather every array
+  void evaluateDensityAtRest(); // density and lambda of the current positions, nothing moves
+
+  bool parallel_;
+  Parameters parameters_;
+  Coefficients<Real> coefficients_;
+  GridGeometry<Real> geometry_;
+
+  std::vector<Vec3<Real>> x_, p_, v_, scratch_, omega_;
+  std::vector<Real> density_, lambda_;
+  std::vector<std::int64_t> id_;
+  std::vector<CellKey> keys_;
+  std::vector<std::uint32_t> cellOffsets_, order_, cursor_;
+  // Gather targets, kept to avoid allocating every step.
+  std::vector<Vec3<Real>> gatherVec_;
+  std::vector<std::int64_t> gatherId_;
+  std::vector<CellKey> gatherKey_;
+};
+
+} // namespace pbf

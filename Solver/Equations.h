@@ -1,0 +1,221 @@
+// The equations of Position Based Fluids (Macklin & Mueller 2013), one function per particle and
+// stage, written once for every backend: the CPU loops and the CUDA kernels call exactly these.
+// Equation numbers refer to the paper. Particles are in cell-sorted order; i and j index it.
+#pragma once
+
+#include "Grid.h"
+#include "HostDevice.h"
+#include "Kernels.h"
+#include "Parameters.h"
+#include "Vec3.h"
+
+#include <cstdint>
+
+namespace pbf
+{
+
+// Parameters in the precision of the backend, with the derived constants computed once.
+template <class Real>
+struct Coefficients
+{
+  Kernels<Real> kernels;
+  Real mass;                // m, calibrated so the initial lattice reads rho_0
+  Real inverseRestDensity;  // 1 / rho_0
+  Real massOverRho0;        // m / rho_0: scales the constraint gradient (eq. 8)
+  Real relaxation;          // epsilon (eq. 11) times the bulk denominator
+  Real sCorrK, sCorrN;      // k (eq. 13) in units of lambda: k / bulk denominator
+  Real inverseWDeltaQ;      // 1 / W(delta_q) (eq. 13)
+  Real xsphC;
+  Real vorticityEpsilon;
+  Real dt;
+  Vec3<Real> gravity;
+  Vec3<Real> boxMin, boxMax;
+  bool unilateral;
+
+  static Coefficients make(const Parameters& p)
+  {
+    const double h = p.smoothingLength();
+    const LatticeCalibration lattice = calibrateLattice(p);
+    const double m = lattice.mass;
+    Coefficients c;
+    c.kernels = Kernels<Real>::make(h);
+    c.mass = static_cast<Real>(m);
+    c.inverseRestDensity = static_cast<Real>(1.0 / p.restDensity);
+    c.massOverRho0 = static_cast<Real>(m / p.restDensity);
+    c.relaxation = static_cast<Real>(p.relaxation * lattice.gradientSum);
+    c.sCorrK = static_cast<Real>(p.sCorrK / lattice.gradientSum);
+    c.sCorrN = static_cast<Real>(p.sCorrN);
+    const auto k64 = Kernels<double>::make(h);
+    const double dq = p.sCorrDeltaQ * h;
+    c.inverseWDeltaQ = static_cast<Real>(1.0 / k64.poly6(dq * dq));
+    c.xsphC = static_cast<Real>(p.xsphC);
+    c.vorticityEpsilon = static_cast<Real>(p.vorticityEpsilon);
+    c.dt = static_cast<Real>(p.timeStep);
+    c.gravity = Vec3<Real>::from(p.gravity);
+    c.boxMin = Vec3<Real>::from(p.domain.min);
+    c.boxMax = Vec3<Real>::from(p.domain.max);
+    c.unilateral = p.unilateral;
+    return c;
+  }
+};
+
+// The particle arrays one stage reads and writes, as raw pointers so the same view works on host
+// and device memory.
+template <class Real>
+struct FluidView
+{
+  const Vec3<Real>* x; // positions at the start of the step
+  Vec3<Real>* p;       // predicted positions x*_i, corrected by the solver
+  Vec3<Real>* v;
+  Real* density;
+  Real* lambda;
+  Vec3<Real>* scratch; // delta p_i during the solve, then the XSPH velocity
+  Vec3<Real>* omega;   // vorticity
+  GridView<Real> grid;
+  Coefficients<Real> c;
+};
+
+// Collision with the domain box: project the particle back inside (the paper's simple response).
+template <class Real>
+PBF_HD PBF_INLINE Vec3<Real> collideWithBox(Vec3<Real> q, const Coefficients<Real>& c)
+{
+  q.x = q.x < c.boxMin.x ? c.boxMin.x : (q.x > c.boxMax.x ? c.boxMax.x : q.x);
+  q.y = q.y < c.boxMin.y ? c.boxMin.y : (q.y > c.boxMax.y ? c.boxMax.y : q.y);
+  q.z = q.z < c.boxMin.z ? c.boxMin.z : (q.z > c.boxMax.z ? c.boxMax.z : q.z);
+  return q;
+}
+
+// Algorithm 1, lines 1-4: apply gravity, predict x*_i = x_i + dt v_i.
+template <class Real>
+PBF_HD PBF_INLINE void predictPosition(std::uint32_t i, const FluidView<Real>& f)
+{
+  const Vec3<Real> v = f.v[i] + f.c.gravity * f.c.dt;
+  f.v[i] = v;
+  f.p[i] = collideWithBox(f.x[i] + v * f.c.dt, f.c);
+}
+
+// Eq. 2 (poly6 density), eq. 1 (C_i = rho_i / rho_0 - 1), eq. 8 (spiky constraint gradients) and
+// eq. 11 (lambda_i with relaxation epsilon), in one pass over the neighbours.
+template <class Real>
+PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real>& f)
+{
+  const Vec3<Real> pi = f.p[i];
+  Real rho = Real(0);
+  Vec3<Real> gradI{ Real(0), Real(0), Real(0) }; // grad_{p_i} C_i
+  Real sumGradJ2 = Real(0);                      // sum_j |grad_{p_j} C_i|^2
+  forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
+    const Vec3<Real> r = pi - f.p[j];
+    const Real r2 = dot(r, r);
+    if (r2 < f.c.kernels.h2)
+    {
+      rho += f.c.kernels.poly6(r2);
+      const Vec3<Real> g = f.c.kernels.spikyGradient(r, r2) * f.c.massOverRho0;
+      gradI += g;
+      sumGradJ2 += dot(g, g);
+    }
+  });
+  rho *= f.c.mass;
+  Real C = rho * f.c.inverseRestDensity - Real(1);
+  if (f.c.unilateral && C < Real(0))
+  {
+    C = Real(0);
+  }
+  f.density[i] = rho;
+  f.lambda[i] = -C / (sumGradJ2 + dot(gradI, gradI) + f.c.relaxation);
+}
+
+// Eq. 13 (s_corr, the artificial pressure against clustering) and eq. 14 (delta p_i).
+template <class Real>
+PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real>& f)
+{
+  const Vec3<Real> pi = f.p[i];
+  const Real lambdaI = f.lambda[i];
+  Vec3<Real> delta{ Real(0), Real(0), Real(0) };
+  forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
+    const Vec3<Real> r = pi - f.p[j];
+    const Real r2 = dot(r, r);
+    if (r2 < f.c.kernels.h2 && j != i)
+    {
+      const Real ratio = f.c.kernels.poly6(r2) * f.c.inverseWDeltaQ;
+      const Real sCorr = -f.c.sCorrK * power(ratio, f.c.sCorrN);
+      delta += f.c.kernels.spikyGradient(r, r2) * (lambdaI + f.lambda[j] + sCorr);
+    }
+  });
+  f.scratch[i] = delta * f.c.massOverRho0;
+}
+
+// Algorithm 1, lines 17-19: apply delta p_i and resolve collisions (Jacobi update).
+template <class Real>
+PBF_HD PBF_INLINE void applyCorrection(std::uint32_t i, const FluidView<Real>& f)
+{
+  f.p[i] = collideWithBox(f.p[i] + f.scratch[i], f.c);
+}
+
+// Algorithm 1, line 21: v_i = (x*_i - x_i) / dt.
+template <class Real>
+PBF_HD PBF_INLINE void updateVelocity(std::uint32_t i, const FluidView<Real>& f)
+{
+  f.v[i] = (f.p[i] - f.x[i]) * (Real(1) / f.c.dt);
+}
+
+// Eq. 15 (vorticity omega_i) and eq. 17 (XSPH viscosity) from the same neighbour pass. Both sums
+// carry the SPH volume m / rho_j, so omega is a true curl in 1/s and c is a dimensionless blend.
+template <class Real>
+PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real>& f)
+{
+  const Vec3<Real> pi = f.p[i];
+  const Vec3<Real> vi = f.v[i];
+  Vec3<Real> omega{ Real(0), Real(0), Real(0) };
+  Vec3<Real> smoothing{ Real(0), Real(0), Real(0) };
+  forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
+    const Vec3<Real> r = pi - f.p[j];
+    const Real r2 = dot(r, r);
+    if (r2 < f.c.kernels.h2 && j != i)
+    {
+      const Real volume = f.c.mass / f.density[j];
+      const Vec3<Real> vij = f.v[j] - vi;
+      omega += cross(f.c.kernels.spikyGradient(r, r2), vij) * volume;
+      smoothing += vij * (volume * f.c.kernels.poly6(r2));
+    }
+  });
+  f.omega[i] = omega;
+  f.scratch[i] = vi + smoothing * f.c.xsphC;
+}
+
+// Eq. 16: f_i = epsilon (N x omega_i), N = eta / |eta|, eta = grad |omega|_i (SPH difference
+// gradient, zero in uniform rotation). Applied to the XSPH velocity as an acceleration. Where
+// |eta| h is negligible against |omega| the direction N is noise, and the force is dropped.
+template <class Real>
+PBF_HD PBF_INLINE void vorticityConfinement(std::uint32_t i, const FluidView<Real>& f)
+{
+  const Vec3<Real> pi = f.p[i];
+  const Vec3<Real> omegaI = f.omega[i];
+  const Real magI = length(omegaI);
+  Vec3<Real> eta{ Real(0), Real(0), Real(0) };
+  forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
+    const Vec3<Real> r = pi - f.p[j];
+    const Real r2 = dot(r, r);
+    if (r2 < f.c.kernels.h2 && j != i)
+    {
+      const Real volume = f.c.mass / f.density[j];
+      eta += f.c.kernels.spikyGradient(r, r2) * (volume * (length(f.omega[j]) - magI));
+    }
+  });
+  Vec3<Real> v = f.scratch[i];
+  const Real etaLength = length(eta);
+  if (etaLength * f.c.kernels.h > Real(1e-4) * magI && etaLength > Real(0))
+  {
+    const Vec3<Real> N = eta * (Real(1) / etaLength);
+    v += cross(N, omegaI) * (f.c.vorticityEpsilon * f.c.dt);
+  }
+  f.v[i] = v;
+}
+
+// Algorithm 1, line 23: x_i = x*_i. The step's start positions become the corrected ones.
+template <class Real>
+PBF_HD PBF_INLINE void commitPosition(std::uint32_t i, const FluidView<Real>& f, Vec3<Real>* x)
+{
+  x[i] = f.p[i];
+}
+
+} // namespace pbf

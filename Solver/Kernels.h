@@ -1,0 +1,57 @@
+// SPH smoothing kernels of Mueller et al. 2003 as used by Macklin & Mueller 2013:
+// poly6 for density (eq. 2) and the spiky gradient for constraint gradients (eq. 8).
+#pragma once
+
+#include <cmath>
+
+#include "HostDevice.h"
+#include "Math.h"
+#include "Vec3.h"
+
+namespace pbf
+{
+
+template <class Real>
+struct Kernels
+{
+  Real h;
+  Real h2;
+  Real poly6Scale;      // 315 / (64 pi h^9)
+  Real spikyGradScale;  // -45 / (pi h^6)
+
+  static Kernels make(double hIn)
+  {
+    const double pi = 3.14159265358979323846;
+    Kernels k;
+    k.h = static_cast<Real>(hIn);
+    k.h2 = static_cast<Real>(hIn * hIn);
+    k.poly6Scale = static_cast<Real>(315.0 / (64.0 * pi * std::pow(hIn, 9)));
+    k.spikyGradScale = static_cast<Real>(-45.0 / (pi * std::pow(hIn, 6)));
+    return k;
+  }
+
+  // W_poly6(r, h) from the squared distance: no square root on the density path.
+  PBF_HD PBF_INLINE Real poly6(Real r2) const
+  {
+    if (r2 >= h2)
+    {
+      return Real(0);
+    }
+    const Real d = h2 - r2;
+    return poly6Scale * d * d * d;
+  }
+
+  // grad_i W_spiky(p_i - p_j, h); r = p_i - p_j. Zero at r = 0, where the direction is undefined.
+  PBF_HD PBF_INLINE Vec3<Real> spikyGradient(const Vec3<Real>& r, Real r2) const
+  {
+    if (r2 >= h2 || r2 <= Real(0))
+    {
+      return { Real(0), Real(0), Real(0) };
+    }
+    const Real rl = squareRoot(r2);
+    const Real d = h - rl;
+    return r * (spikyGradScale * d * d / rl);
+  }
+};
+
+} // namespace pbf

@@ -1,0 +1,396 @@
+#include "Scene.h"
+
+#include "PresetScenes.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace pbf
+{
+namespace
+{
+
+using nlohmann::json;
+
+[[noreturn]] void reject(const std::string& path, const json& value, const std::string& rule)
+{
+  throw InvalidInput("scene " + path + " = " + value.dump() + ": " + rule);
+}
+
+void requireKeys(const json& object, const std::string& path, const std::set<std::string>& allowed,
+  const std::set<std::string>& required)
+{
+  if (!object.is_object())
+  {
+    reject(path, object, "must be an object");
+  }
+  for (const auto& item : object.items())
+  {
+    if (!allowed.count(item.key()))
+    {
+      std::string list;
+      for (const auto& key : allowed)
+      {
+        list += (list.empty() ? "" : ", ") + key;
+      }
+      reject(path + "." + item.key(), item.value(), "unknown key (allowed: " + list + ")");
+    }
+  }
+  for (const auto& key : required)
+  {
+    if (!object.contains(key))
+    {
+      throw InvalidInput("scene " + path + "." + key + " is missing");
+    }
+  }
+}
+
+double number(const json& object, const std::string& path, const std::string& key)
+{
+  const json& value = object.at(key);
+  if (!value.is_number())
+  {
+    reject(path + "." + key, value, "must be a number");
+  }
+  const double d = value.get<double>();
+  if (!std::isfinite(d))
+  {
+    reject(path + "." + key, value, "must be finite");
+  }
+  return d;
+}
+
+double positive(const json& object, const std::string& path, const std::string& key)
+{
+  const double d = number(object, path, key);
+  if (d <= 0)
+  {
+    reject(path + "." + key, object.at(key), "must be > 0");
+  }
+  return d;
+}
+
+Vec3d vector3(const json& object, const std::string& path, const std::string& key,
+  Vec3d fallback = { 0, 0, 0 })
+{
+  if (!object.contains(key))
+  {
+    return fallback;
+  }
+  const json& value = object.at(key);
+  if (!value.is_array() || value.size() != 3)
+  {
+    reject(path + "." + key, value, "must be an array of 3 numbers");
+  }
+  double c[3];
+  for (int a = 0; a < 3; ++a)
+  {
+    if (!value[a].is_number() || !std::isfinite(value[a].get<double>()))
+    {
+      reject(path + "." + key, value, "must be an array of 3 finite numbers");
+    }
+    c[a] = value[a].get<double>();
+  }
+  return { c[0], c[1], c[2] };
+}
+
+void requireOrdered(const Vec3d& lo, const Vec3d& hi, const std::string& path, const json& value)
+{
+  if (!(lo.x < hi.x && lo.y < hi.y && lo.z < hi.z))
+  {
+    reject(path + ".max", value, "must exceed min along every axis");
+  }
+}
+
+bool inside(const Vec3d& p, const Box& box)
+{
+  return p.x >= box.min.x && p.y >= box.min.y && p.z >= box.min.z && p.x <= box.max.x &&
+    p.y <= box.max.y && p.z <= box.max.z;
+}
+
+Scene parse(const json& root)
+{
+  requireKeys(root, "", { "name", "description", "domain", "fluid", "emitters" },
+    { "domain", "fluid" });
+  Scene scene;
+  if (root.contains("name"))
+  {
+    if (!root["name"].is_string())
+    {
+      reject(".name", root["name"], "must be a string");
+    }
+    scene.name = root["name"].get<std::string>();
+  }
+  if (root.contains("description"))
+  {
+    if (!root["description"].is_string())
+    {
+      reject(".description", root["description"], "must be a string");
+    }
+    scene.description = root["description"].get<std::string>();
+  }
+
+  const json& domain = root["domain"];
+  requireKeys(domain, ".domain", { "min", "max" }, { "min", "max" });
+  scene.domain.min = vector3(domain, ".domain", "min");
+  scene.domain.max = vector3(domain, ".domain", "max");
+  requireOrdered(scene.domain.min, scene.domain.max, ".domain", domain["max"]);
+
+  const json& fluid = root["fluid"];
+  if (!fluid.is_array())
+  {
+    reject(".fluid", fluid, "must be an array of regions");
+  }
+  for (std::size_t r = 0; r < fluid.size(); ++r)
+  {
+    const std::string path = ".fluid[" + std::to_string(r) + "]";
+    const json& region = fluid[r];
+    if (!region.is_object() || !region.contains("type") || !region["type"].is_string())
+    {
+      reject(path + ".type", region.is_object() && region.contains("type") ? region["type"] : json(),
+        "each fluid region needs a type, \"box\" or \"sphere\"");
+    }
+    const std::string type = region["type"].get<std::string>();
+    if (type == "box")
+    {
+      requireKeys(region, path, { "type", "min", "max", "velocity" }, { "min", "max" });
+      FluidBox box{ vector3(region, path, "min"), vector3(region, path, "max"),
+        vector3(region, path, "velocity") };
+      requireOrdered(box.min, box.max, path, region["max"]);
+      if (!inside(box.min, scene.domain) || !inside(box.max, scene.domain))
+      {
+        reject(path, region, "the box must lie inside the domain");
+      }
+      scene.boxes.push_back(box);
+    }
+    else if (type == "sphere")
+    {
+      requireKeys(region, path, { "type", "center", "radius", "velocity" }, { "center", "radius" });
+      FluidSphere sphere{ vector3(region, path, "center"), positive(region, path, "radius"),
+        vector3(region, path, "velocity") };
+      const Vec3d r{ sphere.radius, sphere.radius, sphere.radius };
+      if (!inside(sphere.center - r, scene.domain) || !inside(sphere.center + r, scene.domain))
+      {
+        reject(path, region, "the sphere must lie inside the domain");
+      }
+      scene.spheres.push_back(sphere);
+    }
+    else
+    {
+      reject(path + ".type", region["type"], "must be \"box\" or \"sphere\"");
+    }
+  }
+
+  if (root.contains("emitters"))
+  {
+    const json& emitters = root["emitters"];
+    if (!emitters.is_array())
+    {
+      reject(".emitters", emitters, "must be an array");
+    }
+    for (std::size_t e = 0; e < emitters.size(); ++e)
+    {
+      const std::string path = ".emitters[" + std::to_string(e) + "]";
+      const json& item = emitters[e];
+      requireKeys(item, path, { "center", "direction", "radius", "speed", "start", "stop" },
+        { "center", "direction", "radius", "speed", "stop" });
+      Emitter emitter;
+      emitter.center = vector3(item, path, "center");
+      emitter.direction = vector3(item, path, "direction");
+      const double norm = length(emitter.direction);
+      if (norm <= 0)
+      {
+        reject(path + ".direction", item["direction"], "must not be zero");
+      }
+      emitter.direction *= 1.0 / norm;
+      emitter.radius = positive(item, path, "radius");
+      emitter.speed = positive(item, path, "speed");
+      emitter.start = item.contains("start") ? number(item, path, "start") : 0.0;
+      emitter.stop = number(item, path, "stop");
+      if (emitter.start < 0)
+      {
+        reject(path + ".start", item["start"], "must be >= 0");
+      }
+      if (emitter.stop <= emitter.start)
+      {
+        reject(path + ".stop", item["stop"], "must be later than start");
+      }
+      const Vec3d r{ emitter.radius, emitter.radius, emitter.radius };
+      if (!inside(emitter.center - r, scene.domain) || !inside(emitter.center + r, scene.domain))
+      {
+        reject(path, item, "the nozzle must lie inside the domain");
+      }
+      scene.emitters.push_back(emitter);
+    }
+  }
+  if (scene.boxes.empty() && scene.spheres.empty() && scene.emitters.empty())
+  {
+    reject(".fluid", fluid, "the scene has no fluid region and no emitter");
+  }
+  return scene;
+}
+
+// Lattice sites min + s (i + 1/2) inside [min, max]: the fluid stays s/2 from the region's faces.
+void fillBox(const FluidBox& box, double s, ParticleBatch& out)
+{
+  const auto count = [s](double lo, double hi) {
+    return static_cast<long>(std::floor((hi - lo) / s + 1e-9));
+  };
+  const long nx = count(box.min.x, box.max.x);
+  const long ny = count(box.min.y, box.max.y);
+  const long nz = count(box.min.z, box.max.z);
+  for (long k = 0; k < nz; ++k)
+  {
+    for (long j = 0; j < ny; ++j)
+    {
+      for (long i = 0; i < nx; ++i)
+      {
+        out.position.push_back(
+          { box.min.x + s * (i + 0.5), box.min.y + s * (j + 0.5), box.min.z + s * (k + 0.5) });
+        out.velocity.push_back(box.velocity);
+      }
+    }
+  }
+}
+
+void fillSphere(const FluidSphere& sphere, double s, ParticleBatch& out)
+{
+  const long n = static_cast<long>(std::floor(sphere.radius / s));
+  for (long k = -n; k <= n; ++k)
+  {
+    for (long j = -n; j <= n; ++j)
+    {
+      for (long i = -n; i <= n; ++i)
+      {
+        const Vec3d offset{ s * i, s * j, s * k };
+        if (dot(offset, offset) <= sphere.radius * sphere.radius)
+        {
+          out.position.push_back(sphere.center + offset);
+          out.velocity.push_back(sphere.velocity);
+        }
+      }
+    }
+  }
+}
+
+} // namespace
+
+Scene parseScene(const std::string& text)
+{
+  json root;
+  try
+  {
+    root = json::parse(text);
+  }
+  catch (const json::parse_error& error)
+  {
+    throw InvalidInput(std::string("scene is not valid JSON: ") + error.what());
+  }
+  return parse(root);
+}
+
+Scene loadSceneFile(const std::string& path)
+{
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+  {
+    throw InvalidInput("scene file = \"" + path + "\": cannot be opened");
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (text.str().empty())
+  {
+    throw InvalidInput("scene file = \"" + path + "\": is empty");
+  }
+  try
+  {
+    return parseScene(text.str());
+  }
+  catch (const InvalidInput& error)
+  {
+    throw InvalidInput("scene file \"" + path + "\": " + error.what());
+  }
+}
+
+std::vector<std::string> presetNames()
+{
+  std::vector<std::string> names;
+  for (std::size_t i = 0; i < kPresetSceneCount; ++i)
+  {
+    names.emplace_back(kPresetScenes[i].name);
+  }
+  return names;
+}
+
+Scene presetScene(const std::string& name)
+{
+  std::string known;
+  for (std::size_t i = 0; i < kPresetSceneCount; ++i)
+  {
+    if (name == kPresetScenes[i].name)
+    {
+      return parseScene(kPresetScenes[i].json);
+    }
+    known += (known.empty() ? "" : ", ") + std::string(kPresetScenes[i].name);
+  }
+  throw InvalidInput("preset = \"" + name + "\": unknown (known: " + known + ")");
+}
+
+double estimateParticleCount(const Scene& scene, const Parameters& parameters)
+{
+  const double s = parameters.particleSpacing;
+  double count = 0;
+  for (const FluidBox& b : scene.boxes)
+  {
+    count += std::floor((b.max.x - b.min.x) / s + 1e-9) * std::floor((b.max.y - b.min.y) / s + 1e-9) *
+      std::floor((b.max.z - b.min.z) / s + 1e-9);
+  }
+  for (const FluidSphere& sphere : scene.spheres)
+  {
+    count += std::pow(2 * std::floor(sphere.radius / s) + 1, 3);
+  }
+  for (const Emitter& e : scene.emitters)
+  {
+    const double perLayer = std::pow(2 * std::floor(e.radius / s) + 1, 2);
+    count += perLayer * std::ceil((e.stop - e.start) * e.speed / s);
+  }
+  return count;
+}
+
+ParticleBatch fillScene(const Scene& scene, const Parameters& parameters)
+{
+  const double estimate = estimateParticleCount(scene, parameters);
+  if (!(estimate <= static_cast<double>(kMaxParticles)))
+  {
+    throw InvalidInput("particleSpacing = " + std::to_string(parameters.particleSpacing) +
+      ": scene \"" + scene.name + "\" would hold about " + std::to_string(estimate) +
+      " particles, more than the " + std::to_string(kMaxParticles) + " supported");
+  }
+  ParticleBatch batch;
+  for (const FluidBox& box : scene.boxes)
+  {
+    fillBox(box, parameters.particleSpacing, batch);
+  }
+  for (const FluidSphere& sphere : scene.spheres)
+  {
+    fillSphere(sphere, parameters.particleSpacing, batch);
+  }
+  batch.id.resize(batch.position.size());
+  for (std::size_t i = 0; i < batch.id.size(); ++i)
+  {
+    batch.id[i] = static_cast<std::int64_t>(i);
+  }
+  return batch;
+}
+
+Parameters withSceneDomain(Parameters parameters, const Scene& scene)
+{
+  parameters.domain = scene.domain;
+  return parameters;
+}
+
+} // namespace pbf

@@ -1,0 +1,73 @@
+// Where the fluid is: the domain box, fluid regions filled on a cubic lattice, and emitters.
+// How it behaves (spacing, solver, time step) is Parameters. Scenes are JSON; Data/README.md has
+// the schema, and the shipped scenes in Data/ are compiled in as presets.
+#pragma once
+
+#include "Parameters.h"
+#include "Stepper.h"
+#include "Vec3.h"
+
+#include <string>
+#include <vector>
+
+namespace pbf
+{
+
+struct FluidBox
+{
+  Vec3d min, max;
+  Vec3d velocity{ 0, 0, 0 };
+};
+
+struct FluidSphere
+{
+  Vec3d center;
+  double radius = 0;
+  Vec3d velocity{ 0, 0, 0 };
+};
+
+// A nozzle that adds a disk of particles, one lattice layer at a time, while start <= t < stop.
+struct Emitter
+{
+  Vec3d center;
+  Vec3d direction{ 1, 0, 0 }; // normalised on load
+  double radius = 0;
+  double speed = 0;
+  double start = 0;
+  double stop = 0;
+};
+
+struct Scene
+{
+  std::string name;
+  std::string description;
+  Box domain;
+  std::vector<FluidBox> boxes;
+  std::vector<FluidSphere> spheres;
+  std::vector<Emitter> emitters;
+};
+
+// Throws InvalidInput naming the key path and value ("fluid[1].radius = -2: must be > 0") for
+// malformed JSON, unknown keys, missing keys, wrong types and bad values.
+Scene parseScene(const std::string& json);
+Scene loadSceneFile(const std::string& path);
+
+// The scenes shipped in Data/, compiled in. Names are the file names without ".json".
+std::vector<std::string> presetNames();
+Scene presetScene(const std::string& name); // throws InvalidInput for an unknown name
+
+// Upper bound on particles a scene may make, initial and emitted: 32-bit indices with headroom.
+constexpr std::size_t kMaxParticles = std::size_t(1) << 31;
+
+// An upper estimate of the particles the scene makes at the parameters' spacing, emitters included,
+// computed without making them.
+double estimateParticleCount(const Scene& scene, const Parameters& parameters);
+
+// The initial particles of a scene at the parameters' spacing, ids 0..N-1. Throws InvalidInput
+// before allocating when the spacing would make more than kMaxParticles.
+ParticleBatch fillScene(const Scene& scene, const Parameters& parameters);
+
+// Parameters with the scene's domain.
+Parameters withSceneDomain(Parameters parameters, const Scene& scene);
+
+} // namespace pbf

@@ -1,0 +1,79 @@
+#include "Stepper.h"
+
+#include "CpuStepper.h"
+
+#include <stdexcept>
+
+namespace pbf
+{
+
+const char* toString(Backend backend)
+{
+  switch (backend)
+  {
+    case Backend::Serial:
+      return "Serial";
+    case Backend::OpenMP:
+      return "OpenMP";
+    case Backend::CUDA:
+      return "CUDA";
+  }
+  return "unknown";
+}
+
+const char* toString(Precision precision)
+{
+  return precision == Precision::Single ? "single" : "double";
+}
+
+#ifdef PBF_WITH_CUDA
+// Defined in CudaStepper.cu; declared here so that no CUDA header reaches the CPU build.
+std::unique_ptr<Stepper> makeCudaStepper(
+  Precision precision, const Parameters& parameters, const ParticleBatch& initial);
+bool cudaDevicePresent(std::string* why);
+#endif
+
+bool cudaAvailable(std::string* why)
+{
+#ifdef PBF_WITH_CUDA
+  return cudaDevicePresent(why);
+#else
+  if (why)
+  {
+    *why = "this build has no CUDA backend (CUDA compiler not found at configure time)";
+  }
+  return false;
+#endif
+}
+
+std::unique_ptr<Stepper> makeStepper(Backend backend, Precision precision,
+  const Parameters& parameters, const ParticleBatch& initial)
+{
+  switch (backend)
+  {
+    case Backend::Serial:
+    case Backend::OpenMP:
+    {
+      const bool parallel = backend == Backend::OpenMP;
+      if (precision == Precision::Single)
+      {
+        return std::make_unique<CpuStepper<float>>(parallel, parameters, initial);
+      }
+      return std::make_unique<CpuStepper<double>>(parallel, parameters, initial);
+    }
+    case Backend::CUDA:
+    {
+      std::string why;
+      if (!cudaAvailable(&why))
+      {
+        throw std::runtime_error("CUDA backend unavailable: " + why);
+      }
+#ifdef PBF_WITH_CUDA
+      return makeCudaStepper(precision, parameters, initial);
+#endif
+    }
+  }
+  throw std::runtime_error("unknown backend");
+}
+
+} // namespace pbf

@@ -1,0 +1,94 @@
+// The backend seam: one interface for the serial, OpenMP and CUDA steppers. A stepper owns the
+// particle state in its own memory (host or device) and advances it one solver step at a time.
+#pragma once
+
+#include "Parameters.h"
+#include "Vec3.h"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pbf
+{
+
+enum class Backend
+{
+  Serial, // the reference
+  OpenMP, // bit-identical to Serial
+  CUDA,
+};
+
+enum class Precision
+{
+  Single,
+  Double,
+};
+
+const char* toString(Backend backend);
+const char* toString(Precision precision);
+
+// Particles as the host sees them, in the stepper's current (cell-sorted) order: follow a
+// particle across steps by its id, not by its index.
+template <class Real>
+struct Snapshot
+{
+  std::vector<Vec3<Real>> position;
+  std::vector<Vec3<Real>> velocity;
+  std::vector<Real> density; // rho_i from the last constraint evaluation [kg/m^3]
+  std::vector<Real> lambda;  // lambda_i from the last constraint evaluation
+  std::vector<std::int64_t> id;
+};
+
+// New particles (emitters); ids are given by the caller so they stay unique across backends.
+struct ParticleBatch
+{
+  std::vector<Vec3d> position;
+  std::vector<Vec3d> velocity;
+  std::vector<std::int64_t> id;
+};
+
+// Measured on the current state; never feeds back into the simulation.
+struct Statistics
+{
+  std::size_t particles = 0;
+  double averageDensityError = 0; // mean of max(rho_i / rho_0 - 1, 0): compression only, since a
+  double maxDensityError = 0;     // free-surface particle lacks neighbours, not mass
+  double averageNeighbors = 0;    // neighbours within h, self excluded
+  double maxSpeed = 0;
+  double kineticEnergy = 0; // sum of m |v|^2 / 2 [J]
+  Vec3d momentum{ 0, 0, 0 }; // sum of m v
+  bool finite = true;        // no NaN or infinity in positions or velocities
+};
+
+class Stepper
+{
+public:
+  virtual ~Stepper() = default;
+
+  virtual void step() = 0; // one solver step of Parameters::timeStep
+  virtual void append(const ParticleBatch& batch) = 0;
+
+  virtual std::size_t size() const = 0;
+  virtual Backend backend() const = 0;
+  virtual Precision precision() const = 0;
+  // Human-readable: the backend and where it runs ("OpenMP, 2 threads", "CUDA, NVIDIA H200").
+  virtual std::string description() const = 0;
+
+  // Copies the state to the host; the Snapshot of the other precision is converted.
+  virtual void read(Snapshot<float>& out) const = 0;
+  virtual void read(Snapshot<double>& out) const = 0;
+
+  virtual Statistics statistics() const = 0;
+};
+
+// Throws InvalidInput for bad parameters or positions, std::runtime_error when the backend is
+// not available (no CUDA device, or built without CUDA).
+std::unique_ptr<Stepper> makeStepper(Backend backend, Precision precision,
+  const Parameters& parameters, const ParticleBatch& initial);
+
+// True when this build has the CUDA backend and a CUDA device is present.
+bool cudaAvailable(std::string* why = nullptr);
+
+} // namespace pbf

@@ -1,0 +1,147 @@
+#include "ToolOptions.h"
+
+#include <functional>
+#include <sstream>
+
+namespace pbf
+{
+namespace
+{
+
+double toNumber(const std::string& key, const std::string& text)
+{
+  std::size_t used = 0;
+  double value = 0;
+  try
+  {
+    value = std::stod(text, &used);
+  }
+  catch (const std::exception&)
+  {
+    used = 0;
+  }
+  if (used != text.size() || text.empty())
+  {
+    throw InvalidInput("--" + key + " = \"" + text + "\": not a number");
+  }
+  return value;
+}
+
+using Setter = std::function<void(ToolOptions&, const std::string&)>;
+
+std::map<std::string, std::pair<std::string, Setter>> parameterSetters()
+{
+  auto real = [](double Parameters::*field) {
+    return [field](ToolOptions& o, const std::string& v) { o.parameters.*field = toNumber("", v); };
+  };
+  return {
+    { "rest-density", { "rho_0 [kg/m^3]", real(&Parameters::restDensity) } },
+    { "spacing", { "particle spacing s [m]", real(&Parameters::particleSpacing) } },
+    { "smoothing-ratio", { "h / s", real(&Parameters::smoothingRatio) } },
+    { "iterations",
+      { "solver iterations",
+        [](ToolOptions& o, const std::string& v) {
+          o.parameters.solverIterations = static_cast<int>(toNumber("iterations", v));
+        } } },
+    { "epsilon", { "relaxation epsilon [1/h^2]", real(&Parameters::relaxation) } },
+    { "scorr-k", { "s_corr k", real(&Parameters::sCorrK) } },
+    { "scorr-n", { "s_corr n", real(&Parameters::sCorrN) } },
+    { "scorr-dq", { "s_corr delta_q / h", real(&Parameters::sCorrDeltaQ) } },
+    { "xsph", { "XSPH c", real(&Parameters::xsphC) } },
+    { "vorticity", { "vorticity epsilon [m/s]", real(&Parameters::vorticityEpsilon) } },
+    { "dt", { "time step [s]", real(&Parameters::timeStep) } },
+    { "unilateral",
+      { "0 or 1: clamp C_i at 0",
+        [](ToolOptions& o, const std::string& v) {
+          o.parameters.unilateral = toNumber("unilateral", v) != 0.0;
+        } } },
+    { "scene",
+      { "preset name or .json path",
+        [](ToolOptions& o, const std::string& v) { o.scene = v; } } },
+    { "backend",
+      { "serial | openmp | cuda",
+        [](ToolOptions& o, const std::string& v) { o.backend = parseBackend(v); } } },
+    { "precision",
+      { "single | double",
+        [](ToolOptions& o, const std::string& v) {
+          if (v != "single" && v != "double")
+          {
+            throw InvalidInput("--precision = \"" + v + "\": must be single or double");
+          }
+          o.precision = v == "single" ? Precision::Single : Precision::Double;
+        } } },
+  };
+}
+
+} // namespace
+
+Backend parseBackend(const std::string& name)
+{
+  if (name == "serial")
+  {
+    return Backend::Serial;
+  }
+  if (name == "openmp")
+  {
+    return Backend::OpenMP;
+  }
+  if (name == "cuda")
+  {
+    return Backend::CUDA;
+  }
+  throw InvalidInput("--backend = \"" + name + "\": must be serial, openmp or cuda");
+}
+
+ToolOptions parseToolOptions(
+  int argc, char** argv, const std::map<std::string, std::string>& toolKeys)
+{
+  ToolOptions options;
+  const auto setters = parameterSetters();
+  for (int a = 1; a < argc; a += 2)
+  {
+    const std::string flag = argv[a];
+    if (flag.rfind("--", 0) != 0 || a + 1 >= argc)
+    {
+      throw InvalidInput("argument \"" + flag + "\": expected --key value\n" + toolUsage(toolKeys));
+    }
+    const std::string key = flag.substr(2);
+    const std::string value = argv[a + 1];
+    if (auto it = setters.find(key); it != setters.end())
+    {
+      try
+      {
+        it->second.second(options, value);
+      }
+      catch (const InvalidInput& error)
+      {
+        throw InvalidInput("--" + key + " = \"" + value + "\": " + error.what());
+      }
+    }
+    else if (toolKeys.count(key))
+    {
+      options.extra[key] = value;
+    }
+    else
+    {
+      throw InvalidInput("unknown option --" + key + "\n" + toolUsage(toolKeys));
+    }
+  }
+  return options;
+}
+
+std::string toolUsage(const std::map<std::string, std::string>& toolKeys)
+{
+  std::ostringstream out;
+  out << "options:\n";
+  for (const auto& [key, entry] : parameterSetters())
+  {
+    out << "  --" << key << "  " << entry.first << "\n";
+  }
+  for (const auto& [key, help] : toolKeys)
+  {
+    out << "  --" << key << "  " << help << "\n";
+  }
+  return out.str();
+}
+
+} // namespace pbf

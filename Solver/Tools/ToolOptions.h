@@ -1,0 +1,30 @@
+// Command-line options shared by the solver's tools: "--key value" pairs mapped onto Parameters,
+// the backend and the precision. No VTK, no third-party parser: the GPU machine has neither.
+#pragma once
+
+#include "Parameters.h"
+#include "Stepper.h"
+
+#include <map>
+#include <string>
+
+namespace pbf
+{
+
+struct ToolOptions
+{
+  std::string scene = "dam_break"; // a preset name or a path to a .json file
+  Parameters parameters;
+  Backend backend = Backend::Serial;
+  Precision precision = Precision::Single;
+  std::map<std::string, std::string> extra; // tool-specific keys
+};
+
+// Parses argv; keys not in `toolKeys` nor a Parameters field throw InvalidInput naming them.
+ToolOptions parseToolOptions(int argc, char** argv, const std::map<std::string, std::string>& toolKeys);
+
+std::string toolUsage(const std::map<std::string, std::string>& toolKeys);
+
+Backend parseBackend(const std::string& name);
+
+} // namespace pbf
