@@ -1,0 +1,216 @@
+/**
+ * @class   vtkPBFSimulation
+ * @brief   Position Based Fluids (Macklin and Mueller 2013) as a time-aware VTK source or filter.
+ *
+ * vtkPBFSimulation runs the project's PBF solver and outputs the particles of one animation frame
+ * as a vtkPolyData: one vertex cell per particle, point arrays `density` [kg/m^3], `lambda`,
+ * `velocity` [m/s] (also the active scalars and vectors, so that views color by its magnitude)
+ * and `id` (the particle's stable id, also the GlobalIds), and field data holding every parameter
+ * that produced the frame (enough to recompute the density independently).
+ *
+ * Where the fluid is comes from a scene: a preset compiled into the solver (see Preset) or a scene
+ * JSON file (SceneFile, which wins when not empty). How the fluid behaves comes from this
+ * algorithm's properties, whatever the scene says; their defaults are pbf::Parameters' defaults.
+ *
+ * As a filter (optional input port 0, any vtkPointSet), the input's points replace the scene's
+ * fluid regions: point i becomes particle i, with the initial velocity of a 3-component point
+ * array named `velocity` when the input has one (so a frame of this algorithm can seed another),
+ * zero otherwise. The scene's emitters still run, and the scene still gives the domain box, so
+ * that one scene can be seeded with different shapes; a point farther than one ParticleSpacing
+ * outside the domain is an error naming the point. The input is read at its first time step.
+ *
+ * Time: frame k is at time k * FrameInterval, for k = 0..NumberOfFrames, and is
+ * k * SubstepsPerFrame solver steps of FrameInterval / SubstepsPerFrame from the initial state. A
+ * request is answered with the nearest frame. Any frame, asked in any order, is bit-identical to
+ * a run straight to it: the live simulation steps forward to a later frame and is rebuilt from
+ * the initial state for an earlier frame or when anything that shapes the motion changed (a
+ * physics property, the scene or its file's contents, the input, the backend or the precision;
+ * NumberOfFrames is not one of them).
+ *
+ * Parallel runs: the algorithm does not partition the fluid yet. Piece 0 (rank 0) simulates all
+ * of it and other pieces output an empty vtkPolyData; as a filter it asks its input for the whole
+ * data set in one piece.
+ *
+ * Errors (a bad scene or parameter, an empty input, a NaN coordinate, an unavailable backend) are
+ * reported with vtkErrorMacro naming the field and its value; the request then fails and the
+ * previous output is kept.
+ */
+
+#ifndef vtkPBFSimulation_h
+#define vtkPBFSimulation_h
+
+#include "PBFFiltersModule.h" // For export macro
+#include "vtkPolyDataAlgorithm.h"
+
+#include <memory> // For std::unique_ptr
+
+class PBFFILTERS_EXPORT vtkPBFSimulation : public vtkPolyDataAlgorithm
+{
+public:
+  static vtkPBFSimulation* New();
+  vtkTypeMacro(vtkPBFSimulation, vtkPolyDataAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  /**
+   * The scenes compiled into the solver; the names are those of pbf::presetScene (the files in
+   * Data/ without ".json").
+   */
+  enum PresetScenes
+  {
+    PRESET_DAM_BREAK = 0,
+    PRESET_DOUBLE_DAM_BREAK = 1,
+    PRESET_BLOB = 2,
+    PRESET_STREAM = 3
+  };
+
+  enum Backends
+  {
+    BACKEND_AUTO = 0, // CUDA when a device is present, else OpenMP, said once
+    BACKEND_CUDA = 1,
+    BACKEND_OPENMP = 2,
+    BACKEND_SERIAL = 3
+  };
+
+  enum Precisions
+  {
+    PRECISION_SINGLE = 0,
+    PRECISION_DOUBLE = 1
+  };
+
+  ///@{
+  /**
+   * The preset scene used when SceneFile is empty. Default PRESET_DAM_BREAK.
+   */
+  vtkSetClampMacro(Preset, int, PRESET_DAM_BREAK, PRESET_STREAM);
+  vtkGetMacro(Preset, int);
+  ///@}
+
+  /**
+   * The pbf::presetScene name of Preset, e.g. "dam_break".
+   */
+  const char* GetPresetName() const;
+
+  ///@{
+  /**
+   * A scene JSON file (schema in Data/README.md). Empty (the default) uses Preset.
+   */
+  vtkSetFilePathMacro(SceneFile);
+  vtkGetFilePathMacro(SceneFile);
+  ///@}
+
+  ///@{
+  /**
+   * Fluid: rest density rho_0 [kg/m^3], lattice spacing s of the initial fluid [m], and the
+   * ratio h / s of the smoothing length to the spacing.
+   */
+  vtkSetClampMacro(RestDensity, double, 1e-3, 1e6);
+  vtkGetMacro(RestDensity, double);
+  vtkSetClampMacro(ParticleSpacing, double, 1e-4, 1.0);
+  vtkGetMacro(ParticleSpacing, double);
+  vtkSetClampMacro(SmoothingRatio, double, 1.0, 4.0);
+  vtkGetMacro(SmoothingRatio, double);
+  ///@}
+
+  ///@{
+  /**
+   * Solver: constraint projections per step, epsilon of eq. 11 (relaxation), k, n and delta_q
+   * (a fraction of h) of the artificial pressure s_corr (eq. 13), c of the XSPH viscosity
+   * (eq. 17), epsilon of the vorticity confinement (eq. 16) [m/s], whether the density constraint
+   * is unilateral (C_i clamped at 0, so a free surface is not pulled together) and gravity
+   * [m/s^2]. Meanings and units are those of pbf::Parameters.
+   */
+  vtkSetClampMacro(SolverIterations, int, 1, 1000);
+  vtkGetMacro(SolverIterations, int);
+  vtkSetClampMacro(RelaxationEpsilon, double, 1e-9, 1e3);
+  vtkGetMacro(RelaxationEpsilon, double);
+  vtkSetClampMacro(SCorrK, double, 0.0, 10.0);
+  vtkGetMacro(SCorrK, double);
+  vtkSetClampMacro(SCorrN, double, 0.5, 16.0);
+  vtkGetMacro(SCorrN, double);
+  vtkSetClampMacro(SCorrDeltaQ, double, 0.01, 0.99);
+  vtkGetMacro(SCorrDeltaQ, double);
+  vtkSetClampMacro(XSPHViscosity, double, 0.0, 1.0);
+  vtkGetMacro(XSPHViscosity, double);
+  vtkSetClampMacro(VorticityEpsilon, double, 0.0, 10.0);
+  vtkGetMacro(VorticityEpsilon, double);
+  vtkSetMacro(Unilateral, bool);
+  vtkGetMacro(Unilateral, bool);
+  vtkBooleanMacro(Unilateral, bool);
+  vtkSetVector3Macro(Gravity, double);
+  vtkGetVector3Macro(Gravity, double);
+  ///@}
+
+  ///@{
+  /**
+   * Time: the interval between animation frames [s] (default 1/60), the solver steps per frame
+   * (default 4, so the solver's time step is FrameInterval / SubstepsPerFrame) and the number of
+   * frames after the initial one (default 120).
+   */
+  vtkSetClampMacro(FrameInterval, double, 1e-6, 10.0);
+  vtkGetMacro(FrameInterval, double);
+  vtkSetClampMacro(SubstepsPerFrame, int, 1, 10000);
+  vtkGetMacro(SubstepsPerFrame, int);
+  vtkSetClampMacro(NumberOfFrames, int, 0, 1000000);
+  vtkGetMacro(NumberOfFrames, int);
+  ///@}
+
+  ///@{
+  /**
+   * Where the solver runs: BACKEND_AUTO (the default) takes CUDA when pbf::cudaAvailable() and
+   * OpenMP otherwise, saying so once; BACKEND_CUDA without a device is an error naming the
+   * reason. Precision is that of the solver's state and of the output arrays.
+   */
+  vtkSetClampMacro(Backend, int, BACKEND_AUTO, BACKEND_SERIAL);
+  vtkGetMacro(Backend, int);
+  vtkSetClampMacro(Precision, int, PRECISION_SINGLE, PRECISION_DOUBLE);
+  vtkGetMacro(Precision, int);
+  ///@}
+
+protected:
+  vtkPBFSimulation();
+  ~vtkPBFSimulation() override;
+
+  int FillInputPortInformation(int port, vtkInformation* info) override;
+  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+
+  /**
+   * The frame answering a requested time: the nearest one, clamped to 0..NumberOfFrames.
+   */
+  int FrameForTime(double time) const;
+
+  int Preset;
+  char* SceneFile;
+
+  double RestDensity;
+  double ParticleSpacing;
+  double SmoothingRatio;
+
+  int SolverIterations;
+  double RelaxationEpsilon;
+  double SCorrK;
+  double SCorrN;
+  double SCorrDeltaQ;
+  double XSPHViscosity;
+  double VorticityEpsilon;
+  bool Unilateral;
+  double Gravity[3];
+
+  double FrameInterval;
+  int SubstepsPerFrame;
+  int NumberOfFrames;
+
+  int Backend;
+  int Precision;
+
+private:
+  vtkPBFSimulation(const vtkPBFSimulation&) = delete;
+  void operator=(const vtkPBFSimulation&) = delete;
+
+  // The live simulation and the last good output; solver types stay in the .cxx.
+  class vtkInternals;
+  std::unique_ptr<vtkInternals> Internals;
+};
+
+#endif
