@@ -1,5 +1,6 @@
 #include "CpuStepper.h"
 
+#include "CellSort.h"
 #include "ParticleChecks.h"
 
 #include <algorithm>
@@ -81,23 +82,8 @@ void CpuStepper<Real>::sortByCell()
   const std::size_t n = x_.size();
   forEachParticle([&](std::uint32_t i) { keys_[i] = geometry_.keyOf(p_[i]); });
 
-  // Counting sort: stable, so equal keys keep their order and the permutation is unique. It is
   // O(N + cells) and serial in both CPU backends; the per-particle stages dominate.
-  std::fill(cellOffsets_.begin(), cellOffsets_.end(), 0u);
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    ++cellOffsets_[keys_[i] + 1];
-  }
-  for (std::size_t c = 1; c < cellOffsets_.size(); ++c)
-  {
-    cellOffsets_[c] += cellOffsets_[c - 1];
-  }
-  order_.resize(n);
-  cursor_.assign(cellOffsets_.begin(), cellOffsets_.end() - 1);
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    order_[cursor_[keys_[i]]++] = static_cast<std::uint32_t>(i);
-  }
+  countingSortByCell(keys_, cellOffsets_, order_, cursor_);
 
   auto gather = [&](auto& array, auto& tmp) {
     tmp.resize(n);

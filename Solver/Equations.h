@@ -31,6 +31,7 @@ struct Coefficients
   Vec3<Real> gravity;
   Vec3<Real> boxMin, boxMax;
   bool unilateral;
+  bool mirrorWalls;
 
   static Coefficients make(const Parameters& p)
   {
@@ -55,13 +56,17 @@ struct Coefficients
     c.boxMin = Vec3<Real>::from(p.domain.min);
     c.boxMax = Vec3<Real>::from(p.domain.max);
     c.unilateral = p.unilateral;
+    c.mirrorWalls = p.mirrorWalls;
     return c;
   }
 };
 
 // The particle arrays one stage reads and writes, as raw pointers so the same view works on host
 // and device memory.
-template <class Real>
+// Neighbors is what forEachNeighbor walks: GridView<Real> (the 27 cells) on every CPU backend;
+// the CUDA backend may pass a view that visits a subset of the same candidates in the same
+// order, skipping only particles that cannot be within h (Solver/Cuda/NeighborMasks.h).
+template <class Real, class Neighbors = GridView<Real>>
 struct FluidView
 {
   const Vec3<Real>* x; // positions at the start of the step
@@ -71,7 +76,7 @@ struct FluidView
   Real* lambda;
   Vec3<Real>* scratch; // delta p_i during the solve, then the XSPH velocity
   Vec3<Real>* omega;   // vorticity
-  GridView<Real> grid;
+  Neighbors grid;
   Coefficients<Real> c;
 };
 
@@ -85,9 +90,67 @@ PBF_HD PBF_INLINE Vec3<Real> collideWithBox(Vec3<Real> q, const Coefficients<Rea
   return q;
 }
 
-// Algorithm 1, lines 1-4: apply gravity, predict x*_i = x_i + dt v_i.
+// Mirror walls: a particle within h of a domain wall also sees the reflections of its neighbours
+// in that wall (and in both walls of an edge or corner), as if resting fluid continued beyond it.
+// On the initial lattice, whose outer sites sit s/2 inside the walls, the images are exactly the
+// lattice continued, so every particle reads rho_0 at rest; without them the unilateral
+// constraint lets the fluid pack against the walls (a resting 12^3 block sank by a fifth). Images
+// carry their particle's lambda. Only density and the position correction see them.
 template <class Real>
-PBF_HD PBF_INLINE void predictPosition(std::uint32_t i, const FluidView<Real>& f)
+struct WallMirrors
+{
+  int count[3];     // per axis: 1 (the neighbour itself) + the walls within h
+  Real wall[3][2];  // the coordinates of those walls
+};
+
+template <class Real>
+PBF_HD PBF_INLINE WallMirrors<Real> nearWalls(const Vec3<Real>& p, const Coefficients<Real>& c)
+{
+  WallMirrors<Real> m;
+  const Real pa[3] = { p.x, p.y, p.z };
+  const Real lo[3] = { c.boxMin.x, c.boxMin.y, c.boxMin.z };
+  const Real hi[3] = { c.boxMax.x, c.boxMax.y, c.boxMax.z };
+  for (int a = 0; a < 3; ++a)
+  {
+    m.count[a] = 1;
+    if (!c.mirrorWalls)
+    {
+      continue;
+    }
+    if (pa[a] - lo[a] < c.kernels.h)
+    {
+      m.wall[a][m.count[a]++ - 1] = lo[a];
+    }
+    if (hi[a] - pa[a] < c.kernels.h)
+    {
+      m.wall[a][m.count[a]++ - 1] = hi[a];
+    }
+  }
+  return m;
+}
+
+// Calls visit(image, isOriginal) for q and each of its reflections in the walls of m.
+template <class Real, class Visit>
+PBF_HD PBF_INLINE void forEachImage(const WallMirrors<Real>& m, const Vec3<Real>& q, Visit&& visit)
+{
+  for (int ix = 0; ix < m.count[0]; ++ix)
+  {
+    const Real x = ix == 0 ? q.x : Real(2) * m.wall[0][ix - 1] - q.x;
+    for (int iy = 0; iy < m.count[1]; ++iy)
+    {
+      const Real y = iy == 0 ? q.y : Real(2) * m.wall[1][iy - 1] - q.y;
+      for (int iz = 0; iz < m.count[2]; ++iz)
+      {
+        const Real z = iz == 0 ? q.z : Real(2) * m.wall[2][iz - 1] - q.z;
+        visit(Vec3<Real>{ x, y, z }, ix + iy + iz == 0);
+      }
+    }
+  }
+}
+
+// Algorithm 1, lines 1-4: apply gravity, predict x*_i = x_i + dt v_i.
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE void predictPosition(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
   const Vec3<Real> v = f.v[i] + f.c.gravity * f.c.dt;
   f.v[i] = v;
@@ -95,24 +158,27 @@ PBF_HD PBF_INLINE void predictPosition(std::uint32_t i, const FluidView<Real>& f
 }
 
 // Eq. 2 (poly6 density), eq. 1 (C_i = rho_i / rho_0 - 1), eq. 8 (spiky constraint gradients) and
-// eq. 11 (lambda_i with relaxation epsilon), in one pass over the neighbours.
-template <class Real>
-PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real>& f)
+// eq. 11 (lambda_i with relaxation epsilon), in one pass over the neighbours and their images.
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
   const Vec3<Real> pi = f.p[i];
+  const WallMirrors<Real> mirrors = nearWalls(pi, f.c);
   Real rho = Real(0);
   Vec3<Real> gradI{ Real(0), Real(0), Real(0) }; // grad_{p_i} C_i
   Real sumGradJ2 = Real(0);                      // sum_j |grad_{p_j} C_i|^2
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
-    const Vec3<Real> r = pi - f.p[j];
-    const Real r2 = dot(r, r);
-    if (r2 < f.c.kernels.h2)
-    {
-      rho += f.c.kernels.poly6(r2);
-      const Vec3<Real> g = f.c.kernels.spikyGradient(r, r2) * f.c.massOverRho0;
-      gradI += g;
-      sumGradJ2 += dot(g, g);
-    }
+    forEachImage(mirrors, f.p[j], [&](const Vec3<Real>& pj, bool) {
+      const Vec3<Real> r = pi - pj;
+      const Real r2 = dot(r, r);
+      if (r2 < f.c.kernels.h2)
+      {
+        rho += f.c.kernels.poly6(r2);
+        const Vec3<Real> g = f.c.kernels.spikyGradient(r, r2) * f.c.massOverRho0;
+        gradI += g;
+        sumGradJ2 += dot(g, g);
+      }
+    });
   });
   rho *= f.c.mass;
   Real C = rho * f.c.inverseRestDensity - Real(1);
@@ -125,43 +191,47 @@ PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real>& 
 }
 
 // Eq. 13 (s_corr, the artificial pressure against clustering) and eq. 14 (delta p_i).
-template <class Real>
-PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real>& f)
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
   const Vec3<Real> pi = f.p[i];
+  const WallMirrors<Real> mirrors = nearWalls(pi, f.c);
   const Real lambdaI = f.lambda[i];
   Vec3<Real> delta{ Real(0), Real(0), Real(0) };
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
-    const Vec3<Real> r = pi - f.p[j];
-    const Real r2 = dot(r, r);
-    if (r2 < f.c.kernels.h2 && j != i)
-    {
-      const Real ratio = f.c.kernels.poly6(r2) * f.c.inverseWDeltaQ;
-      const Real sCorr = -f.c.sCorrK * power(ratio, f.c.sCorrN);
-      delta += f.c.kernels.spikyGradient(r, r2) * (lambdaI + f.lambda[j] + sCorr);
-    }
+    const Real lambdaJ = f.lambda[j];
+    forEachImage(mirrors, f.p[j], [&](const Vec3<Real>& pj, bool original) {
+      const Vec3<Real> r = pi - pj;
+      const Real r2 = dot(r, r);
+      if (r2 < f.c.kernels.h2 && !(original && j == i))
+      {
+        const Real ratio = f.c.kernels.poly6(r2) * f.c.inverseWDeltaQ;
+        const Real sCorr = -f.c.sCorrK * power(ratio, f.c.sCorrN);
+        delta += f.c.kernels.spikyGradient(r, r2) * (lambdaI + lambdaJ + sCorr);
+      }
+    });
   });
   f.scratch[i] = delta * f.c.massOverRho0;
 }
 
 // Algorithm 1, lines 17-19: apply delta p_i and resolve collisions (Jacobi update).
-template <class Real>
-PBF_HD PBF_INLINE void applyCorrection(std::uint32_t i, const FluidView<Real>& f)
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE void applyCorrection(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
   f.p[i] = collideWithBox(f.p[i] + f.scratch[i], f.c);
 }
 
 // Algorithm 1, line 21: v_i = (x*_i - x_i) / dt.
-template <class Real>
-PBF_HD PBF_INLINE void updateVelocity(std::uint32_t i, const FluidView<Real>& f)
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE void updateVelocity(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
   f.v[i] = (f.p[i] - f.x[i]) * (Real(1) / f.c.dt);
 }
 
 // Eq. 15 (vorticity omega_i) and eq. 17 (XSPH viscosity) from the same neighbour pass. Both sums
 // carry the SPH volume m / rho_j, so omega is a true curl in 1/s and c is a dimensionless blend.
-template <class Real>
-PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real>& f)
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
   const Vec3<Real> pi = f.p[i];
   const Vec3<Real> vi = f.v[i];
@@ -185,8 +255,8 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real>& 
 // Eq. 16: f_i = epsilon (N x omega_i), N = eta / |eta|, eta = grad |omega|_i (SPH difference
 // gradient, zero in uniform rotation). Applied to the XSPH velocity as an acceleration. Where
 // |eta| h is negligible against |omega| the direction N is noise, and the force is dropped.
-template <class Real>
-PBF_HD PBF_INLINE void vorticityConfinement(std::uint32_t i, const FluidView<Real>& f)
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE void vorticityConfinement(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
   const Vec3<Real> pi = f.p[i];
   const Vec3<Real> omegaI = f.omega[i];
@@ -212,8 +282,8 @@ PBF_HD PBF_INLINE void vorticityConfinement(std::uint32_t i, const FluidView<Rea
 }
 
 // Algorithm 1, line 23: x_i = x*_i. The step's start positions become the corrected ones.
-template <class Real>
-PBF_HD PBF_INLINE void commitPosition(std::uint32_t i, const FluidView<Real>& f, Vec3<Real>* x)
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE void commitPosition(std::uint32_t i, const FluidView<Real, Neighbors>& f, Vec3<Real>* x)
 {
   x[i] = f.p[i];
 }

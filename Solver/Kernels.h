@@ -41,6 +41,18 @@ struct Kernels
     return poly6Scale * d * d * d;
   }
 
+  // W_spiky(r, h) = 15 / (pi h^6) (h - r)^3: the kernel whose gradient is used below. Not on the
+  // solver's path; it lets the gradient be checked against its own function.
+  PBF_HD PBF_INLINE Real spiky(Real r) const
+  {
+    if (r >= h)
+    {
+      return Real(0);
+    }
+    const Real d = h - r;
+    return -spikyGradScale / Real(3) * d * d * d;
+  }
+
   // grad_i W_spiky(p_i - p_j, h); r = p_i - p_j. Zero at r = 0, where the direction is undefined.
   PBF_HD PBF_INLINE Vec3<Real> spikyGradient(const Vec3<Real>& r, Real r2) const
   {

@@ -42,6 +42,7 @@ struct Parameters
   double xsphC = 0.01;          // c of eq. 17 (paper: 0.01); the sum is weighted by m/rho_j
   double vorticityEpsilon = 0.01; // epsilon of eq. 16 [m/s]: confinement acceleration per |omega|
   bool unilateral = true;       // clamp C_i at 0: a free surface is not pulled together
+  bool mirrorWalls = true;      // walls mirror the fluid near them (Equations.h, WallMirrors)
   Vec3d gravity{ 0.0, -9.81, 0.0 };
 
   // Time

@@ -55,6 +55,11 @@ std::map<std::string, std::pair<std::string, Setter>> parameterSetters()
         [](ToolOptions& o, const std::string& v) {
           o.parameters.unilateral = toNumber("unilateral", v) != 0.0;
         } } },
+    { "walls",
+      { "0 or 1: walls mirror the fluid",
+        [](ToolOptions& o, const std::string& v) {
+          o.parameters.mirrorWalls = toNumber("walls", v) != 0.0;
+        } } },
     { "scene",
       { "preset name or .json path",
         [](ToolOptions& o, const std::string& v) { o.scene = v; } } },

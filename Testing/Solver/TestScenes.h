@@ -1,0 +1,21 @@
+// Small scenes and helpers shared by the solver tests.
+#pragma once
+
+#include "Scene.h"
+#include "Simulation.h"
+
+#include <map>
+
+namespace pbf::test
+{
+
+// A block of fluid filling the floor of a closed box: side x side x side lattice sites.
+Scene restingBlock(int side, double spacing);
+
+// Sum of m g (height) over the particles: the potential energy above the floor [J].
+double potentialEnergy(const Simulation& simulation);
+
+// Snapshot rows keyed by particle id, for comparisons across backends whose order may differ.
+std::map<std::int64_t, std::size_t> indexById(const Snapshot<double>& snapshot);
+
+} // namespace pbf::test
