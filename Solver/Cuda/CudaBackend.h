@@ -1,0 +1,90 @@
+// The CUDA backend as the rest of the solver sees it: plain C++, no CUDA headers, so the tools
+// and tests compile with the host compiler. makeStepper(Backend::CUDA, ...) gives the defaults;
+// makeCudaStepper with Options is for the benchmark and the tests.
+#pragma once
+
+#include "Parameters.h"
+#include "Stepper.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pbf
+{
+
+// Defined in CudaDevice.cu; Stepper.cpp declares them too, under PBF_WITH_CUDA.
+std::unique_ptr<Stepper> makeCudaStepper(
+  Precision precision, const Parameters& parameters, const ParticleBatch& initial);
+// False, with the reason, when there is no usable CUDA device (no driver, no device, or a device
+// this build's kernels cannot run on).
+bool cudaDevicePresent(std::string* why);
+
+namespace cuda
+{
+
+enum class NeighborSearch
+{
+  RowMasks, // per-step neighbour masks (NeighborMasks.h): the default, measured faster
+  CellWalk, // walk the 27 cells in every pass, as the CPU backends do
+};
+
+struct Options
+{
+  NeighborSearch search = NeighborSearch::RowMasks;
+  // How far beyond h the masks reach, as a fraction of h: larger means more candidates per pass
+  // but fewer rebuilds within a step. Results do not depend on it.
+  double skin = 0.1;
+  // Replay each step as one CUDA graph (no launch gaps); off: launch the kernels one by one.
+  bool graphs = true;
+};
+
+struct Diagnostics
+{
+  std::string device;             // "NVIDIA H200"
+  std::size_t deviceBytes = 0;    // device memory the stepper holds
+  std::size_t capacity = 0;       // particles that fit before the next reallocation
+  double bytesPerParticle = 0;    // per-particle arrays only, per particle of capacity
+  std::uint64_t steps = 0;
+  std::uint64_t maskBuilds = 0;   // mask builds since construction (one per step at least)
+};
+
+// The CUDA stepper beyond the Stepper interface.
+class CudaStepperInterface : public Stepper
+{
+public:
+  virtual Diagnostics diagnostics() const = 0;
+  virtual const Options& options() const = 0;
+  // Waits for the queued steps; step() itself returns as soon as the work is queued.
+  virtual void synchronize() const = 0;
+  // The cudaStream_t the stepper queues its work on, for timing with events.
+  virtual void* stream() const = 0;
+};
+
+// Throws InvalidInput for bad parameters or particles and when the particles do not fit in the
+// device's free memory; std::runtime_error for CUDA errors and when no device is usable.
+std::unique_ptr<CudaStepperInterface> makeCudaStepper(Precision precision,
+  const Parameters& parameters, const ParticleBatch& initial, const Options& options);
+
+// Device time between marks, from CUDA events recorded on a stepper's stream.
+class EventTimer
+{
+public:
+  explicit EventTimer(std::size_t maxMarks);
+  ~EventTimer();
+  EventTimer(const EventTimer&) = delete;
+  EventTimer& operator=(const EventTimer&) = delete;
+
+  void mark(const CudaStepperInterface& stepper);
+  // Waits for the last mark; milliseconds between consecutive marks.
+  std::vector<double> intervalsMs();
+
+private:
+  std::vector<void*> events_;
+  std::size_t used_ = 0;
+};
+
+} // namespace cuda
+} // namespace pbf

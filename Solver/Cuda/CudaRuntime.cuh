@@ -1,0 +1,182 @@
+// CUDA error handling and the kernel executor that runs StepSchedule.h on a stream.
+#pragma once
+
+#include "StepSchedule.h"
+
+#include <cub/device/device_radix_sort.cuh>
+#include <cub/device/device_scan.cuh>
+#include <cuda/functional>
+#include <cuda_runtime.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace pbf
+{
+namespace cuda
+{
+
+// CUDA errors become exceptions naming the call; the process is never aborted.
+inline void check(cudaError_t error, const char* what)
+{
+  if (error != cudaSuccess)
+  {
+    // Clear a non-sticky error so that the next call does not report it again.
+    cudaGetLastError();
+    throw std::runtime_error(std::string("CUDA error in ") + what + ": " + cudaGetErrorName(error) +
+      " (" + cudaGetErrorString(error) + ")");
+  }
+}
+
+// Launch shapes per stage. The neighbour passes run 128 threads a block: small blocks keep the
+// tail of a launch short; register use sets the occupancy (see the benchmark notes).
+template <class Stage>
+struct Launch
+{
+  static constexpr int block = 256;
+};
+template <>
+struct Launch<DensityStage>
+{
+  static constexpr int block = 128;
+};
+template <>
+struct Launch<CorrectionStage>
+{
+  static constexpr int block = 128;
+};
+template <>
+struct Launch<VorticityStage>
+{
+  static constexpr int block = 128;
+};
+template <>
+struct Launch<ConfinementStage>
+{
+  static constexpr int block = 128;
+};
+
+template <class Stage, class F>
+__global__ void __launch_bounds__(Launch<Stage>::block) stageKernel(Stage, std::uint32_t n, F f)
+{
+  const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i < n)
+  {
+    f(i);
+  }
+}
+
+// As stageKernel, and the max of f's non-negative results: a warp max, then one integer atomic
+// per warp. The max is the same in any order, so this stays deterministic.
+template <class Stage, class F>
+__global__ void __launch_bounds__(Launch<Stage>::block) stageMaxKernel(
+  Stage, std::uint32_t n, unsigned long long* maxBits, F f)
+{
+  const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+  unsigned long long bits = 0;
+  if (i < n)
+  {
+    bits = MaskSchedule::doubleToBits(f(i));
+  }
+  for (int offset = 16; offset > 0; offset >>= 1)
+  {
+    const unsigned long long other = __shfl_xor_sync(0xffffffffu, bits, offset);
+    bits = other > bits ? other : bits;
+  }
+  if ((threadIdx.x & 31u) == 0 && bits != 0)
+  {
+    atomicMax(maxBits, bits);
+  }
+}
+
+// Runs the schedule's stages as kernels on one stream. Nothing here synchronises or allocates,
+// so a step can be captured into a CUDA graph.
+class KernelExecutor
+{
+public:
+  KernelExecutor(cudaStream_t stream, void* temp, std::size_t tempBytes)
+    : stream_(stream)
+    , temp_(temp)
+    , tempBytes_(tempBytes)
+  {
+  }
+
+  template <class Stage, class F>
+  void forEach(Stage stage, std::uint32_t n, F f)
+  {
+    if (n == 0)
+    {
+      return;
+    }
+    constexpr int block = Launch<Stage>::block;
+    stageKernel<<<(n + block - 1) / block, block, 0, stream_>>>(stage, n, f);
+    check(cudaGetLastError(), "kernel launch");
+  }
+
+  template <class Stage, class F>
+  void forEachMax(Stage stage, std::uint32_t n, unsigned long long* maxBits, F f)
+  {
+    if (n == 0)
+    {
+      return;
+    }
+    constexpr int block = Launch<Stage>::block;
+    stageMaxKernel<<<(n + block - 1) / block, block, 0, stream_>>>(stage, n, maxBits, f);
+    check(cudaGetLastError(), "kernel launch");
+  }
+
+  SortedPairs sortByKey(CellKey* keys, CellKey* keysAlt, std::uint32_t* values,
+    std::uint32_t* valuesAlt, std::uint32_t n, int keyBits)
+  {
+    cub::DoubleBuffer<CellKey> k(keys, keysAlt);
+    cub::DoubleBuffer<std::uint32_t> v(values, valuesAlt);
+    std::size_t bytes = tempBytes_;
+    check(cub::DeviceRadixSort::SortPairs(temp_, bytes, k, v, n, 0, keyBits, stream_),
+      "cub::DeviceRadixSort::SortPairs");
+    return { k.Current(), v.Current() };
+  }
+
+  void maxScan(std::uint32_t* data, std::size_t count)
+  {
+    std::size_t bytes = tempBytes_;
+    check(cub::DeviceScan::InclusiveScan(temp_, bytes, data, data, ::cuda::maximum<>{},
+            static_cast<std::int64_t>(count), stream_),
+      "cub::DeviceScan::InclusiveScan");
+  }
+
+  void fillZero(void* pointer, std::size_t bytes)
+  {
+    check(cudaMemsetAsync(pointer, 0, bytes, stream_), "cudaMemsetAsync");
+  }
+
+  void copy(void* destination, const void* source, std::size_t bytes)
+  {
+    check(cudaMemcpyAsync(destination, source, bytes, cudaMemcpyDeviceToDevice, stream_),
+      "cudaMemcpyAsync");
+  }
+
+  // Scratch the sort and the scan need, for up to `particles` particles and `cells` cells.
+  static std::size_t tempBytesFor(std::uint32_t particles, std::size_t cells, int keyBits)
+  {
+    std::size_t sortBytes = 0, scanBytes = 0;
+    cub::DoubleBuffer<CellKey> k(nullptr, nullptr);
+    cub::DoubleBuffer<std::uint32_t> v(nullptr, nullptr);
+    check(cub::DeviceRadixSort::SortPairs(nullptr, sortBytes, k, v, particles, 0, keyBits),
+      "cub::DeviceRadixSort::SortPairs (size query)");
+    std::uint32_t* none = nullptr;
+    check(cub::DeviceScan::InclusiveScan(nullptr, scanBytes, none, none, ::cuda::maximum<>{},
+            static_cast<std::int64_t>(cells)),
+      "cub::DeviceScan::InclusiveScan (size query)");
+    return sortBytes > scanBytes ? sortBytes : scanBytes;
+  }
+
+private:
+  cudaStream_t stream_;
+  void* temp_;
+  std::size_t tempBytes_;
+};
+
+} // namespace cuda
+} // namespace pbf

@@ -1,0 +1,249 @@
+// Neighbour lists for the CUDA backend, as bit masks over the rows that forEachNeighbor walks.
+//
+// forEachNeighbor (Grid.h) visits the 27 cells around a particle as 9 contiguous index ranges
+// ("rows": 3 cells along x). About 1 candidate in 6 lies within h, and on a GPU a warp pays for
+// the whole neighbour body whenever any of its 32 lanes has a hit, so walking the cells in every
+// pass costs close to 6 times the work. Instead, once per step each particle marks, per row, the
+// first 32 candidates that lie within h + skin in a 32-bit mask (9 masks, 36 bytes a particle);
+// the passes then visit only the marked candidates and, unconditionally, any candidate past the
+// 32nd of a row. The candidates keep forEachNeighbor's order and the equations still test r < h
+// themselves, so the sums see the same terms in the same order: results are bit-identical to the
+// walk as long as no skipped candidate can have come within h. That is guaranteed by bounding how
+// far particles moved since the masks were built (rebuildMasks below) and rebuilding when the
+// bound could be exceeded. Wall images (Equations.h) lie farther away than the neighbour itself
+// for particles inside the box, so they never need a skipped candidate either.
+#pragma once
+
+#include "Grid.h"
+#include "HostDevice.h"
+#include "Vec3.h"
+
+#include <cstdint>
+#include <cstring>
+#include <limits>
+
+namespace pbf
+{
+
+constexpr int kNeighborRows = 9;  // (z, y) rows of 3 cells along x
+constexpr int kMaskWidth = 32;    // candidates per row covered by a mask
+
+template <class Real>
+struct MaskedNeighbors
+{
+  GridView<Real> cells;
+  const std::uint32_t* masks; // row r of particle i at masks[r * stride + i]
+  std::uint32_t stride;
+  bool useMasks;              // false: walk the 27 cells like the CPU backends
+};
+
+namespace detail
+{
+
+PBF_HD PBF_INLINE int lowestSetBit(std::uint32_t mask)
+{
+#if defined(__CUDA_ARCH__)
+  return __ffs(static_cast<int>(mask)) - 1;
+#else
+  return __builtin_ctz(mask);
+#endif
+}
+
+// The cell of sorted particle i and the x range of its rows, as forEachNeighbor computes them.
+struct RowFrame
+{
+  int cx, cy, cz, x0, x1;
+};
+
+template <class Real>
+PBF_HD PBF_INLINE RowFrame rowFrame(const GridView<Real>& grid, std::uint32_t i)
+{
+  const GridGeometry<Real>& g = grid.geometry;
+  const CellKey key = grid.particleKeys[i];
+  RowFrame f;
+  f.cx = static_cast<int>(key % static_cast<CellKey>(g.nx));
+  f.cy = static_cast<int>((key / static_cast<CellKey>(g.nx)) % static_cast<CellKey>(g.ny));
+  f.cz = static_cast<int>(key / (static_cast<CellKey>(g.nx) * g.ny));
+  f.x0 = f.cx > 0 ? f.cx - 1 : 0;
+  f.x1 = f.cx + 1 < g.nx ? f.cx + 1 : f.cx;
+  return f;
+}
+
+// Row r (z-major, as forEachNeighbor loops) as a sorted index range; false outside the grid.
+template <class Real>
+PBF_HD PBF_INLINE bool rowRange(const GridView<Real>& grid, const RowFrame& f, int r,
+  std::uint32_t& begin, std::uint32_t& end)
+{
+  const GridGeometry<Real>& g = grid.geometry;
+  const int z = f.cz - 1 + r / 3;
+  const int y = f.cy - 1 + r % 3;
+  if (z < 0 || z >= g.nz || y < 0 || y >= g.ny)
+  {
+    return false;
+  }
+  const CellKey row = (static_cast<CellKey>(z) * g.ny + y) * g.nx;
+  begin = grid.cellOffsets[row + f.x0];
+  end = grid.cellOffsets[row + f.x1 + 1];
+  return true;
+}
+
+} // namespace detail
+
+// Marks, in each of particle i's rows, the candidates j among the first 32 with |p_i - p_j|^2 <
+// reach2 = (h + skin)^2. Only particle i's own masks are written, so a pass may rebuild them
+// while other particles read positions.
+template <class Real>
+PBF_HD PBF_INLINE void buildNeighborMasks(std::uint32_t i, const GridView<Real>& grid,
+  const Vec3<Real>* p, Real reach2, std::uint32_t* masks, std::uint32_t stride)
+{
+  const detail::RowFrame frame = detail::rowFrame(grid, i);
+  const Vec3<Real> pi = p[i];
+  for (int r = 0; r < kNeighborRows; ++r)
+  {
+    std::uint32_t begin = 0, end = 0, mask = 0;
+    if (detail::rowRange(grid, frame, r, begin, end))
+    {
+      const std::uint32_t limit = end - begin > kMaskWidth ? begin + kMaskWidth : end;
+      for (std::uint32_t j = begin; j < limit; ++j)
+      {
+        const Vec3<Real> d = pi - p[j];
+        if (dot(d, d) < reach2)
+        {
+          mask |= std::uint32_t(1) << (j - begin);
+        }
+      }
+    }
+    masks[static_cast<std::size_t>(r) * stride + i] = mask;
+  }
+}
+
+// Found by argument-dependent lookup from the equations when their FluidView carries
+// MaskedNeighbors. Visits the marked candidates, then each row's candidates past the 32nd, in
+// ascending sorted index: forEachNeighbor's order without the skipped ones. One loop over all
+// rows, so a lane that runs out of candidates in a row moves on instead of idling while the rest
+// of its warp finishes that row, and the visit body is inlined once.
+template <class Real, class Visit>
+PBF_HD PBF_INLINE void forEachNeighbor(
+  const MaskedNeighbors<Real>& neighbors, std::uint32_t i, Visit&& visit)
+{
+  if (!neighbors.useMasks)
+  {
+    forEachNeighbor(neighbors.cells, i, visit);
+    return;
+  }
+  const detail::RowFrame frame = detail::rowFrame(neighbors.cells, i);
+  int nextRow = 0;
+  std::uint32_t mask = 0, base = 0, tail = 0, tailEnd = 0;
+  for (;;)
+  {
+    while (mask == 0 && tail == tailEnd && nextRow < kNeighborRows)
+    {
+      const int r = nextRow++;
+      std::uint32_t begin = 0, end = 0;
+      if (detail::rowRange(neighbors.cells, frame, r, begin, end))
+      {
+        base = begin;
+        mask = neighbors.masks[static_cast<std::size_t>(r) * neighbors.stride + i];
+        tail = end - begin > kMaskWidth ? begin + kMaskWidth : end;
+        tailEnd = end;
+      }
+    }
+    std::uint32_t j;
+    if (mask != 0)
+    {
+      j = base + static_cast<std::uint32_t>(detail::lowestSetBit(mask));
+      mask &= mask - 1;
+    }
+    else if (tail != tailEnd)
+    {
+      j = tail++;
+    }
+    else
+    {
+      break;
+    }
+    visit(j);
+  }
+}
+
+// When masks are rebuilt. Every correction moves a particle by |delta p_i| at most, plus rounding;
+// collisions only project onto the box, which moves no closer to anything inside it. So after
+// corrections k0..k-1 no particle is farther than S = sum of max_i |delta p_i| from where the masks
+// were built, and a skipped pair, at least h + skin apart then, is still farther than h now while
+// 2 S stays under the skin. The margins cover rounding of distances and of positions.
+struct MaskSchedule
+{
+  double skin;             // [m]
+  double h;                // [m]
+  double roundingPerStep;  // bound on a position's rounding error per correction [m]
+  int enabled;             // 0: masks off, never rebuilt
+
+  PBF_HD PBF_INLINE bool stillValid(double moved, int corrections) const
+  {
+    const double drift = moved * (1.0 + 1e-3) + corrections * roundingPerStep;
+    // Written so that NaN (a NaN displacement) reads as invalid.
+    return 2.0 * drift < skin - 1e-3 * h;
+  }
+
+  // Whether the pass that sees the positions after `corrections` corrections of this step must
+  // rebuild the masks. maxMoved[k] holds max_i |delta p_i| of correction k as the bits of a
+  // non-negative double. Every thread replays the same decisions from the same numbers, so they
+  // agree without synchronising.
+  PBF_HD PBF_INLINE bool rebuildAt(int corrections, const unsigned long long* maxMoved) const
+  {
+    if (corrections == 0)
+    {
+      return true;
+    }
+    int builtAt = 0;
+    double moved = 0.0;
+    for (int k = 1; k <= corrections; ++k)
+    {
+      moved += bitsToDouble(maxMoved[k - 1]);
+      if (!stillValid(moved, k - builtAt))
+      {
+        if (k == corrections)
+        {
+          return true;
+        }
+        builtAt = k;
+        moved = 0.0;
+      }
+    }
+    return false;
+  }
+
+  PBF_HD PBF_INLINE static double bitsToDouble(unsigned long long bits)
+  {
+#if defined(__CUDA_ARCH__)
+    return __longlong_as_double(static_cast<long long>(bits));
+#else
+    double d;
+    std::memcpy(&d, &bits, sizeof d);
+    return d;
+#endif
+  }
+  // Non-negative doubles (and NaN) order like their bit patterns as unsigned integers, so an
+  // integer max gives the max displacement, and a NaN wins it: deterministic in any order.
+  PBF_HD PBF_INLINE static unsigned long long doubleToBits(double d)
+  {
+#if defined(__CUDA_ARCH__)
+    return static_cast<unsigned long long>(__double_as_longlong(d));
+#else
+    unsigned long long bits;
+    std::memcpy(&bits, &d, sizeof d);
+    return bits;
+#endif
+  }
+
+  // Rounding of a coordinate of magnitude <= maxAbsCoordinate in Real, per correction: the sum
+  // p + delta rounds each component by half an ulp; twice that, over three components.
+  template <class Real>
+  static double roundingBound(double maxAbsCoordinate)
+  {
+    return 2.0 * 1.7320508075688772 * static_cast<double>(std::numeric_limits<Real>::epsilon()) *
+      maxAbsCoordinate;
+  }
+};
+
+} // namespace pbf

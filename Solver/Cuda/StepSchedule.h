@@ -1,0 +1,306 @@
+// One solver step of the CUDA backend as a sequence of per-particle stages, written once over an
+// executor: CudaStepper.cu runs it with kernels, CUB and CUDA graphs; the tests run it on the host,
+// where it must reproduce the serial backend bit for bit (Testing/Cuda/StepScheduleTest.cpp).
+//
+// It is CpuStepper::step() with the memory of a GPU in mind:
+// - Algorithm 1's arrays rotate through four Vec3 buffers instead of six plus gather copies;
+//   between steps x and v live in vec[0] and vec[1] (in either order, see Roles).
+// - The sort is stable and keyed like the CPU's counting sort, so the permutation is the same.
+// - The Jacobi update (applyCorrection) is fused into positionCorrection by writing the corrected
+//   positions to the other of two position buffers, and updateVelocity into the last correction.
+// - Algorithm 1, line 23 (x_i = x*_i) is a relabelling: the corrected positions' buffer becomes x.
+// - The neighbour passes walk row masks (NeighborMasks.h) or, with masks off, the 27 cells.
+//
+// Executor interface (Exec):
+//   forEach(Stage, n, f)                 f(i) for i in [0, n), in any order
+//   forEachMax(Stage, n, maxBits, f)     as forEach; *maxBits = max(*maxBits, bits of f(i) >= 0)
+//   sortByKey(keys, keysAlt, values, valuesAlt, n, keyBits) -> SortedPairs (stable radix sort)
+//   maxScan(data, count)                 inclusive max-scan in place
+//   fillZero(pointer, bytes), copy(destination, source, bytes)
+#pragma once
+
+#include "Equations.h"
+#include "Grid.h"
+#include "HostDevice.h"
+#include "NeighborMasks.h"
+
+#include <cstddef>
+#include <cstdint>
+
+namespace pbf
+{
+namespace cuda
+{
+
+// Stage tags: they name the kernels (profilers show them) and pick launch bounds.
+struct PredictStage {};
+struct KeyStage {};
+struct GatherStage {};
+struct DensityStage {};
+struct CorrectionStage {};
+struct VorticityStage {};
+struct ConfinementStage {};
+
+struct SortedPairs
+{
+  const CellKey* keys;
+  const std::uint32_t* values;
+};
+
+template <class Real>
+struct StepBuffers
+{
+  Vec3<Real>* vec[4];
+  Real* density;
+  Real* lambda;            // also the sort's values (the permutation) until density is evaluated
+  std::int64_t* id;
+  CellKey* keys[2];        // cell keys and the sort's alternate buffer
+  std::uint32_t* masks;    // kNeighborRows * stride entries; null when masks are off
+  std::uint32_t stride;    // capacity of every per-particle array
+  std::uint32_t* cellOffsets; // cellCount + 1 entries
+  unsigned long long* maxMoved;   // per solver iteration: max |delta p_i|, as double bits
+  unsigned long long* maskBuilds; // count of mask builds, for diagnostics only
+};
+
+template <class Real>
+struct StepConstants
+{
+  Coefficients<Real> c;
+  GridGeometry<Real> geometry;
+  std::uint32_t cellCount;
+  int keyBits;       // significant bits of a cell key: the radix sort's passes
+  int iterations;    // solver iterations
+  Real reach2;       // (h + skin)^2: what a mask marks
+  MaskSchedule schedule;
+};
+
+// Which of vec[0], vec[1] hold x and v between steps.
+struct Roles
+{
+  int x = 0;
+  int v = 1;
+};
+
+namespace detail
+{
+
+template <class Real>
+FluidView<Real> plainView(const StepConstants<Real>& k)
+{
+  FluidView<Real> f{};
+  f.grid = GridView<Real>{ k.geometry, nullptr, nullptr };
+  f.c = k.c;
+  return f;
+}
+
+// Sorts by the keys in keys[0] (values: the identity in lambda), builds the cell offsets and
+// gathers every array into cell order. On entry A = x, B = v, C = p (old order), D is free; on
+// exit D = x, A = p, C = v (cell order) and B is free. Returns the sorted keys.
+template <class Real, class Exec>
+const CellKey* sortAndGather(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Real>& k,
+  std::uint32_t n, Vec3<Real>* A, Vec3<Real>* B, Vec3<Real>* C, Vec3<Real>* D)
+{
+  const SortedPairs sorted = exec.sortByKey(b.keys[0], b.keys[1],
+    reinterpret_cast<std::uint32_t*>(b.lambda), reinterpret_cast<std::uint32_t*>(b.density), n,
+    k.keyBits);
+  const CellKey* keys = sorted.keys;
+  const std::uint32_t* perm = sorted.values;
+
+  // cellOffsets[c] = particles with key < c. Each run of equal keys writes its end at key + 1 and
+  // a max-scan fills the empty cells in between: every entry is written once, no atomics.
+  std::uint32_t* offsets = b.cellOffsets;
+  exec.fillZero(offsets, (static_cast<std::size_t>(k.cellCount) + 1) * sizeof(std::uint32_t));
+  exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) {
+    D[i] = A[perm[i]];
+    if (i + 1 == n || keys[i] != keys[i + 1])
+    {
+      offsets[keys[i] + 1] = i + 1;
+    }
+  });
+  exec.maxScan(offsets, static_cast<std::size_t>(k.cellCount) + 1);
+  exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { A[i] = C[perm[i]]; });
+  exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { C[i] = B[perm[i]]; });
+  // B is free now; it holds the gathered ids until they are copied back.
+  std::int64_t* id = b.id;
+  std::int64_t* idSorted = reinterpret_cast<std::int64_t*>(B);
+  exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { idSorted[i] = id[perm[i]]; });
+  exec.copy(id, idSorted, static_cast<std::size_t>(n) * sizeof(std::int64_t));
+  return keys;
+}
+
+template <class Real>
+FluidView<Real, MaskedNeighbors<Real>> solverView(const StepBuffers<Real>& b,
+  const StepConstants<Real>& k, const CellKey* sortedKeys)
+{
+  FluidView<Real, MaskedNeighbors<Real>> f{};
+  f.density = b.density;
+  f.lambda = b.lambda;
+  f.grid = MaskedNeighbors<Real>{ GridView<Real>{ k.geometry, b.cellOffsets, sortedKeys }, b.masks,
+    b.stride, k.schedule.enabled != 0 };
+  f.c = k.c;
+  return f;
+}
+
+// A neighbour pass that is the first to see new positions: rebuild the masks first if the
+// particles may have moved too far since they were built.
+template <class Real, class Exec, class Stage, class Pass>
+void firstPassOnPositions(Exec& exec, Stage stage, const StepBuffers<Real>& b,
+  const StepConstants<Real>& k, std::uint32_t n, const FluidView<Real, MaskedNeighbors<Real>>& f,
+  int corrections, Pass pass)
+{
+  const MaskSchedule schedule = k.schedule;
+  const unsigned long long* maxMoved = b.maxMoved;
+  unsigned long long* builds = b.maskBuilds;
+  std::uint32_t* masks = b.masks;
+  const Real reach2 = k.reach2;
+  exec.forEach(stage, n, [=] PBF_HD(std::uint32_t i) {
+    if (schedule.enabled && schedule.rebuildAt(corrections, maxMoved))
+    {
+      if (i == 0)
+      {
+        ++*builds;
+      }
+      buildNeighborMasks(i, f.grid.cells, f.p, reach2, masks, f.grid.stride);
+    }
+    pass(i, f);
+  });
+}
+
+struct DensityPass
+{
+  template <class View>
+  PBF_HD PBF_INLINE void operator()(std::uint32_t i, const View& f) const
+  {
+    densityAndLambda(i, f);
+  }
+};
+
+struct VorticityPass
+{
+  template <class View>
+  PBF_HD PBF_INLINE void operator()(std::uint32_t i, const View& f) const
+  {
+    vorticityAndXsph(i, f);
+  }
+};
+
+} // namespace detail
+
+// Algorithm 1 of Macklin & Mueller 2013, one step; returns where x and v are afterwards.
+template <class Real, class Exec>
+Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Real>& k,
+  std::uint32_t n, Roles roles, const CellKey** sortedKeysOut)
+{
+  Vec3<Real>* const A = b.vec[roles.x];
+  Vec3<Real>* const B = b.vec[roles.v];
+  Vec3<Real>* const C = b.vec[2];
+  Vec3<Real>* const D = b.vec[3];
+
+  // Lines 1-4: gravity and the predicted positions x*_i, with their cell keys.
+  {
+    FluidView<Real> f = detail::plainView(k);
+    f.x = A;
+    f.v = B;
+    f.p = C;
+    CellKey* keys = b.keys[0];
+    std::uint32_t* order = reinterpret_cast<std::uint32_t*>(b.lambda);
+    const GridGeometry<Real> geometry = k.geometry;
+    exec.forEach(PredictStage{}, n, [=] PBF_HD(std::uint32_t i) {
+      predictPosition(i, f);
+      keys[i] = geometry.keyOf(f.p[i]);
+      order[i] = i;
+    });
+  }
+  // Line 7: neighbours from the predicted positions, once per step.
+  const CellKey* sortedKeys = detail::sortAndGather(exec, b, k, n, A, B, C, D);
+  *sortedKeysOut = sortedKeys;
+  // Now D = x, A = x*, C = v; the solver's positions alternate between A and B.
+  Vec3<Real>* const positions[2] = { A, B };
+  exec.fillZero(b.maxMoved, static_cast<std::size_t>(k.iterations) * sizeof(unsigned long long));
+
+  // Lines 8-20, Jacobi iterations.
+  for (int iteration = 0; iteration < k.iterations; ++iteration)
+  {
+    FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
+    f.x = D;
+    f.v = C;
+    f.p = positions[iteration & 1];
+    f.scratch = positions[(iteration + 1) & 1];
+    detail::firstPassOnPositions(
+      exec, DensityStage{}, b, k, n, f, iteration, detail::DensityPass{});
+
+    const bool last = iteration + 1 == k.iterations;
+    exec.forEachMax(CorrectionStage{}, n, b.maxMoved + iteration,
+      [=] PBF_HD(std::uint32_t i) -> double {
+        // delta p_i lands in the other position buffer (f.scratch), which nobody reads in this
+        // pass; applyCorrection then adds p_i to it in place. IEEE addition is commutative, so
+        // this is exactly x*_i + delta p_i, and no particle reads a position that moved.
+        positionCorrection(i, f);
+        const Vec3<Real> delta = f.scratch[i];
+        FluidView<Real, MaskedNeighbors<Real>> apply = f;
+        apply.p = f.scratch;
+        apply.scratch = f.p;
+        applyCorrection(i, apply);
+        if (last)
+        {
+          updateVelocity(i, apply); // line 21 needs only particle i's own corrected position
+        }
+        return static_cast<double>(length(delta));
+      });
+  }
+
+  // Lines 22-23 (vorticity confinement and XSPH) on the corrected positions.
+  Vec3<Real>* const corrected = positions[k.iterations & 1];
+  Vec3<Real>* const spare = positions[(k.iterations + 1) & 1];
+  FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
+  f.p = corrected;
+  f.v = C;
+  f.omega = D; // x is no longer needed
+  f.scratch = spare;
+  detail::firstPassOnPositions(
+    exec, VorticityStage{}, b, k, n, f, k.iterations, detail::VorticityPass{});
+  // The confined velocity overwrites the XSPH velocity in place: each particle reads only its
+  // own, and spare becomes v.
+  FluidView<Real, MaskedNeighbors<Real>> confine = f;
+  confine.v = spare;
+  exec.forEach(ConfinementStage{}, n,
+    [=] PBF_HD(std::uint32_t i) { vorticityConfinement(i, confine); });
+
+  // Line 23, x_i = x*_i: the corrected positions' buffer becomes x.
+  Roles next;
+  next.x = corrected == A ? roles.x : roles.v;
+  next.v = corrected == A ? roles.v : roles.x;
+  return next;
+}
+
+// CpuStepper::evaluateDensityAtRest: density and lambda of the current positions, nothing moves.
+// Used after particles are added; x and v keep their buffers.
+template <class Real, class Exec>
+void enqueueEvaluateAtRest(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Real>& k,
+  std::uint32_t n, Roles roles, const CellKey** sortedKeysOut)
+{
+  Vec3<Real>* const A = b.vec[roles.x];
+  Vec3<Real>* const B = b.vec[roles.v];
+  Vec3<Real>* const C = b.vec[2];
+  Vec3<Real>* const D = b.vec[3];
+  exec.copy(C, A, static_cast<std::size_t>(n) * sizeof(Vec3<Real>)); // p = x
+  {
+    CellKey* keys = b.keys[0];
+    std::uint32_t* order = reinterpret_cast<std::uint32_t*>(b.lambda);
+    const GridGeometry<Real> geometry = k.geometry;
+    exec.forEach(KeyStage{}, n, [=] PBF_HD(std::uint32_t i) {
+      keys[i] = geometry.keyOf(C[i]);
+      order[i] = i;
+    });
+  }
+  const CellKey* sortedKeys = detail::sortAndGather(exec, b, k, n, A, B, C, D);
+  *sortedKeysOut = sortedKeys;
+  // A = x (sorted, equal to D), C = v.
+  FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
+  f.p = A;
+  detail::firstPassOnPositions(exec, DensityStage{}, b, k, n, f, 0, detail::DensityPass{});
+  exec.copy(B, C, static_cast<std::size_t>(n) * sizeof(Vec3<Real>));
+}
+
+} // namespace cuda
+} // namespace pbf

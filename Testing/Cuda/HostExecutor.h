@@ -1,0 +1,81 @@
+// Runs StepSchedule.h on the host, stage by stage, so that the CUDA backend's algorithm (buffer
+// rotation, fused correction, neighbour masks and their rebuilds) can be checked against the
+// serial backend on a machine without a GPU. Particles are visited forwards or backwards: a stage
+// that read what another particle of the same stage writes would then give different results.
+#pragma once
+
+#include "Cuda/StepSchedule.h"
+
+#include <algorithm>
+#include <cstring>
+#include <numeric>
+#include <vector>
+
+namespace pbf
+{
+namespace test
+{
+
+class HostExecutor
+{
+public:
+  explicit HostExecutor(bool backwards)
+    : backwards_(backwards)
+  {
+  }
+
+  template <class Stage, class F>
+  void forEach(Stage, std::uint32_t n, F f)
+  {
+    for (std::uint32_t k = 0; k < n; ++k)
+    {
+      f(backwards_ ? n - 1 - k : k);
+    }
+  }
+
+  template <class Stage, class F>
+  void forEachMax(Stage, std::uint32_t n, unsigned long long* maxBits, F f)
+  {
+    for (std::uint32_t k = 0; k < n; ++k)
+    {
+      const unsigned long long bits = MaskSchedule::doubleToBits(f(backwards_ ? n - 1 - k : k));
+      *maxBits = std::max(*maxBits, bits);
+    }
+  }
+
+  // A stable sort, like CUB's radix sort; the results go to the alternate buffers.
+  cuda::SortedPairs sortByKey(CellKey* keys, CellKey* keysAlt, std::uint32_t* values,
+    std::uint32_t* valuesAlt, std::uint32_t n, int)
+  {
+    std::vector<std::uint32_t> index(n);
+    std::iota(index.begin(), index.end(), 0u);
+    std::stable_sort(index.begin(), index.end(),
+      [keys](std::uint32_t a, std::uint32_t b) { return keys[a] < keys[b]; });
+    for (std::uint32_t k = 0; k < n; ++k)
+    {
+      keysAlt[k] = keys[index[k]];
+      valuesAlt[k] = values[index[k]];
+    }
+    return { keysAlt, valuesAlt };
+  }
+
+  void maxScan(std::uint32_t* data, std::size_t count)
+  {
+    for (std::size_t i = 1; i < count; ++i)
+    {
+      data[i] = std::max(data[i], data[i - 1]);
+    }
+  }
+
+  void fillZero(void* pointer, std::size_t bytes) { std::memset(pointer, 0, bytes); }
+  void copy(void* destination, const void* source, std::size_t bytes)
+  {
+    std::memmove(destination, source, bytes);
+  }
+
+private:
+  bool backwards_;
+};
+
+} // namespace test
+} // namespace pbf
