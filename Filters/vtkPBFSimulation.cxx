@@ -64,6 +64,8 @@ bool SameBox(const pbf::Box& a, const pbf::Box& b)
 }
 
 // Field by field: a NaN never compares equal, which only costs a rebuild that then reports it.
+// A field added to pbf::Parameters must be added here, or changing it would not restart the
+// simulation (Testing/Python/pbf_parameters.py fails for a field without a property).
 bool SameParameters(const pbf::Parameters& a, const pbf::Parameters& b)
 {
   return a.restDensity == b.restDensity && a.particleSpacing == b.particleSpacing &&
@@ -71,6 +73,7 @@ bool SameParameters(const pbf::Parameters& a, const pbf::Parameters& b)
     a.relaxation == b.relaxation && a.sCorrK == b.sCorrK && a.sCorrN == b.sCorrN &&
     a.sCorrDeltaQ == b.sCorrDeltaQ && a.xsphC == b.xsphC &&
     a.vorticityEpsilon == b.vorticityEpsilon && a.unilateral == b.unilateral &&
+    a.mirrorWalls == b.mirrorWalls &&
     a.gravity.x == b.gravity.x && a.gravity.y == b.gravity.y && a.gravity.z == b.gravity.z &&
     a.timeStep == b.timeStep && SameBox(a.domain, b.domain);
 }
@@ -249,6 +252,7 @@ void FillParameters(const pbf::Simulation& simulation, int frame, double frameIn
   AddValue(fieldData, "XSPHViscosity", p.xsphC);
   AddValue(fieldData, "VorticityEpsilon", p.vorticityEpsilon);
   AddInteger(fieldData, "Unilateral", p.unilateral ? 1 : 0);
+  AddInteger(fieldData, "MirrorWalls", p.mirrorWalls ? 1 : 0);
   vtkNew<vtkDoubleArray> gravity;
   gravity->SetName("Gravity");
   gravity->SetNumberOfComponents(3);
@@ -363,6 +367,7 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->XSPHViscosity = defaults.xsphC;
   this->VorticityEpsilon = defaults.vorticityEpsilon;
   this->Unilateral = defaults.unilateral;
+  this->MirrorWalls = defaults.mirrorWalls;
   this->Gravity[0] = defaults.gravity.x;
   this->Gravity[1] = defaults.gravity.y;
   this->Gravity[2] = defaults.gravity.z;
@@ -511,6 +516,7 @@ int vtkPBFSimulation::RequestData(
     p.xsphC = this->XSPHViscosity;
     p.vorticityEpsilon = this->VorticityEpsilon;
     p.unilateral = this->Unilateral;
+    p.mirrorWalls = this->MirrorWalls;
     p.gravity = pbf::Vec3d{ this->Gravity[0], this->Gravity[1], this->Gravity[2] };
     p.timeStep = this->FrameInterval / this->SubstepsPerFrame;
 
@@ -624,6 +630,7 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "XSPHViscosity: " << this->XSPHViscosity << "\n";
   os << indent << "VorticityEpsilon: " << this->VorticityEpsilon << "\n";
   os << indent << "Unilateral: " << (this->Unilateral ? "On" : "Off") << "\n";
+  os << indent << "MirrorWalls: " << (this->MirrorWalls ? "On" : "Off") << "\n";
   os << indent << "Gravity: (" << this->Gravity[0] << ", " << this->Gravity[1] << ", "
      << this->Gravity[2] << ")\n";
   os << indent << "FrameInterval: " << this->FrameInterval << "\n";

@@ -116,8 +116,9 @@ public:
    * Solver: constraint projections per step, epsilon of eq. 11 (relaxation), k, n and delta_q
    * (a fraction of h) of the artificial pressure s_corr (eq. 13), c of the XSPH viscosity
    * (eq. 17), epsilon of the vorticity confinement (eq. 16) [m/s], whether the density constraint
-   * is unilateral (C_i clamped at 0, so a free surface is not pulled together) and gravity
-   * [m/s^2]. Meanings and units are those of pbf::Parameters.
+   * is unilateral (C_i clamped at 0, so a free surface is not pulled together), whether the
+   * domain walls mirror the fluid near them (so that fluid at rest against a wall reads rho_0)
+   * and gravity [m/s^2]. Meanings and units are those of pbf::Parameters.
    */
   vtkSetClampMacro(SolverIterations, int, 1, 1000);
   vtkGetMacro(SolverIterations, int);
@@ -136,6 +137,9 @@ public:
   vtkSetMacro(Unilateral, bool);
   vtkGetMacro(Unilateral, bool);
   vtkBooleanMacro(Unilateral, bool);
+  vtkSetMacro(MirrorWalls, bool);
+  vtkGetMacro(MirrorWalls, bool);
+  vtkBooleanMacro(MirrorWalls, bool);
   vtkSetVector3Macro(Gravity, double);
   vtkGetVector3Macro(Gravity, double);
   ///@}
@@ -195,6 +199,7 @@ protected:
   double XSPHViscosity;
   double VorticityEpsilon;
   bool Unilateral;
+  bool MirrorWalls;
   double Gravity[3];
 
   double FrameInterval;

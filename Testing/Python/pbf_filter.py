@@ -1,0 +1,100 @@
+"""As a filter the algorithm makes the input's points the fluid: point i is particle i at frame 0
+(with the input's "velocity" when it has one), the fluid then falls inside the scene's domain,
+an input change restarts it, and an empty input, a NaN coordinate or a point outside the domain is
+an error naming the point and its value, with the previous output kept."""
+import os
+import sys
+
+import numpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import pbf_testing as T  # noqa: E402
+from paraview.simple import PointSource, ProgrammableSource  # noqa: E402
+from vtkmodules.util import numpy_support  # noqa: E402
+
+T.load_plugin(globals())
+expect = T.expect
+
+# A ball of random points in the middle of the dam break tank (x 0..1.6, y 0..0.8, z 0..0.6),
+# about as dense as the lattice: a 0.12 m ball holds 113 sites of 0.04 m.
+SPACING = 0.04
+seed = PointSource(Center=[0.8, 0.35, 0.3], Radius=0.12, NumberOfPoints=100)
+fluid = PositionBasedFluidsFromPoints(Input=seed, ParticleSpacing=SPACING,  # noqa: F821
+                                      NumberOfFrames=6, SubstepsPerFrame=2)
+
+seed.UpdatePipeline()
+seed_points = numpy_support.vtk_to_numpy(
+    seed.GetClientSideObject().GetOutputDataObject(0).GetPoints().GetData()).copy()
+start = T.frame(fluid, 0.0)
+expect(start["n"] == 100, "100 input points became %d particles" % start["n"])
+expect(numpy.array_equal(start["id"], numpy.arange(100)), "ids are not the input's point ids")
+expect(numpy.array_equal(start["points"], seed_points.astype(start["points"].dtype)),
+       "frame 0 is not the input's points, point i as particle i")
+expect(not start["velocity"].any(), "an input without velocity must start at rest")
+
+later = T.frame(fluid, 6 / 60.0)
+expect(T.finite(later["points"]) and T.finite(later["velocity"]), "non-finite values at frame 6")
+expect(later["n"] == 100 and numpy.array_equal(later["id"], numpy.arange(100)),
+       "the particles changed")
+domain = T.field_value(T.output_at(fluid, 6 / 60.0), "Domain")
+expect(domain == (0.0, 1.6, 0.0, 0.8, 0.0, 0.6), "the scene's domain is %s" % (domain,))
+# The ball is in free fall for 0.1 s (12 steps of 1/120 s, far from the floor): its internal
+# pressure is pairwise, so its centre falls as one body, v_y = -g t = -0.981 m/s and, with the
+# solver's symplectic Euler, g dt^2 (12 * 13 / 2) = 5.31 cm. The tolerance (5%, 10%) leaves room
+# for the vorticity confinement and the spreading of a random ball.
+fall = start["points"][:, 1].mean() - later["points"][:, 1].mean()
+expect(abs(fall - 0.0531) < 0.1 * 0.0531, "the ball's centre fell %.4f m in 0.1 s" % fall)
+vy = later["velocity"][:, 1].mean()
+expect(abs(vy + 0.981) < 0.05 * 0.981, "the ball's centre falls at %.3f m/s" % vy)
+speed = numpy.linalg.norm(later["velocity"], axis=1)
+expect(speed.max() < 4.0, "a particle of the ball moves at %.2f m/s" % speed.max())
+
+# The input changes: the simulation restarts from the new points.
+seed.NumberOfPoints = 80
+expect(T.frame(fluid, 3 / 60.0)["n"] == 80, "a changed input was not used")
+
+# An input with a "velocity" point array starts with that velocity.
+LATTICE = """
+import numpy
+from vtkmodules.vtkCommonCore import vtkPoints
+from vtkmodules.vtkCommonDataModel import vtkPolyData
+from vtkmodules.util import numpy_support
+g = numpy.arange(%(n)d) * 0.05 + 0.5
+x = numpy.array(numpy.meshgrid(g, g - 0.3, g - 0.3, indexing="ij")).reshape(3, -1).T.copy()
+%(edit)s
+points = vtkPoints()
+points.SetData(numpy_support.numpy_to_vtk(x, deep=True))
+output.SetPoints(points)
+v = numpy_support.numpy_to_vtk(numpy.tile([1.0, 0.0, -0.5], (len(x), 1)), deep=True)
+v.SetName("velocity")
+output.GetPointData().AddArray(v)
+"""
+lattice = ProgrammableSource(OutputDataSetType="vtkPolyData",
+                             Script=LATTICE % {"n": 4, "edit": ""})
+fluid.Input = lattice
+moving = T.frame(fluid, 0.0)
+expect(moving["n"] == 64, "the lattice gave %d particles" % moving["n"])
+expect(numpy.all(moving["velocity"] == numpy.array([1.0, 0.0, -0.5], dtype=numpy.float32)),
+       "the input's velocity array was not the initial velocity")
+
+# Errors name the point and its value; the previous output stays.
+BAD = [
+    ("empty input", "x = x[:0]", ["input number of points = 0"]),
+    ("NaN coordinate", "x[5, 1] = float('nan')", ["input point 5", "nan", "finite"]),
+    ("point outside the domain", "x[7] = [5.0, 0.2, 0.3]",
+     ["position of particle 7", "(5, 0.2, 0.3)", "outside the domain"]),
+]
+for what, edit, needles in BAD:
+    lattice.Script = LATTICE % {"n": 4, "edit": edit}
+    _, text = T.capture_messages(lambda: T.output_at(fluid, 0.0))
+    errors = [line for line in text.splitlines() if line.startswith("vtkPBFSimulation")]
+    expect(len(errors) == 1, "%s: expected one vtkPBFSimulation error, got %r" % (what, text))
+    for needle in needles:
+        expect(needle in errors[0], "%s: the error %r does not name %r" % (what, errors[0], needle))
+    T.expect_identical(T.frame(fluid, 0.0), moving, "%s: the output after the error" % what)
+
+# A valid input works again.
+lattice.Script = LATTICE % {"n": 3, "edit": ""}
+expect(T.frame(fluid, 2 / 60.0)["n"] == 27, "a valid input after the errors was not simulated")
+
+T.passed("Filter")

@@ -1,0 +1,96 @@
+"""ParaView's GUI (run by smTestDriver under Xvfb, the plugin loaded with --plugins) creates the
+source with its defaults, shows it as the proxy's hints say, plays the animation to the last frame
+and saves a screenshot in which the particles must be visible and colored by |velocity|.
+
+PBF_GUI_FRAMES, when set, shortens the animation (NumberOfFrames); everything else is default."""
+import os
+
+import numpy
+from paraview import simple
+from vtkmodules.util import numpy_support
+from vtkmodules.vtkIOImage import vtkPNGReader
+
+
+def expect(condition, message):
+    if not condition:
+        raise RuntimeError("pbf_gui: " + message)
+
+
+def read_png(path):
+    reader = vtkPNGReader()
+    reader.SetFileName(path)
+    reader.Update()
+    image = reader.GetOutput()
+    width, height, _ = image.GetDimensions()
+    pixels = numpy_support.vtk_to_numpy(image.GetPointData().GetScalars())
+    return pixels.reshape(height, width, -1)[:, :, :3].astype(int)
+
+
+expect(hasattr(simple, "PositionBasedFluids"),
+       "the plugin's source is not available: was it loaded with --plugins?")
+output_dir = os.environ.get("PBF_GUI_OUTPUT", os.getcwd())
+os.makedirs(output_dir, exist_ok=True)
+
+source = simple.PositionBasedFluids()
+frames = os.environ.get("PBF_GUI_FRAMES")
+if frames:
+    source.NumberOfFrames = int(frames)
+view = simple.GetActiveViewOrCreate("RenderView")
+view.ViewSize = [800, 450]
+display = simple.Show(source, view)
+simple.Render(view)
+
+# What Apply with nothing else set gives: particles, colored by |velocity|.
+expect(display.Representation in ("Point Gaussian", "Points"),
+       "shown as %s, not as particles" % display.Representation)
+expect(list(display.ColorArrayName) == ["POINTS", "velocity"],
+       "colored by %s, not by velocity" % list(display.ColorArrayName))
+lut = simple.GetColorTransferFunction("velocity")
+expect(lut.VectorMode == "Magnitude", "velocity is colored by its %s" % lut.VectorMode)
+# The plugin's GUI defaults (Plugin/pqPBFRepresentationDefaults.h): touching spheres, and a color
+# map that follows the speeds as they grow from rest.
+expect(display.GaussianRadius == 0.5 * source.ParticleSpacing,
+       "Point Gaussian radius %g, expected half the spacing" % display.GaussianRadius)
+expect(lut.AutomaticRescaleRangeMode == "Grow and update every timestep",
+       "the velocity color map rescales %r" % lut.AutomaticRescaleRangeMode)
+
+scene = simple.GetAnimationScene()
+scene.UpdateAnimationUsingDataTimeSteps()
+keeper = simple.GetTimeKeeper()
+steps = list(keeper.TimestepValues)
+expect(len(steps) == source.NumberOfFrames + 1,
+       "the animation has %d time steps for %d frames" % (len(steps), source.NumberOfFrames))
+scene.Play()
+expect(keeper.Time == steps[-1], "Play stopped at t = %g, not at the last frame %g"
+       % (keeper.Time, steps[-1]))
+data = source.GetClientSideObject().GetOutputDataObject(0)
+frame = int(data.GetFieldData().GetArray("Frame").GetTuple1(0))
+expect(frame == source.NumberOfFrames, "the view shows frame %d, not the last (%d)"
+       % (frame, source.NumberOfFrames))
+
+# A side view of the tank (gravity -y, x 0..1.6, y 0..0.8, z 0..0.6), as the main job uses.
+view.CameraPosition = [0.8, 0.55, 3.2]
+view.CameraFocalPoint = [0.8, 0.3, 0.3]
+view.CameraViewUp = [0.0, 1.0, 0.0]
+view.CameraParallelProjection = 0
+simple.Render(view)
+shot = os.path.join(output_dir, "pbf_gui_last_frame.png")
+simple.SaveScreenshot(shot, view, ImageResolution=[800, 450])
+simple.Hide(source, view)
+empty = os.path.join(output_dir, "pbf_gui_empty.png")
+simple.SaveScreenshot(empty, view, ImageResolution=[800, 450])
+simple.Show(source, view)
+
+# Particles are the pixels that change when the source is hidden. The background is whatever the
+# palette makes it; the comparison needs no assumption about it.
+with_fluid, without = read_png(shot), read_png(empty)
+changed = numpy.any(with_fluid != without, axis=2)
+fraction = changed.mean()
+# The collapsed dam break covers the tank floor: several % of this view. 0.5% is a floor that only
+# an empty or nearly empty view stays under.
+expect(fraction > 0.005, "only %.3f%% of the screenshot shows particles" % (100 * fraction))
+colors = {tuple(c // 16) for c in with_fluid[changed]}
+expect(len(colors) >= 8, "the particles show only %d distinct colors: not colored by |velocity|"
+       % len(colors))
+print("pbf_gui: frame %d of %d, %.1f%% of the view is particles in %d colors; saved %s"
+      % (frame, source.NumberOfFrames, 100 * fraction, len(colors), shot))

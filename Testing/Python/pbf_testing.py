@@ -1,0 +1,130 @@
+"""Shared helpers of the plugin's pvpython/pvbatch tests.
+
+The tests run in a builtin session (no separate server), so the VTK object behind a proxy is in
+this process: frames are read from it directly, at exactly the time that was asked for.
+"""
+import os
+import sys
+
+import numpy
+from paraview import simple
+from vtkmodules.util import numpy_support
+from vtkmodules.vtkCommonCore import vtkLogger, vtkOutputWindow, vtkStringOutputWindow
+
+# Small scenes keep each test to seconds: the dam break at 0.05 m spacing is 8 x 12 x 12 = 1152
+# particles, one step about 10 ms on two cores.
+QUICK_SPACING = 0.05
+QUICK_PARTICLES = 8 * 12 * 12
+
+
+class TestFailure(AssertionError):
+    pass
+
+
+def expect(condition, message):
+    """An assertion that survives python -O and says what was expected."""
+    if not condition:
+        raise TestFailure(message)
+
+
+def plugin_path():
+    """The plugin's shared library: --plugin PATH on the command line, else $PBF_PLUGIN."""
+    if "--plugin" in sys.argv:
+        return sys.argv[sys.argv.index("--plugin") + 1]
+    path = os.environ.get("PBF_PLUGIN")
+    expect(path, "no plugin given: pass --plugin PATH or set PBF_PLUGIN")
+    return path
+
+
+def argument(name, default=None):
+    if name in sys.argv:
+        return sys.argv[sys.argv.index(name) + 1]
+    return default
+
+
+def load_plugin(namespace):
+    """Loads the plugin in this process and puts its proxy constructors into namespace."""
+    path = plugin_path()
+    expect(os.path.isfile(path), "plugin not found: %s" % path)
+    simple.LoadPlugin(path, remote=False, ns=namespace)
+    for constructor in ("PositionBasedFluids", "PositionBasedFluidsFromPoints"):
+        expect(constructor in namespace, "LoadPlugin did not define %s()" % constructor)
+
+
+def capture_messages(action):
+    """Runs action() with VTK's output window replaced by a string; returns (result, text).
+
+    pvpython routes Python's print through the output window too, so nothing is printed
+    while the capture is on. The logger's copy on stderr is silenced as well: an expected error
+    must not look like an unexpected one ("ERR|") in the test's output.
+    """
+    previous = vtkOutputWindow.GetInstance()
+    previous.Register(None)
+    capture = vtkStringOutputWindow()
+    vtkOutputWindow.SetInstance(capture)
+    verbosity = vtkLogger.GetCurrentVerbosityCutoff()
+    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
+    try:
+        result = action()
+    finally:
+        vtkLogger.SetStderrVerbosity(verbosity)
+        vtkOutputWindow.SetInstance(previous)
+        previous.UnRegister(None)
+    return result, capture.GetOutput()
+
+
+def output_at(proxy, time):
+    """Updates the proxy at time and returns its VTK output (a live object: copy what you keep)."""
+    proxy.UpdatePipeline(time)
+    return proxy.GetClientSideObject().GetOutputDataObject(0)
+
+
+def field_value(data, name):
+    array = data.GetFieldData().GetAbstractArray(name)
+    expect(array is not None, "field data array %s is missing" % name)
+    if array.IsA("vtkStringArray"):
+        return array.GetValue(0)
+    if array.GetNumberOfComponents() == 1:
+        return array.GetTuple1(0)
+    return array.GetTuple(0)
+
+
+def frame(proxy, time):
+    """The particles of the frame answering time, as numpy arrays sorted by particle id."""
+    data = output_at(proxy, time)
+    n = data.GetNumberOfPoints()
+    point_data = data.GetPointData()
+    ids = numpy_support.vtk_to_numpy(point_data.GetArray("id")).copy()
+    order = numpy.argsort(ids, kind="stable")
+    result = {
+        "n": n,
+        "id": ids[order],
+        "points": numpy_support.vtk_to_numpy(data.GetPoints().GetData())[order].copy(),
+        "points_type": data.GetPoints().GetData().GetClassName(),
+        "time": data.GetInformation().Get(data.DATA_TIME_STEP()),
+        "step": int(field_value(data, "StepCount")),
+        "frame": int(field_value(data, "Frame")),
+    }
+    for name in ("density", "lambda", "velocity"):
+        result[name] = numpy_support.vtk_to_numpy(point_data.GetArray(name))[order].copy()
+    return result
+
+
+def expect_identical(a, b, what):
+    """Bit-identical frames: same ids, and every array equal element by element."""
+    expect(a["n"] == b["n"], "%s: %d particles vs %d" % (what, a["n"], b["n"]))
+    expect(numpy.array_equal(a["id"], b["id"]), "%s: the particle ids differ" % what)
+    for name in ("points", "velocity", "density", "lambda"):
+        if not numpy.array_equal(a[name], b[name]):
+            worst = numpy.max(numpy.abs(a[name].astype(float) - b[name].astype(float)))
+            raise TestFailure("%s: %s differs (max |difference| %g)" % (what, name, worst))
+
+
+def passed(name):
+    sys.stdout.write("%s: passed\n" % name)
+    sys.stdout.flush()
+
+
+def finite(values):
+    return bool(numpy.all(numpy.isfinite(values)))
+
