@@ -73,9 +73,8 @@ bool SameParameters(const pbf::Parameters& a, const pbf::Parameters& b)
     a.relaxation == b.relaxation && a.sCorrK == b.sCorrK && a.sCorrN == b.sCorrN &&
     a.sCorrDeltaQ == b.sCorrDeltaQ && a.xsphC == b.xsphC &&
     a.vorticityEpsilon == b.vorticityEpsilon && a.unilateral == b.unilateral &&
-    a.mirrorWalls == b.mirrorWalls &&
-    a.gravity.x == b.gravity.x && a.gravity.y == b.gravity.y && a.gravity.z == b.gravity.z &&
-    a.timeStep == b.timeStep && SameBox(a.domain, b.domain);
+    a.mirrorWalls == b.mirrorWalls && a.gravity.x == b.gravity.x && a.gravity.y == b.gravity.y &&
+    a.gravity.z == b.gravity.z && a.timeStep == b.timeStep && SameBox(a.domain, b.domain);
 }
 
 bool operator==(const Configuration& a, const Configuration& b)
@@ -328,11 +327,16 @@ public:
     {
       // Free the old state first: two large simulations need not fit at once.
       this->Live.reset();
-      this->Live = initial
-        ? std::make_unique<pbf::Simulation>(
-            scene, configuration.Parameters, configuration.Backend, configuration.Precision, *initial)
-        : std::make_unique<pbf::Simulation>(
-            scene, configuration.Parameters, configuration.Backend, configuration.Precision);
+      const Configuration& c = configuration;
+      if (initial)
+      {
+        this->Live =
+          std::make_unique<pbf::Simulation>(scene, c.Parameters, c.Backend, c.Precision, *initial);
+      }
+      else
+      {
+        this->Live = std::make_unique<pbf::Simulation>(scene, c.Parameters, c.Backend, c.Precision);
+      }
       this->LiveConfiguration = configuration;
     }
     const std::uint64_t first = this->Live->stepCount();
@@ -428,8 +432,8 @@ int vtkPBFSimulation::RequestInformation(
   {
     times[k] = static_cast<double>(k) * this->FrameInterval;
   }
-  outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_STEPS(), times.data(),
-    static_cast<int>(times.size()));
+  outInfo->Set(
+    vtkStreamingDemandDrivenPipeline::TIME_STEPS(), times.data(), static_cast<int>(times.size()));
   const double range[2] = { times.front(), times.back() };
   outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_RANGE(), range, 2);
   // One piece only until the fluid is partitioned: the executive then runs a source on piece 0.
@@ -569,16 +573,16 @@ int vtkPBFSimulation::RequestData(
     pbf::ParticleBatch initial;
     if (!this->Internals->CanStepTo(configuration, targetStep))
     {
-      scene = sceneFile.empty() ? pbf::presetScene(this->GetPresetName())
-                                : pbf::loadSceneFile(sceneFile);
+      scene =
+        sceneFile.empty() ? pbf::presetScene(this->GetPresetName()) : pbf::loadSceneFile(sceneFile);
       if (input)
       {
         initial = BatchFromInput(input);
       }
     }
 
-    pbf::Simulation& simulation = this->Internals->Seek(
-      configuration, scene, input ? &initial : nullptr, targetStep, this);
+    pbf::Simulation& simulation =
+      this->Internals->Seek(configuration, scene, input ? &initial : nullptr, targetStep, this);
 
     vtkNew<vtkPolyData> result;
     if (simulation.stepper().precision() == pbf::Precision::Double)
