@@ -110,38 +110,54 @@ PBF_HD PBF_INLINE WallMirrors<Real> nearWalls(const Vec3<Real>& p, const Coeffic
   const Real pa[3] = { p.x, p.y, p.z };
   const Real lo[3] = { c.boxMin.x, c.boxMin.y, c.boxMin.z };
   const Real hi[3] = { c.boxMax.x, c.boxMax.y, c.boxMax.z };
+  // Unrolled, with the wall slot chosen by a branch rather than an index: on a GPU an array
+  // indexed at run time lives in local memory.
+#if defined(__CUDACC__)
+#pragma unroll
+#endif
   for (int a = 0; a < 3; ++a)
   {
     m.count[a] = 1;
+    m.wall[a][0] = m.wall[a][1] = Real(0);
     if (!c.mirrorWalls)
     {
       continue;
     }
     if (pa[a] - lo[a] < c.kernels.h)
     {
-      m.wall[a][m.count[a]++ - 1] = lo[a];
+      m.wall[a][0] = lo[a];
+      m.count[a] = 2;
     }
     if (hi[a] - pa[a] < c.kernels.h)
     {
-      m.wall[a][m.count[a]++ - 1] = hi[a];
+      if (m.count[a] == 1)
+      {
+        m.wall[a][0] = hi[a];
+      }
+      else
+      {
+        m.wall[a][1] = hi[a];
+      }
+      ++m.count[a];
     }
   }
   return m;
 }
 
-// Calls visit(image, isOriginal) for q and each of its reflections in the walls of m.
+// Calls visit(image, isOriginal) for q and each of its reflections in the walls of m. The wall is
+// picked by a select, not an index, for the reason given in nearWalls.
 template <class Real, class Visit>
 PBF_HD PBF_INLINE void forEachImage(const WallMirrors<Real>& m, const Vec3<Real>& q, Visit&& visit)
 {
   for (int ix = 0; ix < m.count[0]; ++ix)
   {
-    const Real x = ix == 0 ? q.x : Real(2) * m.wall[0][ix - 1] - q.x;
+    const Real x = ix == 0 ? q.x : Real(2) * (ix == 1 ? m.wall[0][0] : m.wall[0][1]) - q.x;
     for (int iy = 0; iy < m.count[1]; ++iy)
     {
-      const Real y = iy == 0 ? q.y : Real(2) * m.wall[1][iy - 1] - q.y;
+      const Real y = iy == 0 ? q.y : Real(2) * (iy == 1 ? m.wall[1][0] : m.wall[1][1]) - q.y;
       for (int iz = 0; iz < m.count[2]; ++iz)
       {
-        const Real z = iz == 0 ? q.z : Real(2) * m.wall[2][iz - 1] - q.z;
+        const Real z = iz == 0 ? q.z : Real(2) * (iz == 1 ? m.wall[2][0] : m.wall[2][1]) - q.z;
         visit(Vec3<Real>{ x, y, z }, ix + iy + iz == 0);
       }
     }
