@@ -1,0 +1,325 @@
+// pbf_bench: time the solver on a dam break scaled to a given particle count.
+//
+// The scene is the dam_break preset (a 2:3:3 column against the -x wall of a tank 4 x 4/3 x 1
+// times the column) with the column and tank enlarged so that the default spacing gives N
+// particles: the flow and the time step stay those of the preset, only the fluid grows. Warm-up
+// steps are excluded; GPU steps are timed with CUDA events on the stepper's stream, CPU steps with
+// the host's steady clock. Prints a table and, with --json, writes every run as JSON.
+#include "Scene.h"
+#include "Stepper.h"
+#include "ToolOptions.h"
+
+#ifdef PBF_WITH_CUDA
+#include "Cuda/CudaBackend.h"
+#endif
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace pbf;
+
+namespace
+{
+
+struct Result
+{
+  std::string backend, precision, device, neighbors;
+  double skin = 0;
+  bool graphs = false;
+  int iterations = 0;
+  std::size_t particles = 0;
+  int steps = 0;
+  double medianMs = 0, p10Ms = 0, p90Ms = 0, stepsPerSecond = 0;
+  double averageNeighbors = 0, averageDensityError = 0, maxDensityError = 0;
+  double bytesPerParticle = 0; // device memory per particle (CUDA only)
+  std::size_t deviceBytes = 0;
+  double maskBuildsPerStep = 0;
+  double setupSeconds = 0;
+  bool finite = true;
+};
+
+// The dam_break preset scaled so that the column holds about `particles` lattice sites.
+Scene scaledDamBreak(double particles, double spacing)
+{
+  const double a = std::cbrt(particles / 18.0); // column of 2a x 3a x 3a sites
+  const double cx = std::max(1.0, std::round(2 * a));
+  const double cy = std::max(1.0, std::round(3 * a));
+  Scene scene;
+  scene.name = "dam_break_scaled";
+  scene.description = "dam_break preset scaled to the particle count";
+  FluidBox column;
+  column.min = { 0, 0, 0 };
+  column.max = { cx * spacing, cy * spacing, cy * spacing };
+  scene.boxes.push_back(column);
+  scene.domain.min = { 0, 0, 0 };
+  scene.domain.max = { 4 * cx * spacing, 4.0 / 3.0 * cy * spacing, cy * spacing };
+  return scene;
+}
+
+double percentile(std::vector<double> v, double q)
+{
+  if (v.empty())
+  {
+    return 0;
+  }
+  std::sort(v.begin(), v.end());
+  const double at = q * static_cast<double>(v.size() - 1);
+  const std::size_t lo = static_cast<std::size_t>(std::floor(at));
+  const std::size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (at - static_cast<double>(lo)) * (v[hi] - v[lo]);
+}
+
+Result benchmark(const ToolOptions& options, double particles, int warmup, int steps,
+  const std::string& neighbors, double skin, bool graphs)
+{
+  const Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
+  const Parameters parameters = withSceneDomain(options.parameters, scene);
+  const auto setup0 = std::chrono::steady_clock::now();
+  ParticleBatch batch = fillScene(scene, parameters);
+
+  Result r;
+  r.backend = toString(options.backend);
+  r.precision = toString(options.precision);
+  r.iterations = parameters.solverIterations;
+  r.particles = batch.position.size();
+  r.steps = steps;
+  std::vector<double> ms;
+
+  std::unique_ptr<Stepper> stepper;
+#ifdef PBF_WITH_CUDA
+  cuda::CudaStepperInterface* gpu = nullptr;
+  if (options.backend == Backend::CUDA)
+  {
+    cuda::Options o;
+    o.search = neighbors == "walk" ? cuda::NeighborSearch::CellWalk : cuda::NeighborSearch::RowMasks;
+    o.skin = skin;
+    o.graphs = graphs;
+    auto made = cuda::makeCudaStepper(options.precision, parameters, batch, o);
+    gpu = made.get();
+    stepper = std::move(made);
+    r.neighbors = neighbors;
+    r.skin = skin;
+    r.graphs = graphs;
+  }
+  else
+#endif
+  {
+    stepper = makeStepper(options.backend, options.precision, parameters, batch);
+    r.neighbors = "walk";
+  }
+  batch = ParticleBatch{}; // the host copy is not needed any more
+  r.device = stepper->description();
+
+  for (int s = 0; s < warmup; ++s)
+  {
+    stepper->step();
+  }
+#ifdef PBF_WITH_CUDA
+  if (gpu)
+  {
+    gpu->synchronize();
+    r.setupSeconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - setup0).count();
+    const std::uint64_t builds0 = gpu->diagnostics().maskBuilds;
+    cuda::EventTimer timer(static_cast<std::size_t>(steps) + 1);
+    timer.mark(*gpu);
+    for (int s = 0; s < steps; ++s)
+    {
+      gpu->step();
+      timer.mark(*gpu);
+    }
+    ms = timer.intervalsMs();
+    const cuda::Diagnostics d = gpu->diagnostics();
+    r.bytesPerParticle = d.bytesPerParticle;
+    r.deviceBytes = d.deviceBytes;
+    r.maskBuildsPerStep = steps > 0 ? double(d.maskBuilds - builds0) / steps : 0.0;
+  }
+  else
+#endif
+  {
+    r.setupSeconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - setup0).count();
+    for (int s = 0; s < steps; ++s)
+    {
+      const auto t0 = std::chrono::steady_clock::now();
+      stepper->step();
+      const auto t1 = std::chrono::steady_clock::now();
+      ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    }
+  }
+  r.medianMs = percentile(ms, 0.5);
+  r.p10Ms = percentile(ms, 0.1);
+  r.p90Ms = percentile(ms, 0.9);
+  r.stepsPerSecond = r.medianMs > 0 ? 1000.0 / r.medianMs : 0.0;
+  const Statistics s = stepper->statistics();
+  r.averageNeighbors = s.averageNeighbors;
+  r.averageDensityError = s.averageDensityError;
+  r.maxDensityError = s.maxDensityError;
+  r.finite = s.finite;
+  return r;
+}
+
+std::string quoted(const std::string& text)
+{
+  std::string out = "\"";
+  for (char c : text)
+  {
+    if (c == '"' || c == '\\')
+    {
+      out += '\\';
+    }
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string toJson(const std::vector<Result>& results, const std::string& label)
+{
+  std::ostringstream out;
+  out.precision(9);
+  out << "{\n  \"tool\": \"pbf_bench\",\n  \"label\": " << quoted(label)
+      << ",\n  \"scene\": \"dam_break scaled to the particle count\",\n  \"runs\": [\n";
+  for (std::size_t i = 0; i < results.size(); ++i)
+  {
+    const Result& r = results[i];
+    out << "    {\"backend\": " << quoted(r.backend) << ", \"precision\": " << quoted(r.precision)
+        << ", \"device\": " << quoted(r.device) << ", \"neighbors\": " << quoted(r.neighbors)
+        << ", \"skin\": " << r.skin << ", \"graphs\": " << (r.graphs ? "true" : "false")
+        << ", \"iterations\": " << r.iterations << ",\n     \"particles\": " << r.particles
+        << ", \"steps\": " << r.steps << ", \"median_ms\": " << r.medianMs
+        << ", \"p10_ms\": " << r.p10Ms << ", \"p90_ms\": " << r.p90Ms
+        << ", \"steps_per_second\": " << r.stepsPerSecond
+        << ",\n     \"average_neighbors\": " << r.averageNeighbors
+        << ", \"average_density_error\": " << r.averageDensityError
+        << ", \"max_density_error\": " << r.maxDensityError
+        << ", \"finite\": " << (r.finite ? "true" : "false")
+        << ",\n     \"device_bytes_per_particle\": " << r.bytesPerParticle
+        << ", \"device_bytes\": " << r.deviceBytes
+        << ", \"mask_builds_per_step\": " << r.maskBuildsPerStep
+        << ", \"setup_seconds\": " << r.setupSeconds << "}"
+        << (i + 1 < results.size() ? ",\n" : "\n");
+  }
+  out << "  ]\n}\n";
+  return out.str();
+}
+
+void printRow(const Result& r)
+{
+  std::printf("%-7s %-6s %-5s %10zu %6d %10.3f %10.3f %10.3f %9.1f %7.2f %8.3f %8.3f %7.1f %6.2f%s\n",
+    r.backend.c_str(), r.precision.c_str(), r.neighbors.c_str(), r.particles, r.steps, r.medianMs,
+    r.p10Ms, r.p90Ms, r.stepsPerSecond, r.averageNeighbors, 100 * r.averageDensityError,
+    100 * r.maxDensityError, r.bytesPerParticle, r.maskBuildsPerStep, r.finite ? "" : "  NON-FINITE");
+  std::fflush(stdout);
+}
+
+std::vector<double> parseCounts(const std::string& text)
+{
+  if (text == "default")
+  {
+    return { 16e3, 32e3, 64e3, 128e3, 256e3, 512e3, 1e6, 2e6, 4e6, 8e6, 16e6 };
+  }
+  std::vector<double> counts;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ','))
+  {
+    std::size_t used = 0;
+    double value = 0;
+    try
+    {
+      value = std::stod(item, &used);
+    }
+    catch (const std::exception&)
+    {
+      used = 0;
+    }
+    if (used != item.size() || !(value >= 1 && value < 2.1e9))
+    {
+      throw InvalidInput("--sweep item \"" + item + "\": must be a particle count");
+    }
+    counts.push_back(value);
+  }
+  return counts;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+  const std::map<std::string, std::string> keys = {
+    { "particles", "particle count of the scaled dam break (default 1e6)" },
+    { "sweep", "comma-separated particle counts, or \"default\" (16k to 16M)" },
+    { "steps", "timed steps per run (default 100)" },
+    { "warmup", "untimed steps before timing (default 20)" },
+    { "neighbors", "CUDA neighbour search: masks | walk (default masks)" },
+    { "skin", "CUDA mask reach beyond h, fraction of h (default 0.1)" },
+    { "graphs", "CUDA: 1 replays a step as one graph, 0 launches kernels (default 1)" },
+    { "json", "write the results to this JSON file" },
+    { "label", "free text stored in the JSON" },
+  };
+  try
+  {
+    ToolOptions options = parseToolOptions(argc, argv, keys);
+    auto extra = [&](const std::string& key, const std::string& fallback) {
+      return options.extra.count(key) ? options.extra[key] : fallback;
+    };
+    const std::vector<double> counts = options.extra.count("sweep")
+      ? parseCounts(options.extra["sweep"])
+      : parseCounts(extra("particles", "1000000"));
+    const int steps = std::stoi(extra("steps", "100"));
+    const int warmup = std::stoi(extra("warmup", "20"));
+    const std::string neighbors = extra("neighbors", "masks");
+    if (neighbors != "masks" && neighbors != "walk")
+    {
+      throw InvalidInput("--neighbors = \"" + neighbors + "\": must be masks or walk");
+    }
+    const double skin = std::stod(extra("skin", "0.1"));
+    const bool graphs = extra("graphs", "1") != "0";
+    if (steps < 1 || warmup < 0)
+    {
+      throw InvalidInput("--steps must be >= 1 and --warmup >= 0");
+    }
+
+    std::printf("pbf_bench: dam break scaled to N particles, spacing %g m, %d solver iterations, "
+                "XSPH c %g, vorticity %g, %d warm-up + %d timed steps\n",
+      options.parameters.particleSpacing, options.parameters.solverIterations,
+      options.parameters.xsphC, options.parameters.vorticityEpsilon, warmup, steps);
+    std::printf("%-7s %-6s %-5s %10s %6s %10s %10s %10s %9s %7s %8s %8s %7s %6s\n", "backend",
+      "prec", "nbrs", "particles", "steps", "median_ms", "p10_ms", "p90_ms", "steps/s",
+      "nbrs", "avgErr%", "maxErr%", "B/part", "builds");
+    std::fflush(stdout);
+    std::vector<Result> results;
+    for (double count : counts)
+    {
+      results.push_back(benchmark(options, count, warmup, steps, neighbors, skin, graphs));
+      printRow(results.back());
+    }
+    if (!results.empty())
+    {
+      std::printf("device: %s\n", results.front().device.c_str());
+    }
+    if (options.extra.count("json"))
+    {
+      std::ofstream out(options.extra["json"]);
+      out << toJson(results, extra("label", ""));
+      if (!out)
+      {
+        throw std::runtime_error("cannot write " + options.extra["json"]);
+      }
+    }
+  }
+  catch (const std::exception& error)
+  {
+    std::cerr << "pbf_bench: " << error.what() << "\n";
+    return 2;
+  }
+  return 0;
+}
