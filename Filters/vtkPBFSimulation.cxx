@@ -310,16 +310,18 @@ public:
     return this->CudaPresent;
   }
 
-  // Positions the live simulation at targetStep of the configuration: steps on when it is at or
-  // before targetStep, otherwise starts over from the initial state. A checkpoint cache slots in
-  // here: restore the latest checkpoint of this configuration at or before targetStep instead of
-  // starting from step 0; the result stays bit-identical because stepping is deterministic.
+  // True when the live simulation is of this configuration and not past targetStep: stepping on
+  // from it gives what a run from the initial state would, bit for bit.
   bool CanStepTo(const Configuration& configuration, std::uint64_t targetStep) const
   {
     return this->Live && this->LiveConfiguration == configuration &&
       this->Live->stepCount() <= targetStep;
   }
 
+  // Positions the live simulation at targetStep of the configuration: steps on when it can,
+  // otherwise starts over from the initial state (scene, or initial when the input gives it). A
+  // checkpoint cache slots in here: restore the latest checkpoint of this configuration at or
+  // before targetStep instead of step 0; stepping is deterministic, so frames stay bit-identical.
   pbf::Simulation& Seek(const Configuration& configuration, const pbf::Scene& scene,
     const pbf::ParticleBatch* initial, std::uint64_t targetStep, vtkPBFSimulation* self)
   {

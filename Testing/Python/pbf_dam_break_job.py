@@ -1,9 +1,8 @@
 """The main job (Utilities/dam_break.py) in a short run: it writes a .pvd time series with one .vtp
 per frame holding every particle, and one PNG per frame in which the particles are visible.
 
-Runs with the system python3 (matplotlib reads the PNGs):
-    python3 pbf_dam_break_job.py --xvfb-run X --pvbatch P --script dam_break.py --plugin SO
-        --output DIR"""
+Runs with the system python3 (matplotlib reads the PNGs), pvbatch under a private Xvfb:
+    python3 pbf_dam_break_job.py --pvbatch P --script dam_break.py --plugin SO --output DIR"""
 import argparse
 import os
 import re
@@ -15,6 +14,9 @@ import xml.etree.ElementTree as ElementTree
 import numpy
 from matplotlib import image
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from pbf_xvfb import run_with_xvfb  # noqa: E402
+
 FRAMES = 3
 SPACING = 0.05
 PARTICLES = 8 * 12 * 12  # the dam break column 0.4 x 0.6 x 0.6 m at 0.05 m
@@ -25,16 +27,16 @@ def fail(message):
 
 
 parser = argparse.ArgumentParser()
-for name in ("--xvfb-run", "--pvbatch", "--script", "--plugin", "--output"):
+for name in ("--pvbatch", "--script", "--plugin", "--output"):
     parser.add_argument(name, required=True)
 args = parser.parse_args()
 
 shutil.rmtree(args.output, ignore_errors=True)
-command = [args.xvfb_run, "-a", args.pvbatch, "--dr", args.script, "--plugin", args.plugin,
+command = [args.pvbatch, "--dr", args.script, "--plugin", args.plugin,
            "--output", args.output, "--frames", str(FRAMES), "--spacing", str(SPACING),
            "--size", "640", "360"]
 print(" ".join(command))
-run = subprocess.run(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+run = run_with_xvfb(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 print(run.stdout)
 if run.returncode != 0:
     fail("dam_break.py exited with %d" % run.returncode)

@@ -7,6 +7,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import pbf_testing as T  # noqa: E402
 from paraview import servermanager  # noqa: E402
+from paraview.simple import PointSource  # noqa: E402
 
 T.load_plugin(globals())
 
