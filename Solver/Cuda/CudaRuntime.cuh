@@ -30,36 +30,38 @@ inline void check(cudaError_t error, const char* what)
   }
 }
 
-// Launch shapes per stage. The neighbour passes run 128 threads a block: small blocks keep the
-// tail of a launch short; register use sets the occupancy (see the benchmark notes).
+// Launch shapes per stage: the neighbour passes take their block size from Options::block (128
+// by default: small blocks keep the tail of a launch short, and with ~56 registers a thread 128
+// fills the most of an SM); the others run 256 threads a block.
 template <class Stage>
 struct Launch
 {
-  static constexpr int block = 256;
+  static constexpr bool neighborPass = false;
 };
 template <>
 struct Launch<DensityStage>
 {
-  static constexpr int block = 128;
+  static constexpr bool neighborPass = true;
 };
 template <>
 struct Launch<CorrectionStage>
 {
-  static constexpr int block = 128;
+  static constexpr bool neighborPass = true;
 };
 template <>
 struct Launch<VorticityStage>
 {
-  static constexpr int block = 128;
+  static constexpr bool neighborPass = true;
 };
 template <>
 struct Launch<ConfinementStage>
 {
-  static constexpr int block = 128;
+  static constexpr bool neighborPass = true;
 };
+constexpr int kMaxBlock = 256;
 
 template <class Stage, class F>
-__global__ void __launch_bounds__(Launch<Stage>::block) stageKernel(Stage, std::uint32_t n, F f)
+__global__ void __launch_bounds__(kMaxBlock) stageKernel(Stage, std::uint32_t n, F f)
 {
   const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < n)
@@ -71,7 +73,7 @@ __global__ void __launch_bounds__(Launch<Stage>::block) stageKernel(Stage, std::
 // As stageKernel, and the max of f's non-negative results: a warp max, then one integer atomic
 // per warp. The max is the same in any order, so this stays deterministic.
 template <class Stage, class F>
-__global__ void __launch_bounds__(Launch<Stage>::block) stageMaxKernel(
+__global__ void __launch_bounds__(kMaxBlock) stageMaxKernel(
   Stage, std::uint32_t n, unsigned long long* maxBits, F f)
 {
   const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -96,10 +98,11 @@ __global__ void __launch_bounds__(Launch<Stage>::block) stageMaxKernel(
 class KernelExecutor
 {
 public:
-  KernelExecutor(cudaStream_t stream, void* temp, std::size_t tempBytes)
+  KernelExecutor(cudaStream_t stream, void* temp, std::size_t tempBytes, int neighborBlock)
     : stream_(stream)
     , temp_(temp)
     , tempBytes_(tempBytes)
+    , neighborBlock_(neighborBlock)
   {
   }
 
@@ -110,7 +113,7 @@ public:
     {
       return;
     }
-    constexpr int block = Launch<Stage>::block;
+    const int block = Launch<Stage>::neighborPass ? neighborBlock_ : kMaxBlock;
     stageKernel<<<(n + block - 1) / block, block, 0, stream_>>>(stage, n, f);
     check(cudaGetLastError(), "kernel launch");
   }
@@ -122,7 +125,7 @@ public:
     {
       return;
     }
-    constexpr int block = Launch<Stage>::block;
+    const int block = Launch<Stage>::neighborPass ? neighborBlock_ : kMaxBlock;
     stageMaxKernel<<<(n + block - 1) / block, block, 0, stream_>>>(stage, n, maxBits, f);
     check(cudaGetLastError(), "kernel launch");
   }
@@ -176,6 +179,7 @@ private:
   cudaStream_t stream_;
   void* temp_;
   std::size_t tempBytes_;
+  int neighborBlock_;
 };
 
 } // namespace cuda

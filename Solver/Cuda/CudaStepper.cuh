@@ -92,7 +92,11 @@ __global__ void __launch_bounds__(kStatisticsThreads) statisticsKernel(const Vec
     double neighbors = 0;
     forEachNeighbor(grid, i, [&](std::uint32_t j) {
       const Vec3d r = xi - Vec3d::from(x[j]);
-      neighbors += (j != i && dot(r, r) < h2) ? 1.0 : 0.0;
+      // Rounded like the host's dot (no FMA): lattice pairs sit at exactly h, and the count must
+      // not depend on how r^2 rounds there.
+      const double r2 =
+        __dadd_rn(__dadd_rn(__dmul_rn(r.x, r.x), __dmul_rn(r.y, r.y)), __dmul_rn(r.z, r.z));
+      neighbors += (j != i && r2 < h2) ? 1.0 : 0.0;
     });
     acc[kNeighborSum] += neighbors;
     const Vec3d vi = Vec3d::from(v[i]);
@@ -226,6 +230,11 @@ CudaStepper<Real>::CudaStepper(
   {
     throw InvalidInput("CUDA skin = " + std::to_string(options_.skin) +
       ": must lie in (0, 1] (a fraction of h)");
+  }
+  if (options_.block < 32 || options_.block > kMaxBlock || options_.block % 32 != 0)
+  {
+    throw InvalidInput("CUDA block = " + std::to_string(options_.block) +
+      ": must be a multiple of 32 up to " + std::to_string(kMaxBlock));
   }
   std::string why;
   if (!cudaDevicePresent(&why))
@@ -417,7 +426,7 @@ StepBuffers<Real> CudaStepper<Real>::buffers() const
 template <class Real>
 KernelExecutor CudaStepper<Real>::executor() const
 {
-  return KernelExecutor(stream_, temp_, tempBytes_);
+  return KernelExecutor(stream_, temp_, tempBytes_, options_.block);
 }
 
 template <class Real>

@@ -34,6 +34,7 @@ struct Result
   std::string backend, precision, device, neighbors;
   double skin = 0;
   bool graphs = false;
+  int block = 0;
   int iterations = 0;
   std::size_t particles = 0;
   int steps = 0;
@@ -78,7 +79,7 @@ double percentile(std::vector<double> v, double q)
 }
 
 Result benchmark(const ToolOptions& options, double particles, int warmup, int steps,
-  const std::string& neighbors, double skin, bool graphs)
+  const std::string& neighbors, double skin, bool graphs, int block)
 {
   const Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
   const Parameters parameters = withSceneDomain(options.parameters, scene);
@@ -102,12 +103,14 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
     o.search = neighbors == "walk" ? cuda::NeighborSearch::CellWalk : cuda::NeighborSearch::RowMasks;
     o.skin = skin;
     o.graphs = graphs;
+    o.block = block;
     auto made = cuda::makeCudaStepper(options.precision, parameters, batch, o);
     gpu = made.get();
     stepper = std::move(made);
     r.neighbors = neighbors;
     r.skin = skin;
     r.graphs = graphs;
+    r.block = block;
   }
   else
 #endif
@@ -192,7 +195,7 @@ std::string toJson(const std::vector<Result>& results, const std::string& label)
     const Result& r = results[i];
     out << "    {\"backend\": " << quoted(r.backend) << ", \"precision\": " << quoted(r.precision)
         << ", \"device\": " << quoted(r.device) << ", \"neighbors\": " << quoted(r.neighbors)
-        << ", \"skin\": " << r.skin << ", \"graphs\": " << (r.graphs ? "true" : "false")
+        << ", \"skin\": " << r.skin << ", \"graphs\": " << (r.graphs ? "true" : "false") << ", \"block\": " << r.block
         << ", \"iterations\": " << r.iterations << ",\n     \"particles\": " << r.particles
         << ", \"steps\": " << r.steps << ", \"median_ms\": " << r.medianMs
         << ", \"p10_ms\": " << r.p10Ms << ", \"p90_ms\": " << r.p90Ms
@@ -262,6 +265,7 @@ int main(int argc, char** argv)
     { "neighbors", "CUDA neighbour search: masks | walk (default masks)" },
     { "skin", "CUDA mask reach beyond h, fraction of h (default 0.1)" },
     { "graphs", "CUDA: 1 replays a step as one graph, 0 launches kernels (default 1)" },
+    { "block", "CUDA: threads per block of the neighbour passes (default 128)" },
     { "json", "write the results to this JSON file" },
     { "label", "free text stored in the JSON" },
   };
@@ -283,6 +287,7 @@ int main(int argc, char** argv)
     }
     const double skin = std::stod(extra("skin", "0.1"));
     const bool graphs = extra("graphs", "1") != "0";
+    const int block = std::stoi(extra("block", "128"));
     if (steps < 1 || warmup < 0)
     {
       throw InvalidInput("--steps must be >= 1 and --warmup >= 0");
@@ -299,7 +304,7 @@ int main(int argc, char** argv)
     std::vector<Result> results;
     for (double count : counts)
     {
-      results.push_back(benchmark(options, count, warmup, steps, neighbors, skin, graphs));
+      results.push_back(benchmark(options, count, warmup, steps, neighbors, skin, graphs, block));
       printRow(results.back());
     }
     if (!results.empty())

@@ -1,0 +1,179 @@
+#!/usr/bin/env bash
+# The GPU machine's whole job, in one call of the device tool (carry [".deps"], made on the build
+# machine by Utilities/gpu-deps.sh):
+#   1. build Solver/ alone with CUDA for sm_90 (no ParaView there), all cores
+#   2. ctest, labels gpu and solver
+#   3. compute-sanitizer memcheck and racecheck on small scenes (must report 0 errors)
+#   4. pbf_bench: the CUDA sweep 16k-16M in single precision, 10M and 100M, double precision,
+#      the cell walk, skins, graphs off, and the serial and OpenMP references on this CPU
+#   5. ncu: per-kernel times of one step at 1M, and the neighbour passes' sections
+# Logs and JSON go under $OUT (else output/gpu-run); a short table is printed last. Every phase
+# has a time limit inside a budget of PBF_GPU_BUDGET seconds (default 540), so the table comes
+# within the device tool's 10 minutes whatever happens.
+set -uo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+out=${OUT:-$root/output/gpu-run}
+build=${PBF_GPU_BUILD:-/tmp/pbf-gpu-build}
+work=/tmp/pbf-gpu-run
+budget=${PBF_GPU_BUDGET:-540}
+mkdir -p "$out" "$work"
+rm -f "$work"/*.json
+exec > >(tee "$out/run.log") 2>&1
+t0=$SECONDS
+results=()
+phase() { echo; echo "== [$((SECONDS - t0)) s] $*"; }
+# limit SECONDS: the phase's own limit, cut to what the budget has left (30 s kept for the end).
+limit() {
+  local left=$((budget - 30 - (SECONDS - t0)))
+  ((left < $1)) && echo $((left > 5 ? left : 5)) || echo "$1"
+}
+record() { results+=("$1"); echo ">> $1"; }
+
+phase "machine"
+nvidia-smi --query-gpu=name,driver_version,memory.total,memory.used,clocks.sm,clocks.max.sm,power.limit \
+  --format=csv 2>&1 || true
+echo "cores: $(nproc); $(nvcc --version | tail -1); $(cmake --version | head -1)"
+command -v compute-sanitizer ncu ninja || true
+
+phase "build"
+generator=()
+command -v ninja >/dev/null && generator=(-G Ninja)
+if timeout "$(limit 300)" cmake -S "$root" -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release \
+    -DPBF_SOLVER_ONLY=ON -DCMAKE_CUDA_ARCHITECTURES=90 \
+    -DPBF_JSON_INCLUDE_DIR="$root/.deps/json" -DPBF_GTEST_SOURCE_DIR="$root/.deps/googletest" \
+    >"$work/configure.log" 2>&1 &&
+  timeout "$(limit 300)" cmake --build "$build" -j "$(nproc)" >"$work/build.log" 2>&1; then
+  record "build: ok ($((SECONDS - t0)) s)"
+else
+  tail -n 40 "$work/configure.log" "$work/build.log"
+  record "build: FAILED"
+  exit 1
+fi
+grep -E "warning|spill" "$work/build.log" | grep -v "^--" | head -20
+# The neighbour passes' machine code, for reading offline.
+for object in "$build"/Solver/CMakeFiles/pbf_solver.dir/Cuda/CudaStepperFloat.cu.o; do
+  cuobjdump -sass "$object" 2>/dev/null | gzip >"$work/float.sass.gz" || true
+done
+bench=$build/Solver/Tools/pbf_bench
+run=$build/Solver/Tools/pbf_run
+
+# bench NAME SECONDS ARGS...: one pbf_bench run, its JSON kept for the table.
+bench() {
+  local name=$1 seconds=$2
+  shift 2
+  phase "bench $name: $*"
+  timeout "$(limit "$seconds")" "$bench" "$@" --json "$work/$name.json" --label "$name" ||
+    record "bench $name: FAILED or cut (exit $?)"
+}
+
+bench cuda_single 120 --backend cuda --sweep default --warmup 20 --steps 100
+bench cuda_10M 40 --backend cuda --particles 10000000 --warmup 10 --steps 50
+bench cuda_100M 90 --backend cuda --particles 100000000 --warmup 3 --steps 10
+bench cuda_double 60 --backend cuda --precision double --sweep 16000,64000,256000,1000000,4000000 \
+  --warmup 20 --steps 100
+bench cuda_walk 60 --backend cuda --neighbors walk --sweep 64000,256000,1000000,4000000 --warmup 10 \
+  --steps 50
+for skin in 0.05 0.2 0.3; do
+  bench "cuda_skin_$skin" 20 --backend cuda --skin "$skin" --particles 1000000 --warmup 20 --steps 100
+done
+for block in 64 256; do
+  bench "cuda_block_$block" 20 --backend cuda --block "$block" --particles 1000000 --warmup 20 --steps 100
+done
+bench cuda_nographs 30 --backend cuda --graphs 0 --sweep 16000,64000,1000000 --warmup 20 --steps 100
+bench serial 90 --backend serial --sweep 16000,64000,256000 --warmup 1 --steps 3
+bench openmp 40 --backend openmp --sweep 64000,256000,1000000 --warmup 1 --steps 3
+
+phase "ctest (gpu, solver)"
+(cd "$build" && timeout "$(limit 240)" ctest -L 'gpu|solver' -j "$(nproc)" --timeout 300 \
+  --output-on-failure) >"$work/ctest.log" 2>&1
+ctest_status=$?
+grep -E "tests passed|Skipped|Failed|\*\*\*|Timeout|Exception" "$work/ctest.log" | head -60
+record "ctest gpu|solver: $(grep -E 'tests passed' "$work/ctest.log" | tail -1) (exit $ctest_status)"
+
+phase "compute-sanitizer"
+# sanitize "TOOL [OPTIONS]" PROGRAM ARGS...
+sanitize() {
+  local tool=($1)
+  shift
+  local log="$work/sanitizer-${tool[0]}-$RANDOM.log"
+  timeout "$(limit 90)" compute-sanitizer --tool "${tool[@]}" --error-exitcode 9 "$@" >"$log" 2>&1
+  local status=$?
+  tail -n 3 "$log"
+  record "${tool[0]} $(basename "$1") ${*:2}: $(grep -E 'ERROR SUMMARY|RACECHECK SUMMARY' "$log" | tail -1) (exit $status)"
+}
+small=(--backend cuda --particles 4000 --warmup 2 --steps 3)
+sanitize "memcheck --leak-check full" "$bench" "${small[@]}"
+sanitize memcheck "$bench" "${small[@]}" --precision double --neighbors walk --graphs 0
+sanitize memcheck "$run" --backend cuda --scene stream --spacing 0.01 --steps 20 --report 10
+sanitize racecheck "$bench" "${small[@]}"
+
+phase "ncu"
+# One step at 1M: the kernels of construction (evaluateAtRest) and of 2 warm-up steps first.
+timeout "$(limit 60)" ncu --clock-control none --metrics gpu__time_duration.sum --csv --page raw \
+  "$bench" --backend cuda --particles 1000000 --warmup 2 --steps 1 >"$out/ncu_times.csv" 2>&1 ||
+  record "ncu times: FAILED or cut"
+timeout "$(limit 90)" ncu --clock-control none --kernel-name-base demangled \
+  -k 'regex:DensityStage|CorrectionStage|VorticityStage|ConfinementStage' --launch-skip 1 \
+  --launch-count 10 --section SpeedOfLight --section Occupancy --section SchedulerStats \
+  --section WarpStateStats --section MemoryWorkloadAnalysis \
+  --metrics smsp__thread_inst_executed_per_inst_executed.ratio,smsp__inst_executed.sum \
+  "$bench" --backend cuda --particles 1000000 --warmup 0 --steps 1 >"$out/ncu_sections.txt" 2>&1 ||
+  record "ncu sections: FAILED or cut"
+grep -E "Stage|Duration|Throughput|Achieved Occupancy|Issue Slots Busy|thread_inst_executed_per" \
+  "$out/ncu_sections.txt" | head -60
+
+phase "summary"
+python3 - "$work" "$out/bench.json" <<'PY'
+import glob, json, os, sys
+work, target = sys.argv[1], sys.argv[2]
+runs = []
+for path in sorted(glob.glob(os.path.join(work, "*.json"))):
+    try:
+        data = json.load(open(path))
+    except Exception as error:
+        print("unreadable", path, error)
+        continue
+    for r in data["runs"]:
+        r["label"] = data["label"]
+        runs.append(r)
+json.dump({"runs": runs}, open(target, "w"), indent=1)
+PY
+# $OUT keeps five files: run.log, bench.json, ncu_times.csv, ncu_sections.txt, logs.tar.gz.
+(cd "$work" && tar czf "$out/logs.tar.gz" ./*.log ./*.json ./*.sass.gz) 2>/dev/null
+
+echo
+echo "== [$((SECONDS - t0)) s] results"
+for line in "${results[@]}"; do echo "  $line"; done
+python3 - "$out/bench.json" <<'PY' || echo "summary: no CUDA results to tabulate"
+import json, sys
+runs = json.load(open(sys.argv[1]))["runs"]
+def pick(label):
+    return {r["particles"]: r for r in runs if r["label"] == label}
+single, double, walk, serial = pick("cuda_single"), pick("cuda_double"), pick("cuda_walk"), pick("serial")
+extra = {r["particles"]: r for r in runs if r["label"] in ("cuda_10M", "cuda_100M")}
+single.update(extra)
+# Serial ms per particle-step from its largest measured run; extrapolated linearly beyond.
+per = None
+if serial:
+    n = max(serial)
+    per = serial[n]["median_ms"] / n
+print("%10s %10s %9s %10s %9s %9s %10s %9s" % ("particles", "f32 ms", "steps/s", "f64 ms", "B/part",
+      "builds", "serial ms", "speedup"))
+for n in sorted(single):
+    r = single[n]
+    d = min(double, key=lambda m: abs(m - n)) if double else None
+    dms = double[d]["median_ms"] if d and abs(d - n) < 0.1 * n else float("nan")
+    s = serial[n]["median_ms"] if n in serial else (per * n if per else float("nan"))
+    mark = "" if n in serial else "*"
+    print("%10d %10.3f %9.1f %10.3f %9.0f %9.2f %9.1f%s %9.0f" % (n, r["median_ms"],
+          r["steps_per_second"], dms, r["device_bytes_per_particle"], r["mask_builds_per_step"], s,
+          mark, s / r["median_ms"]))
+print("* serial extrapolated linearly from its largest measured count")
+for n in sorted(walk):
+    m = min(single, key=lambda k: abs(k - n))
+    print("walk %9d: %8.3f ms   masks: %8.3f ms" % (n, walk[n]["median_ms"], single[m]["median_ms"]))
+for r in runs:
+    if r["label"].startswith(("cuda_skin", "cuda_block")) or r["label"] == "cuda_nographs":
+        print("%-14s %9d: %8.3f ms  builds/step %.2f" % (r["label"], r["particles"], r["median_ms"],
+              r["mask_builds_per_step"]))
+PY
