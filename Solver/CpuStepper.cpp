@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #ifdef _OPENMP
@@ -120,11 +121,27 @@ void CpuStepper<Real>::step()
   // Neighbours are found once per step, on the predicted positions (Algorithm 1, line 7).
   sortByCell();
   const FluidView<Real> f = view();
+  const double tolerance = parameters_.densityErrorTolerance / 100.0;
+  report_ = StepReport{};
   for (int iteration = 0; iteration < parameters_.solverIterations; ++iteration)
   {
     forEachParticle([&](std::uint32_t i) { densityAndLambda(i, f); });
+    if (tolerance > 0)
+    {
+      // Adaptive mode: the constraint already holds well enough, no need to project again.
+      report_.densityError = meanDensityError();
+      if (report_.densityError <= tolerance)
+      {
+        break;
+      }
+    }
     forEachParticle([&](std::uint32_t i) { positionCorrection(i, f); });
     forEachParticle([&](std::uint32_t i) { applyCorrection(i, f); });
+    ++report_.iterations;
+  }
+  if (tolerance <= 0)
+  {
+    report_.densityError = std::numeric_limits<double>::quiet_NaN();
   }
   forEachParticle([&](std::uint32_t i) { updateVelocity(i, f); });
   forEachParticle([&](std::uint32_t i) { vorticityAndXsph(i, f); });
@@ -150,6 +167,74 @@ void CpuStepper<Real>::append(const ParticleBatch& batch)
   lambda_.resize(n);
   keys_.resize(n);
   evaluateDensityAtRest();
+}
+
+template <class Real>
+double CpuStepper<Real>::meanDensityError()
+{
+  if (density_.empty())
+  {
+    return 0.0;
+  }
+  // Fixed blocks summed in parallel, then the block sums in order: the same bits whatever the
+  // number of threads, so OpenMP stays identical to serial.
+  constexpr std::size_t block = 4096;
+  const std::size_t n = density_.size();
+  const auto blocks = static_cast<std::int64_t>((n + block - 1) / block);
+  blockSums_.assign(static_cast<std::size_t>(blocks), 0.0);
+  const double inverseRho0 = 1.0 / parameters_.restDensity;
+#pragma omp parallel for schedule(static) if (parallel_)
+  for (std::int64_t b = 0; b < blocks; ++b)
+  {
+    double sum = 0.0;
+    const std::size_t end = std::min(n, static_cast<std::size_t>(b + 1) * block);
+    for (std::size_t i = static_cast<std::size_t>(b) * block; i < end; ++i)
+    {
+      sum += std::max(double(density_[i]) * inverseRho0 - 1.0, 0.0);
+    }
+    blockSums_[static_cast<std::size_t>(b)] = sum;
+  }
+  double total = 0.0;
+  for (double sum : blockSums_)
+  {
+    total += sum;
+  }
+  return total / double(n);
+}
+
+template <class Real>
+template <class In>
+void CpuStepper<Real>::loadState(const Snapshot<In>& state)
+{
+  if (sizeof(In) != sizeof(Real))
+  {
+    throw InvalidInput(std::string("checkpoint precision = ") +
+      (sizeof(In) == sizeof(float) ? "single" : "double") + ": the stepper runs in " +
+      toString(precision()) + " precision");
+  }
+  const std::size_t n = state.id.size();
+  if (state.position.size() != n || state.velocity.size() != n || state.density.size() != n ||
+    state.lambda.size() != n)
+  {
+    throw InvalidInput("checkpoint arrays differ in length (" + std::to_string(n) + " ids)");
+  }
+  for (auto* array : { &x_, &p_, &v_, &scratch_, &omega_ })
+  {
+    array->resize(n);
+  }
+  density_.resize(n);
+  lambda_.resize(n);
+  keys_.resize(n);
+  id_ = state.id;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    x_[i] = Vec3<Real>::from(state.position[i]);
+    v_[i] = Vec3<Real>::from(state.velocity[i]);
+    density_[i] = static_cast<Real>(state.density[i]);
+    lambda_[i] = static_cast<Real>(state.lambda[i]);
+  }
+  // Nothing else is state: the next step predicts, re-sorts (stably, from this order) and
+  // recomputes every other array.
 }
 
 template <class Real>
@@ -180,20 +265,39 @@ Statistics CpuStepper<Real>::statistics() const
   {
     return s;
   }
-  const GridView<Real> grid{ geometry_, cellOffsets_.data(), keys_.data() };
+  // Neighbours are counted at the current positions on a grid of their own, so the answer does
+  // not depend on when the step's grid was built (or on a checkpoint having been loaded).
+  std::vector<CellKey> keys(x_.size());
+  for (std::size_t i = 0; i < x_.size(); ++i)
+  {
+    keys[i] = geometry_.keyOf(x_[i]);
+  }
+  std::vector<std::uint32_t> offsets(cellOffsets_.size()), order, cursor;
+  countingSortByCell(keys, offsets, order, cursor);
+  std::vector<Vec3d> sorted(x_.size());
+  std::vector<CellKey> sortedKeys(x_.size());
+  for (std::size_t k = 0; k < order.size(); ++k)
+  {
+    sorted[k] = Vec3d::from(x_[order[k]]);
+    sortedKeys[k] = keys[order[k]];
+  }
+  const GridView<Real> grid{ geometry_, offsets.data(), sortedKeys.data() };
   const double h2 = parameters_.smoothingLength() * parameters_.smoothingLength();
   const double mass = calibratedParticleMass(parameters_);
   double errorSum = 0, neighborSum = 0;
-  for (std::uint32_t i = 0; i < x_.size(); ++i)
+  for (std::uint32_t k = 0; k < sorted.size(); ++k)
+  {
+    forEachNeighbor(grid, k, [&](std::uint32_t j) {
+      const Vec3d r = sorted[k] - sorted[j];
+      neighborSum += (j != k && dot(r, r) < h2) ? 1.0 : 0.0;
+    });
+  }
+  for (std::size_t i = 0; i < x_.size(); ++i)
   {
     const double error = std::max(double(density_[i]) / parameters_.restDensity - 1.0, 0.0);
     errorSum += error;
     s.maxDensityError = std::max(s.maxDensityError, error);
     const Vec3d xi = Vec3d::from(x_[i]);
-    forEachNeighbor(grid, i, [&](std::uint32_t j) {
-      const Vec3d r = xi - Vec3d::from(x_[j]);
-      neighborSum += (j != i && dot(r, r) < h2) ? 1.0 : 0.0;
-    });
     const Vec3d vi = Vec3d::from(v_[i]);
     const double speed2 = dot(vi, vi);
     s.maxSpeed = std::max(s.maxSpeed, std::sqrt(speed2));

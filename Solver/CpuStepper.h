@@ -29,10 +29,16 @@ public:
   void read(Snapshot<double>& out) const override { copyOut(out); }
 
   Statistics statistics() const override;
+  StepReport lastStep() const override { return report_; }
+  void load(const Snapshot<float>& state) override { loadState(state); }
+  void load(const Snapshot<double>& state) override { loadState(state); }
 
 private:
   template <class Out>
   void copyOut(Snapshot<Out>& out) const;
+  template <class In>
+  void loadState(const Snapshot<In>& state);
+  double meanDensityError();     // of density_, summed in fixed blocks: thread-count independent
   template <class Stage>
   void forEachParticle(Stage&& stage);
   FluidView<Real> view();
@@ -46,6 +52,8 @@ private:
 
   std::vector<Vec3<Real>> x_, p_, v_, scratch_, omega_;
   std::vector<Real> density_, lambda_;
+  std::vector<double> blockSums_;
+  StepReport report_;
   std::vector<std::int64_t> id_;
   std::vector<CellKey> keys_;
   std::vector<std::uint32_t> cellOffsets_, order_, cursor_;

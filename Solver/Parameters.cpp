@@ -58,6 +58,7 @@ void Parameters::validate() const
   {
     reject("solverIterations", solverIterations, "must lie in [1, 1000]");
   }
+  requireNonNegative("densityErrorTolerance", densityErrorTolerance);
   requirePositive("relaxation", relaxation);
   requireNonNegative("sCorrK", sCorrK);
   requirePositive("sCorrN", sCorrN);
@@ -128,6 +129,7 @@ std::string describe(const Parameters& p)
   std::ostringstream out;
   out << "rho0=" << p.restDensity << " s=" << p.particleSpacing << " h=" << p.smoothingLength()
       << " m=" << calibratedParticleMass(p) << " iterations=" << p.solverIterations
+      << (p.densityErrorTolerance > 0 ? " (adaptive to " + std::to_string(p.densityErrorTolerance) + "%)" : "")
       << " epsilon=" << p.relaxation << " k=" << p.sCorrK << " n=" << p.sCorrN
       << " dq=" << p.sCorrDeltaQ << " c=" << p.xsphC << " vorticity=" << p.vorticityEpsilon
       << " dt=" << p.timeStep;

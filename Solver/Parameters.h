@@ -30,7 +30,11 @@ struct Parameters
   double smoothingRatio = 2.0;    // h / s; the support radius h of poly6 and spiky
 
   // Solver (Macklin & Mueller 2013)
-  int solverIterations = 4;     // constraint projections per step (paper: 2-4)
+  int solverIterations = 4;     // constraint projections per step (paper: 2-4); the most when
+                                // adaptive
+  // Adaptive mode when > 0: iterate until the mean compression max(rho_i / rho_0 - 1, 0) is at or
+  // below this many percent, or solverIterations are done. 0: always solverIterations.
+  double densityErrorTolerance = 0.0;
   // epsilon of eq. 11 and k of eq. 13 are in units of the bulk denominator of eq. 11 (see
   // LatticeCalibration): the paper's values assume its own unit system, these stay meaningful in SI
   // at any h. epsilon = 0.01 softens the bulk constraint by 1%; k = 0.1 makes a pair at delta_q

@@ -1,5 +1,6 @@
 #include "Simulation.h"
 
+#include <chrono>
 #include <cmath>
 
 namespace pbf
@@ -28,14 +29,69 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   emit();
 }
 
-void Simulation::advance(std::uint64_t steps)
+AdvanceReport Simulation::advance(std::uint64_t steps)
 {
+  AdvanceReport report;
+  const auto start = std::chrono::steady_clock::now();
   for (std::uint64_t k = 0; k < steps; ++k)
   {
     stepper_->step();
     ++steps_;
     emit();
+    const StepReport step = stepper_->lastStep();
+    report.iterations += step.iterations;
+    report.densityError = step.densityError;
   }
+  stepper_->synchronize();
+  report.steps = steps;
+  report.milliseconds =
+    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+std::size_t SimulationCheckpoint::bytes() const
+{
+  return std::visit(
+    [this](const auto& s) {
+      return s.position.size() * sizeof(s.position[0]) + s.velocity.size() * sizeof(s.velocity[0]) +
+        s.density.size() * sizeof(s.density[0]) + s.lambda.size() * sizeof(s.lambda[0]) +
+        s.id.size() * sizeof(s.id[0]) + layersEmitted.size() * sizeof(std::int64_t);
+    },
+    state);
+}
+
+SimulationCheckpoint Simulation::checkpoint() const
+{
+  SimulationCheckpoint c;
+  c.steps = steps_;
+  c.nextId = nextId_;
+  c.layersEmitted = layersEmitted_;
+  if (stepper_->precision() == Precision::Single)
+  {
+    Snapshot<float> s;
+    stepper_->read(s);
+    c.state = std::move(s);
+  }
+  else
+  {
+    Snapshot<double> s;
+    stepper_->read(s);
+    c.state = std::move(s);
+  }
+  return c;
+}
+
+void Simulation::restore(const SimulationCheckpoint& c)
+{
+  if (c.layersEmitted.size() != layersEmitted_.size())
+  {
+    throw InvalidInput("checkpoint emitters = " + std::to_string(c.layersEmitted.size()) +
+      ": the scene has " + std::to_string(layersEmitted_.size()));
+  }
+  std::visit([this](const auto& s) { stepper_->load(s); }, c.state);
+  steps_ = c.steps;
+  nextId_ = c.nextId;
+  layersEmitted_ = c.layersEmitted;
 }
 
 // Each emitter releases one disk of lattice sites every s / speed seconds. A layer released

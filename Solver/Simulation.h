@@ -9,9 +9,30 @@
 
 #include <cstdint>
 #include <memory>
+#include <variant>
 
 namespace pbf
 {
+
+// Everything a Simulation needs to resume exactly where it was.
+struct SimulationCheckpoint
+{
+  std::uint64_t steps = 0;
+  std::int64_t nextId = 0;
+  std::vector<std::int64_t> layersEmitted;
+  std::variant<Snapshot<float>, Snapshot<double>> state;
+
+  std::size_t bytes() const; // host memory held
+};
+
+// What one advance() did.
+struct AdvanceReport
+{
+  std::uint64_t steps = 0;
+  long iterations = 0;       // constraint projections, summed over the steps
+  double densityError = 0;   // adaptive mode: at the end of the last step; NaN in fixed mode
+  double milliseconds = 0;   // wall time, the queued GPU work included
+};
 
 class Simulation
 {
@@ -25,7 +46,12 @@ public:
   Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
     Precision precision, const ParticleBatch& initial);
 
-  void advance(std::uint64_t steps);
+  AdvanceReport advance(std::uint64_t steps);
+
+  // A copy of the whole state; restore() continues bit-identically from it. The checkpoint must
+  // come from a Simulation of the same scene, parameters and precision.
+  SimulationCheckpoint checkpoint() const;
+  void restore(const SimulationCheckpoint& checkpoint);
 
   std::uint64_t stepCount() const { return steps_; }
   double time() const { return static_cast<double>(steps_) * parameters_.timeStep; }

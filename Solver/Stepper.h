@@ -62,6 +62,15 @@ struct Statistics
   bool finite = true;        // no NaN or infinity in positions or velocities
 };
 
+// What the last step() did.
+struct StepReport
+{
+  int iterations = 0; // constraint projections applied
+  // Adaptive mode: mean of max(rho_i / rho_0 - 1, 0) at the last evaluation, the one that ended
+  // the loop. NaN in fixed mode, which computes no reduction inside a step (see statistics()).
+  double densityError = 0;
+};
+
 class Stepper
 {
 public:
@@ -81,6 +90,18 @@ public:
   virtual void read(Snapshot<double>& out) const = 0;
 
   virtual Statistics statistics() const = 0;
+
+  virtual StepReport lastStep() const;
+
+  // Returns when the queued steps are done (a GPU queues them); a no-op on the CPU.
+  virtual void synchronize() const {}
+
+  // Replaces the whole state with a snapshot taken by read() of the same precision, in the same
+  // order: the steps that follow are then bit-identical to those that followed the read. This is
+  // what checkpoints restore. Throws InvalidInput for a snapshot of another precision or with
+  // arrays of different lengths.
+  virtual void load(const Snapshot<float>& state);
+  virtual void load(const Snapshot<double>& state);
 };
 
 // Throws InvalidInput for bad parameters or positions, std::runtime_error when the backend is
