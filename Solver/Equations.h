@@ -149,6 +149,13 @@ PBF_HD PBF_INLINE WallMirrors<Real> nearWalls(const Vec3<Real>& p, const Coeffic
 template <class Real, class Visit>
 PBF_HD PBF_INLINE void forEachImage(const WallMirrors<Real>& m, const Vec3<Real>& q, Visit&& visit)
 {
+  if (m.count[0] == 1 && m.count[1] == 1 && m.count[2] == 1)
+  {
+    // Away from the walls, as most particles are: the neighbour itself, without the loops (the
+    // same call the loops would make; on a GPU their bookkeeping costs as much as the visit).
+    visit(q, true);
+    return;
+  }
   for (int ix = 0; ix < m.count[0]; ++ix)
   {
     const Real x = ix == 0 ? q.x : Real(2) * (ix == 1 ? m.wall[0][0] : m.wall[0][1]) - q.x;

@@ -39,7 +39,7 @@ struct Options
   double skin = 0.1;
   // Replay each step as one CUDA graph (no launch gaps); off: launch the kernels one by one.
   bool graphs = true;
-  // Threads per block of the neighbour passes: a multiple of 32 up to 256.
+  // Threads per block of the neighbour passes: a multiple of 32 up to 128.
   int block = 128;
 };
 
