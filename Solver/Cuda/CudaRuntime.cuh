@@ -93,6 +93,82 @@ __global__ void __launch_bounds__(kMaxBlock) stageMaxKernel(
   }
 }
 
+// Adaptive mode's mean compression: fixed blocks of particles summed in a fixed tree, then the
+// block sums by one block, so the result is the same on every run.
+constexpr int kCompressionBlock = 4096;
+constexpr int kReduceThreads = 256;
+
+__device__ inline void treeSum(double* shared)
+{
+  for (int width = kReduceThreads / 2; width > 0; width >>= 1)
+  {
+    if (static_cast<int>(threadIdx.x) < width)
+    {
+      shared[threadIdx.x] += shared[threadIdx.x + width];
+    }
+    __syncthreads();
+  }
+}
+
+template <class Real>
+__global__ void __launch_bounds__(kReduceThreads) compressionBlocksKernel(const Real* density,
+  std::uint32_t n, double inverseRestDensity, const AdaptiveState* state, double* blockSums)
+{
+  __shared__ double shared[kReduceThreads];
+  if (state->done)
+  {
+    return;
+  }
+  const std::uint32_t begin = blockIdx.x * kCompressionBlock;
+  const std::uint32_t end = n - begin < kCompressionBlock ? n : begin + kCompressionBlock;
+  double sum = 0.0;
+  for (std::uint32_t i = begin + threadIdx.x; i < end; i += kReduceThreads)
+  {
+    const double c = static_cast<double>(density[i]) * inverseRestDensity - 1.0;
+    sum += c < 0.0 ? 0.0 : c; // std::max(c, 0.0), as CpuStepper::meanDensityError
+  }
+  shared[threadIdx.x] = sum;
+  __syncthreads();
+  treeSum(shared);
+  if (threadIdx.x == 0)
+  {
+    blockSums[blockIdx.x] = shared[0];
+  }
+}
+
+template <class Real> // only so that each translation unit has its own instance
+__global__ void __launch_bounds__(kReduceThreads) compressionFinalKernel(
+  std::uint32_t blocks, std::uint32_t n, double tolerance, AdaptiveState* state,
+  const double* blockSums)
+{
+  __shared__ double shared[kReduceThreads];
+  if (state->done)
+  {
+    return;
+  }
+  double sum = 0.0;
+  for (std::uint32_t b = threadIdx.x; b < blocks; b += kReduceThreads)
+  {
+    sum += blockSums[b];
+  }
+  shared[threadIdx.x] = sum;
+  __syncthreads();
+  treeSum(shared);
+  if (threadIdx.x == 0)
+  {
+    const double mean = n > 0 ? shared[0] / n : 0.0;
+    state->densityError = mean;
+    if (mean <= tolerance)
+    {
+      state->done = 1;
+    }
+    else
+    {
+      ++state->iterations;
+    }
+  }
+}
+
 // Runs the schedule's stages as kernels on one stream. Nothing here synchronises or allocates,
 // so a step can be captured into a CUDA graph.
 class KernelExecutor
@@ -147,6 +223,22 @@ public:
     check(cub::DeviceScan::InclusiveScan(temp_, bytes, data, data, ::cuda::maximum<>{},
             static_cast<std::int64_t>(count), stream_),
       "cub::DeviceScan::InclusiveScan");
+  }
+
+  template <class Real>
+  void reduceCompression(const Real* density, std::uint32_t n, AdaptiveState* state,
+    double* blockSums, const StepConstants<Real>& k)
+  {
+    const std::uint32_t blocks = (n + kCompressionBlock - 1) / kCompressionBlock;
+    if (blocks > 0)
+    {
+      compressionBlocksKernel<Real><<<blocks, kReduceThreads, 0, stream_>>>(
+        density, n, k.inverseRestDensity, state, blockSums);
+      check(cudaGetLastError(), "kernel launch (compression)");
+    }
+    compressionFinalKernel<Real><<<1, kReduceThreads, 0, stream_>>>(
+      blocks, n, k.tolerance, state, blockSums);
+    check(cudaGetLastError(), "kernel launch (compression)");
   }
 
   void fillZero(void* pointer, std::size_t bytes)

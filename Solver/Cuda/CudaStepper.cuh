@@ -74,11 +74,12 @@ __device__ inline void reduceBlock(double (*shared)[kStatisticsThreads], double*
   }
 }
 
-// The same quantities as CpuStepper::statistics(), in double.
+// The same quantities as CpuStepper::statistics(), in double. Neighbours are counted on `sorted`,
+// the positions sorted into a grid of their own (enqueueSortedCopy), as the CPU counts them.
 template <class Real>
 __global__ void __launch_bounds__(kStatisticsThreads) statisticsKernel(const Vec3<Real>* x,
-  const Vec3<Real>* v, const Real* density, GridView<Real> grid, std::uint32_t n, double h2,
-  double mass, double restDensity, double* partials)
+  const Vec3<Real>* v, const Real* density, const Vec3<Real>* sorted, GridView<Real> grid,
+  std::uint32_t n, double h2, double mass, double restDensity, double* partials)
 {
   __shared__ double shared[kStatisticsValues][kStatisticsThreads];
   double acc[kStatisticsValues] = {};
@@ -88,10 +89,10 @@ __global__ void __launch_bounds__(kStatisticsThreads) statisticsKernel(const Vec
     const double error = fmax(static_cast<double>(density[i]) / restDensity - 1.0, 0.0);
     acc[kErrorSum] += error;
     acc[kErrorMax] = fmax(acc[kErrorMax], error);
-    const Vec3d xi = Vec3d::from(x[i]);
+    const Vec3d si = Vec3d::from(sorted[i]);
     double neighbors = 0;
     forEachNeighbor(grid, i, [&](std::uint32_t j) {
-      const Vec3d r = xi - Vec3d::from(x[j]);
+      const Vec3d r = si - Vec3d::from(sorted[j]);
       // Rounded like the host's dot (no FMA): lattice pairs sit at exactly h, and the count must
       // not depend on how r^2 rounds there.
       const double r2 =
@@ -99,6 +100,7 @@ __global__ void __launch_bounds__(kStatisticsThreads) statisticsKernel(const Vec
       neighbors += (j != i && r2 < h2) ? 1.0 : 0.0;
     });
     acc[kNeighborSum] += neighbors;
+    const Vec3d xi = Vec3d::from(x[i]);
     const Vec3d vi = Vec3d::from(v[i]);
     const double speed2 = dot(vi, vi);
     acc[kSpeedMax] = fmax(acc[kSpeedMax], sqrt(speed2));
@@ -155,6 +157,9 @@ public:
   void read(Snapshot<float>& out) const override { copyOut(out); }
   void read(Snapshot<double>& out) const override { copyOut(out); }
   Statistics statistics() const override;
+  StepReport lastStep() const override;
+  void load(const Snapshot<float>& state) override { loadState(state); }
+  void load(const Snapshot<double>& state) override { loadState(state); }
 
   Diagnostics diagnostics() const override;
   const Options& options() const override { return options_; }
@@ -185,6 +190,8 @@ private:
     const std::vector<std::int64_t>& id);
   template <class Out>
   void copyOut(Snapshot<Out>& out) const;
+  template <class In>
+  void loadState(const Snapshot<In>& state);
 
   Parameters parameters_;
   Options options_;
@@ -198,6 +205,7 @@ private:
   Roles roles_;
   const CellKey* sortedKeys_ = nullptr;
   std::uint64_t steps_ = 0;
+  bool stepped_ = false; // lastStep() has a step to report
 
   // One allocation holds everything; the pointers below point into it.
   void* arena_ = nullptr;
@@ -266,6 +274,8 @@ CudaStepper<Real>::CudaStepper(
   k.schedule.h = h;
   k.schedule.roundingPerStep = MaskSchedule::roundingBound<Real>(maxAbs);
   k.schedule.enabled = options_.search == NeighborSearch::RowMasks ? 1 : 0;
+  k.tolerance = parameters_.densityErrorTolerance / 100.0;
+  k.inverseRestDensity = 1.0 / parameters_.restDensity;
 
   check(cudaStreamCreate(&stream_), "cudaStreamCreate");
   try
@@ -359,6 +369,9 @@ void CudaStepper<Real>::allocate(std::size_t capacity, std::size_t particles)
   const std::size_t offsetsAt = place(cells * sizeof(std::uint32_t));
   const std::size_t movedAt = place(static_cast<std::size_t>(k.iterations) * 8);
   const std::size_t buildsAt = place(8);
+  const std::size_t adaptiveAt = place(sizeof(AdaptiveState));
+  const std::size_t blockSumsAt =
+    place((capacity + kCompressionBlock - 1) / kCompressionBlock * sizeof(double));
   const std::size_t partialsAt = place(kStatisticsBlocks * kStatisticsValues * sizeof(double));
   const std::size_t resultAt = place(kStatisticsValues * sizeof(double));
   const std::size_t tempAt = place(tempBytes);
@@ -408,6 +421,8 @@ void CudaStepper<Real>::allocate(std::size_t capacity, std::size_t particles)
   b.cellOffsets = reinterpret_cast<std::uint32_t*>(base + offsetsAt);
   b.maxMoved = reinterpret_cast<unsigned long long*>(base + movedAt);
   b.maskBuilds = reinterpret_cast<unsigned long long*>(base + buildsAt);
+  b.adaptive = reinterpret_cast<AdaptiveState*>(base + adaptiveAt);
+  b.blockSums = reinterpret_cast<double*>(base + blockSumsAt);
   statisticsPartials_ = reinterpret_cast<double*>(base + partialsAt);
   statisticsResult_ = reinterpret_cast<double*>(base + resultAt);
   temp_ = base + tempAt;
@@ -500,6 +515,7 @@ void CudaStepper<Real>::step()
       exec, buffers_, constants_, static_cast<std::uint32_t>(n_), roles_, &sortedKeys_);
   }
   ++steps_;
+  stepped_ = true;
 }
 
 template <class Real>
@@ -668,11 +684,18 @@ Statistics CudaStepper<Real>::statistics() const
   }
   selectDevice();
   const double h = parameters_.smoothingLength();
-  const GridView<Real> grid{ constants_.geometry, buffers_.cellOffsets, sortedKeys_ };
+  // Neighbours at the current positions on a grid of their own, as the CPU counts them. Between
+  // steps the keys, C, D and the cell offsets are free: the next step rebuilds them.
+  const StepBuffers<Real>& b = buffers_;
+  const auto n = static_cast<std::uint32_t>(n_);
+  std::uint32_t* order = reinterpret_cast<std::uint32_t*>(b.vec[2]);
+  KernelExecutor exec = executor();
+  const CellKey* keys = enqueueSortedCopy(exec, constants_, n, b.vec[roles_.x], b.keys[0],
+    b.keys[1], order, order + capacity_, b.vec[3], b.cellOffsets);
+  const GridView<Real> grid{ constants_.geometry, b.cellOffsets, keys };
   statisticsKernel<Real><<<kStatisticsBlocks, kStatisticsThreads, 0, stream_>>>(
-    buffers_.vec[roles_.x], buffers_.vec[roles_.v], buffers_.density, grid,
-    static_cast<std::uint32_t>(n_), h * h, calibratedParticleMass(parameters_),
-    parameters_.restDensity, statisticsPartials_);
+    b.vec[roles_.x], b.vec[roles_.v], b.density, b.vec[3], grid, n, h * h,
+    calibratedParticleMass(parameters_), parameters_.restDensity, statisticsPartials_);
   check(cudaGetLastError(), "kernel launch (statistics)");
   statisticsFinalKernel<Real><<<1, kStatisticsThreads, 0, stream_>>>(
     statisticsPartials_, kStatisticsBlocks, statisticsResult_);
@@ -690,6 +713,75 @@ Statistics CudaStepper<Real>::statistics() const
   s.momentum = Vec3d{ r[kMomentumX], r[kMomentumY], r[kMomentumZ] };
   s.finite = r[kNonFinite] == 0.0;
   return s;
+}
+
+template <class Real>
+StepReport CudaStepper<Real>::lastStep() const
+{
+  StepReport report;
+  if (!stepped_)
+  {
+    return report;
+  }
+  if (constants_.tolerance <= 0)
+  {
+    // Fixed mode computes no reduction inside a step, as on the CPU.
+    report.iterations = constants_.iterations;
+    report.densityError = std::numeric_limits<double>::quiet_NaN();
+    return report;
+  }
+  selectDevice();
+  AdaptiveState state{};
+  check(cudaMemcpyAsync(&state, buffers_.adaptive, sizeof state, cudaMemcpyDeviceToHost, stream_),
+    "cudaMemcpyAsync");
+  check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
+  report.iterations = state.iterations;
+  report.densityError = state.densityError;
+  return report;
+}
+
+// As CpuStepper::loadState: the snapshot's order is kept, and the next step predicts, re-sorts
+// (stably, from this order) and recomputes everything else.
+template <class Real>
+template <class In>
+void CudaStepper<Real>::loadState(const Snapshot<In>& state)
+{
+  if (sizeof(In) != sizeof(Real))
+  {
+    throw InvalidInput(std::string("checkpoint precision = ") +
+      (sizeof(In) == sizeof(float) ? "single" : "double") + ": the stepper runs in " +
+      toString(precision()) + " precision");
+  }
+  const std::size_t n = state.id.size();
+  if (state.position.size() != n || state.velocity.size() != n || state.density.size() != n ||
+    state.lambda.size() != n)
+  {
+    throw InvalidInput("checkpoint arrays differ in length (" + std::to_string(n) + " ids)");
+  }
+  selectDevice();
+  check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
+  if (n > capacity_)
+  {
+    n_ = 0; // the old state is gone either way; empty if the allocation throws
+    release();
+    allocate(n, n);
+  }
+  roles_ = Roles{};
+  n_ = n;
+  if (n > 0)
+  {
+    const auto upload = [this](void* to, const void* from, std::size_t bytes) {
+      check(cudaMemcpyAsync(to, from, bytes, cudaMemcpyHostToDevice, stream_), "cudaMemcpyAsync");
+    };
+    // In is Real here (checked above), so the arrays go up as they are.
+    upload(buffers_.vec[roles_.x], state.position.data(), n * sizeof(Vec3<Real>));
+    upload(buffers_.vec[roles_.v], state.velocity.data(), n * sizeof(Vec3<Real>));
+    upload(buffers_.density, state.density.data(), n * sizeof(Real));
+    upload(buffers_.lambda, state.lambda.data(), n * sizeof(Real));
+    upload(buffers_.id, state.id.data(), n * sizeof(std::int64_t));
+  }
+  captureGraphs();
+  check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
 }
 
 template <class Real>

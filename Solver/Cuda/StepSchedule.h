@@ -17,6 +17,7 @@
 //   sortByKey(keys, keysAlt, values, valuesAlt, n, keyBits) -> SortedPairs (stable radix sort)
 //   maxScan(data, count)                 inclusive max-scan in place
 //   fillZero(pointer, bytes), copy(destination, source, bytes)
+//   reduceCompression(density, n, state, blockSums, constants)   adaptive mode, see AdaptiveState
 #pragma once
 
 #include "Equations.h"
@@ -41,6 +42,18 @@ struct CorrectionStage {};
 struct VorticityStage {};
 struct ConfinementStage {};
 
+// Adaptive mode (Parameters::densityErrorTolerance > 0), kept on the device: after each density
+// evaluation reduceCompression stores the mean compression mean(max(rho_i / rho_0 - 1, 0)) and
+// either counts one more projection or, when it is within the tolerance, sets done; the passes
+// that follow in the step then return at once (the skipped corrections copy the positions, so the
+// buffers stay where the captured graph expects them).
+struct AdaptiveState
+{
+  int done;
+  int iterations;
+  double densityError;
+};
+
 struct SortedPairs
 {
   const CellKey* keys;
@@ -60,6 +73,8 @@ struct StepBuffers
   std::uint32_t* cellOffsets; // cellCount + 1 entries
   unsigned long long* maxMoved;   // per solver iteration: max |delta p_i|, as double bits
   unsigned long long* maskBuilds; // count of mask builds, for diagnostics only
+  AdaptiveState* adaptive;        // adaptive mode only
+  double* blockSums;              // adaptive mode: the reduction's partial sums
 };
 
 template <class Real>
@@ -72,6 +87,8 @@ struct StepConstants
   int iterations;    // solver iterations
   Real reach2;       // (h + skin)^2: what a mask marks
   MaskSchedule schedule;
+  double tolerance;            // adaptive mode when > 0: densityErrorTolerance as a fraction
+  double inverseRestDensity;   // 1 / rho_0 in double, for the compression of adaptive mode
 };
 
 // Which of vec[0], vec[1] hold x and v between steps.
@@ -146,14 +163,19 @@ FluidView<Real, MaskedNeighbors<Real>> solverView(const StepBuffers<Real>& b,
 template <class Real, class Exec, class Stage, class Pass>
 void firstPassOnPositions(Exec& exec, Stage stage, const StepBuffers<Real>& b,
   const StepConstants<Real>& k, std::uint32_t n, const FluidView<Real, MaskedNeighbors<Real>>& f,
-  int corrections, Pass pass)
+  int corrections, bool skipWhenDone, Pass pass)
 {
   const MaskSchedule schedule = k.schedule;
   const unsigned long long* maxMoved = b.maxMoved;
   unsigned long long* builds = b.maskBuilds;
   std::uint32_t* masks = b.masks;
   const Real reach2 = k.reach2;
+  const AdaptiveState* adaptive = skipWhenDone ? b.adaptive : nullptr;
   exec.forEach(stage, n, [=] PBF_HD(std::uint32_t i) {
+    if (adaptive && adaptive->done)
+    {
+      return;
+    }
     if (schedule.enabled && schedule.rebuildAt(corrections, maxMoved))
     {
       if (i == 0)
@@ -219,6 +241,11 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
   exec.fillZero(b.maxMoved, static_cast<std::size_t>(k.iterations) * sizeof(unsigned long long));
 
   // Lines 8-20, Jacobi iterations.
+  const bool adaptive = k.tolerance > 0;
+  if (adaptive)
+  {
+    exec.fillZero(b.adaptive, sizeof(AdaptiveState));
+  }
   for (int iteration = 0; iteration < k.iterations; ++iteration)
   {
     FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
@@ -227,19 +254,34 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
     f.p = positions[iteration & 1];
     f.scratch = positions[(iteration + 1) & 1];
     detail::firstPassOnPositions(
-      exec, DensityStage{}, b, k, n, f, iteration, detail::DensityPass{});
+      exec, DensityStage{}, b, k, n, f, iteration, adaptive, detail::DensityPass{});
+    if (adaptive)
+    {
+      exec.reduceCompression(b.density, n, b.adaptive, b.blockSums, k);
+    }
 
     const bool last = iteration + 1 == k.iterations;
+    const AdaptiveState* state = adaptive ? b.adaptive : nullptr;
     exec.forEachMax(CorrectionStage{}, n, b.maxMoved + iteration,
       [=] PBF_HD(std::uint32_t i) -> double {
+        FluidView<Real, MaskedNeighbors<Real>> apply = f;
+        apply.p = f.scratch;
+        apply.scratch = f.p;
+        if (state && state->done)
+        {
+          // Adaptive mode is done: the positions stay, copied to where the next pass reads them.
+          f.scratch[i] = f.p[i];
+          if (last)
+          {
+            updateVelocity(i, apply);
+          }
+          return 0.0;
+        }
         // delta p_i lands in the other position buffer (f.scratch), which nobody reads in this
         // pass; applyCorrection then adds p_i to it in place. IEEE addition is commutative, so
         // this is exactly x*_i + delta p_i, and no particle reads a position that moved.
         positionCorrection(i, f);
         const Vec3<Real> delta = f.scratch[i];
-        FluidView<Real, MaskedNeighbors<Real>> apply = f;
-        apply.p = f.scratch;
-        apply.scratch = f.p;
         applyCorrection(i, apply);
         if (last)
         {
@@ -258,7 +300,7 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
   f.omega = D; // x is no longer needed
   f.scratch = spare;
   detail::firstPassOnPositions(
-    exec, VorticityStage{}, b, k, n, f, k.iterations, detail::VorticityPass{});
+    exec, VorticityStage{}, b, k, n, f, k.iterations, false, detail::VorticityPass{});
   // The confined velocity overwrites the XSPH velocity in place: each particle reads only its
   // own, and spare becomes v.
   FluidView<Real, MaskedNeighbors<Real>> confine = f;
@@ -298,8 +340,36 @@ void enqueueEvaluateAtRest(Exec& exec, const StepBuffers<Real>& b, const StepCon
   // A = x (sorted, equal to D), C = v.
   FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
   f.p = A;
-  detail::firstPassOnPositions(exec, DensityStage{}, b, k, n, f, 0, detail::DensityPass{});
+  detail::firstPassOnPositions(exec, DensityStage{}, b, k, n, f, 0, false, detail::DensityPass{});
   exec.copy(B, C, static_cast<std::size_t>(n) * sizeof(Vec3<Real>));
+}
+
+// Sorts the positions x (n particles) into cell order on a grid of their own, as statistics()
+// counts neighbours: keys, scratch for the permutation (2 n entries), the sorted positions and
+// the grid's cell offsets are written; the state is not touched. Returns the sorted keys.
+template <class Real, class Exec>
+const CellKey* enqueueSortedCopy(Exec& exec, const StepConstants<Real>& k, std::uint32_t n,
+  const Vec3<Real>* x, CellKey* keys, CellKey* keysAlt, std::uint32_t* order,
+  std::uint32_t* orderAlt, Vec3<Real>* sorted, std::uint32_t* offsets)
+{
+  const GridGeometry<Real> geometry = k.geometry;
+  exec.forEach(KeyStage{}, n, [=] PBF_HD(std::uint32_t i) {
+    keys[i] = geometry.keyOf(x[i]);
+    order[i] = i;
+  });
+  const SortedPairs s = exec.sortByKey(keys, keysAlt, order, orderAlt, n, k.keyBits);
+  const CellKey* sortedKeys = s.keys;
+  const std::uint32_t* perm = s.values;
+  exec.fillZero(offsets, (static_cast<std::size_t>(k.cellCount) + 1) * sizeof(std::uint32_t));
+  exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) {
+    sorted[i] = x[perm[i]];
+    if (i + 1 == n || sortedKeys[i] != sortedKeys[i + 1])
+    {
+      offsets[sortedKeys[i] + 1] = i + 1;
+    }
+  });
+  exec.maxScan(offsets, static_cast<std::size_t>(k.cellCount) + 1);
+  return sortedKeys;
 }
 
 } // namespace cuda

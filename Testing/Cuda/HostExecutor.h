@@ -67,6 +67,37 @@ public:
     }
   }
 
+  // Adaptive mode's mean compression summed exactly as CpuStepper::meanDensityError sums it
+  // (blocks of 4096 in order), so that the decisions match the serial backend bit for bit.
+  template <class Real>
+  void reduceCompression(const Real* density, std::uint32_t n, cuda::AdaptiveState* state,
+    double*, const cuda::StepConstants<Real>& k)
+  {
+    if (state->done)
+    {
+      return;
+    }
+    double total = 0.0;
+    for (std::uint32_t begin = 0; begin < n; begin += 4096)
+    {
+      double sum = 0.0;
+      for (std::uint32_t i = begin; i < std::min(n, begin + 4096); ++i)
+      {
+        sum += std::max(double(density[i]) * k.inverseRestDensity - 1.0, 0.0);
+      }
+      total += sum;
+    }
+    state->densityError = n > 0 ? total / double(n) : 0.0;
+    if (state->densityError <= k.tolerance)
+    {
+      state->done = 1;
+    }
+    else
+    {
+      ++state->iterations;
+    }
+  }
+
   void fillZero(void* pointer, std::size_t bytes) { std::memset(pointer, 0, bytes); }
   void copy(void* destination, const void* source, std::size_t bytes)
   {

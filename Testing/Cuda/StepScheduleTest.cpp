@@ -43,6 +43,8 @@ public:
     const double maxAbs = std::max({ std::abs(d.min.x), std::abs(d.min.y), std::abs(d.min.z),
       std::abs(d.max.x), std::abs(d.max.y), std::abs(d.max.z) });
     k.schedule = MaskSchedule{ skin * h, h, MaskSchedule::roundingBound<Real>(maxAbs), masks };
+    k.tolerance = parameters.densityErrorTolerance / 100.0;
+    k.inverseRestDensity = 1.0 / parameters.restDensity;
 
     for (auto& v : vec_)
     {
@@ -71,6 +73,8 @@ public:
     b.cellOffsets = offsets_.data();
     b.maxMoved = moved_.data();
     b.maskBuilds = &builds_;
+    b.adaptive = &adaptive_;
+    b.blockSums = nullptr;
     for (std::size_t i = 0; i < n_; ++i)
     {
       vec_[roles_.x][i] = Vec3<Real>::from(initial.position[i]);
@@ -99,6 +103,7 @@ public:
   }
 
   unsigned long long maskBuilds() const { return builds_; }
+  const cuda::AdaptiveState& adaptive() const { return adaptive_; }
 
 private:
   std::uint32_t count() const { return static_cast<std::uint32_t>(n_); }
@@ -117,6 +122,7 @@ private:
   std::vector<std::uint32_t> masks_, offsets_;
   std::vector<unsigned long long> moved_;
   unsigned long long builds_ = 0;
+  cuda::AdaptiveState adaptive_{};
 };
 
 template <class Real>
@@ -137,6 +143,7 @@ struct Case
   bool masks;
   double skin;
   bool backwards;
+  double tolerance = 0; // densityErrorTolerance [%]: adaptive mode when > 0
 };
 
 template <class Real>
@@ -145,17 +152,28 @@ void compareWithSerial(const Case& c, int steps, unsigned long long* builds = nu
   Parameters p;
   p.particleSpacing = 0.04;
   p.solverIterations = c.iterations;
+  p.densityErrorTolerance = c.tolerance;
   const Scene scene = presetScene(c.scene);
   p = withSceneDomain(p, scene);
   const ParticleBatch initial = fillScene(scene, p);
   const Precision precision = sizeof(Real) == 4 ? Precision::Single : Precision::Double;
   auto serial = makeStepper(Backend::Serial, precision, p, initial);
   HostSchedule<Real> schedule(p, initial, c.masks, c.skin, c.backwards);
+  int serialIterations = 0, scheduleIterations = 0;
   for (int s = 0; s < steps; ++s)
   {
     serial->step();
+    schedule.step(1);
+    serialIterations += serial->lastStep().iterations;
+    scheduleIterations += schedule.adaptive().iterations;
   }
-  schedule.step(steps);
+  if (c.tolerance > 0)
+  {
+    EXPECT_EQ(scheduleIterations, serialIterations);
+    // The tolerance must both stop some steps early and not others, or nothing was tested.
+    EXPECT_LT(serialIterations, steps * c.iterations);
+    EXPECT_GT(serialIterations, steps);
+  }
   Snapshot<Real> reference;
   serial->read(reference);
   SCOPED_TRACE(std::string(c.scene) + ", " + std::to_string(c.iterations) + " iterations, " +
@@ -195,6 +213,13 @@ TEST(StepSchedule, MasksStayExactWhenEveryPassMustRebuildThem)
   // One build at rest plus at least one per step; the thin skin must rebuild far more often.
   EXPECT_GE(thick, 61u);
   EXPECT_GT(thin, 2 * thick);
+}
+
+TEST(StepSchedule, AdaptiveIterationsReproduceTheSerialBackendBitForBit)
+{
+  // Steps that meet the tolerance early skip their remaining projections on the device too.
+  compareWithSerial<float>({ "dam_break", 6, true, 0.1, false, 0.05 }, 60);
+  compareWithSerial<double>({ "blob", 5, false, 0.1, true, 0.05 }, 60);
 }
 
 TEST(MaskSchedule, RebuildsExactlyWhenTheBoundCouldBeExceeded)
