@@ -8,7 +8,6 @@
 #include "vtkIdTypeArray.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
-#include "vtkIntArray.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkOutputWindow.h"
@@ -19,6 +18,7 @@
 #include "vtkSmartPointer.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkStringArray.h"
+#include "vtkTable.h"
 
 #include "Parameters.h"
 #include "Scene.h"
@@ -26,10 +26,14 @@
 #include "Stepper.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
+#include <map>
 #include <memory>
 #include <new>
 #include <sstream>
@@ -44,13 +48,16 @@ namespace
 // Indexed by vtkPBFSimulation::PresetScenes; the names are pbf::presetScene's.
 const char* const PresetNames[] = { "dam_break", "double_dam_break", "blob", "stream" };
 
-// Everything that shapes the motion from the initial state. Frames of two equal configurations
-// are bit-identical, so a live simulation of an equal configuration may be stepped on instead of
-// rebuilt. NumberOfFrames is deliberately absent: more frames do not change earlier ones.
+// Everything that decides the frames from the initial state. Frames of two equal configurations
+// are bit-identical, so the live simulation, the checkpoints and the diagnostics of one serve the
+// other. NumberOfFrames, the checkpoint settings and display properties are deliberately absent:
+// they change no frame.
 struct Configuration
 {
   std::string SceneKey; // the preset's name, or the file's name and contents
   pbf::Parameters Parameters;
+  double FrameInterval = 0;
+  int Substeps = 1;
   pbf::Backend Backend = pbf::Backend::OpenMP;
   pbf::Precision Precision = pbf::Precision::Single;
   bool HasInput = false;
@@ -64,24 +71,30 @@ bool SameBox(const pbf::Box& a, const pbf::Box& b)
 }
 
 // Field by field: a NaN never compares equal, which only costs a rebuild that then reports it.
-// A field added to pbf::Parameters must be added here, or changing it would not restart the
+// A field added to pbf::Parameters must be added here, or changing it would not invalidate the
 // simulation (Testing/Python/pbf_parameters.py fails for a field without a property).
 bool SameParameters(const pbf::Parameters& a, const pbf::Parameters& b)
 {
   return a.restDensity == b.restDensity && a.particleSpacing == b.particleSpacing &&
     a.smoothingRatio == b.smoothingRatio && a.solverIterations == b.solverIterations &&
-    a.relaxation == b.relaxation && a.sCorrK == b.sCorrK && a.sCorrN == b.sCorrN &&
-    a.sCorrDeltaQ == b.sCorrDeltaQ && a.xsphC == b.xsphC &&
-    a.vorticityEpsilon == b.vorticityEpsilon && a.unilateral == b.unilateral &&
-    a.mirrorWalls == b.mirrorWalls && a.gravity.x == b.gravity.x && a.gravity.y == b.gravity.y &&
-    a.gravity.z == b.gravity.z && a.timeStep == b.timeStep && SameBox(a.domain, b.domain);
+    a.densityErrorTolerance == b.densityErrorTolerance && a.relaxation == b.relaxation &&
+    a.sCorrK == b.sCorrK && a.sCorrN == b.sCorrN && a.sCorrDeltaQ == b.sCorrDeltaQ &&
+    a.xsphC == b.xsphC && a.vorticityEpsilon == b.vorticityEpsilon &&
+    a.unilateral == b.unilateral && a.mirrorWalls == b.mirrorWalls &&
+    a.gravity.x == b.gravity.x && a.gravity.y == b.gravity.y && a.gravity.z == b.gravity.z &&
+    a.timeStep == b.timeStep && SameBox(a.domain, b.domain);
 }
 
 bool operator==(const Configuration& a, const Configuration& b)
 {
   return a.SceneKey == b.SceneKey && SameParameters(a.Parameters, b.Parameters) &&
-    a.Backend == b.Backend && a.Precision == b.Precision && a.HasInput == b.HasInput &&
-    a.InputMTime == b.InputMTime;
+    a.FrameInterval == b.FrameInterval && a.Substeps == b.Substeps && a.Backend == b.Backend &&
+    a.Precision == b.Precision && a.HasInput == b.HasInput && a.InputMTime == b.InputMTime;
+}
+
+bool operator!=(const Configuration& a, const Configuration& b)
+{
+  return !(a == b);
 }
 
 std::string FormatPoint(const double x[3])
@@ -142,56 +155,76 @@ template <class Real>
 using RealArray =
   typename std::conditional<std::is_same<Real, float>::value, vtkFloatArray, vtkDoubleArray>::type;
 
-// Particles in the solver's (cell-sorted) order, one vertex cell each.
-template <class Real>
-void FillParticles(const pbf::Stepper& stepper, vtkPolyData* output)
+template <class Array>
+vtkSmartPointer<Array> NewArray(const char* name, int components, vtkIdType tuples)
 {
-  pbf::Snapshot<Real> snapshot;
-  stepper.read(snapshot);
-  const auto n = static_cast<vtkIdType>(snapshot.position.size());
+  auto array = vtkSmartPointer<Array>::New();
+  if (name)
+  {
+    array->SetName(name);
+  }
+  array->SetNumberOfComponents(components);
+  array->SetNumberOfTuples(tuples);
+  return array;
+}
 
-  vtkNew<RealArray<Real>> coordinates;
-  coordinates->SetNumberOfComponents(3);
-  coordinates->SetNumberOfTuples(n);
-  vtkNew<RealArray<Real>> velocity;
-  velocity->SetName("velocity");
-  velocity->SetNumberOfComponents(3);
-  velocity->SetNumberOfTuples(n);
-  vtkNew<RealArray<Real>> density;
-  density->SetName("density");
-  density->SetNumberOfTuples(n);
-  vtkNew<RealArray<Real>> lambda;
-  lambda->SetName("lambda");
-  lambda->SetNumberOfTuples(n);
-  vtkNew<vtkIdTypeArray> id;
-  id->SetName("id");
-  id->SetNumberOfTuples(n);
-  vtkNew<vtkIdTypeArray> offsets;
-  offsets->SetNumberOfTuples(n + 1);
-  vtkNew<vtkIdTypeArray> connectivity;
-  connectivity->SetNumberOfTuples(n);
-
+// Vertex cells 0..n-1 depend on the particle count only: built once per count and shared by the
+// frames (outputs are never modified downstream), instead of 16 bytes per particle per frame.
+vtkSmartPointer<vtkCellArray> VertexCells(vtkIdType n)
+{
+  auto offsets = NewArray<vtkIdTypeArray>(nullptr, 1, n + 1);
+  auto connectivity = NewArray<vtkIdTypeArray>(nullptr, 1, n);
+  vtkIdType* o = offsets->GetPointer(0);
+  vtkIdType* c = connectivity->GetPointer(0);
   for (vtkIdType i = 0; i < n; ++i)
   {
-    const auto k = static_cast<std::size_t>(i);
-    const auto& x = snapshot.position[k];
-    const auto& v = snapshot.velocity[k];
-    const Real xyz[3] = { x.x, x.y, x.z };
-    const Real uvw[3] = { v.x, v.y, v.z };
-    coordinates->SetTypedTuple(i, xyz);
-    velocity->SetTypedTuple(i, uvw);
-    density->SetValue(i, snapshot.density[k]);
-    lambda->SetValue(i, snapshot.lambda[k]);
-    id->SetValue(i, static_cast<vtkIdType>(snapshot.id[k]));
-    offsets->SetValue(i, i);
-    connectivity->SetValue(i, i);
+    o[i] = i;
+    c[i] = i;
   }
-  offsets->SetValue(n, n);
+  o[n] = n;
+  auto cells = vtkSmartPointer<vtkCellArray>::New();
+  cells->SetData(offsets, connectivity);
+  return cells;
+}
+
+// The particles in the solver's (cell-sorted) order, copied straight into the VTK arrays'
+// memory: pbf::Vec3 is three packed reals, as VTK's interleaved 3-component arrays are.
+template <class Real>
+void FillParticles(const pbf::Stepper& stepper, pbf::Snapshot<Real>& snapshot,
+  vtkSmartPointer<vtkCellArray>& vertices, vtkPolyData* output)
+{
+  static_assert(sizeof(pbf::Vec3<Real>) == 3 * sizeof(Real), "pbf::Vec3 must be 3 packed reals");
+  stepper.read(snapshot);
+  const auto n = static_cast<vtkIdType>(snapshot.position.size());
+  const auto count = static_cast<std::size_t>(n);
+
+  auto coordinates = NewArray<RealArray<Real>>(nullptr, 3, n);
+  auto velocity = NewArray<RealArray<Real>>("velocity", 3, n);
+  auto density = NewArray<RealArray<Real>>("density", 1, n);
+  auto lambda = NewArray<RealArray<Real>>("lambda", 1, n);
+  auto id = NewArray<vtkIdTypeArray>("id", 1, n);
+  if (n > 0)
+  {
+    std::memcpy(coordinates->GetPointer(0), snapshot.position.data(), count * 3 * sizeof(Real));
+    std::memcpy(velocity->GetPointer(0), snapshot.velocity.data(), count * 3 * sizeof(Real));
+    std::memcpy(density->GetPointer(0), snapshot.density.data(), count * sizeof(Real));
+    std::memcpy(lambda->GetPointer(0), snapshot.lambda.data(), count * sizeof(Real));
+    if (sizeof(vtkIdType) == sizeof(std::int64_t))
+    {
+      std::memcpy(id->GetPointer(0), snapshot.id.data(), count * sizeof(std::int64_t));
+    }
+    else
+    {
+      std::copy(snapshot.id.begin(), snapshot.id.end(), id->GetPointer(0));
+    }
+  }
+  if (!vertices || vertices->GetNumberOfCells() != n)
+  {
+    vertices = VertexCells(n);
+  }
 
   vtkNew<vtkPoints> points;
   points->SetData(coordinates);
-  vtkNew<vtkCellArray> vertices;
-  vertices->SetData(offsets, connectivity);
   output->SetPoints(points);
   output->SetVerts(vertices);
 
@@ -233,17 +266,19 @@ void AddText(vtkFieldData* fieldData, const char* name, const std::string& value
 
 // The parameters that produced the frame, as the solver saw them (domain included), so that a
 // reader of the output alone can recompute the density with poly6 of h and the particle mass.
-void FillParameters(const pbf::Simulation& simulation, int frame, double frameInterval,
-  int substeps, vtkPolyData* output)
+vtkSmartPointer<vtkFieldData> FrameFieldData(
+  const pbf::Simulation& simulation, int frame, double frameInterval, int substeps)
 {
   const pbf::Parameters& p = simulation.parameters();
-  vtkNew<vtkFieldData> fieldData;
+  auto fieldData = vtkSmartPointer<vtkFieldData>::New();
   AddValue(fieldData, "SmoothingLength", p.smoothingLength());
   AddValue(fieldData, "RestDensity", p.restDensity);
   AddValue(fieldData, "ParticleMass", pbf::calibratedParticleMass(p));
   AddValue(fieldData, "ParticleSpacing", p.particleSpacing);
   AddValue(fieldData, "SmoothingRatio", p.smoothingRatio);
   AddInteger(fieldData, "SolverIterations", p.solverIterations);
+  AddInteger(fieldData, "AdaptiveIterations", p.densityErrorTolerance > 0 ? 1 : 0);
+  AddValue(fieldData, "DensityErrorTolerance", p.densityErrorTolerance);
   AddValue(fieldData, "RelaxationEpsilon", p.relaxation);
   AddValue(fieldData, "SCorrK", p.sCorrK);
   AddValue(fieldData, "SCorrN", p.sCorrN);
@@ -273,7 +308,7 @@ void FillParameters(const pbf::Simulation& simulation, int frame, double frameIn
   AddText(fieldData, "Backend", simulation.stepper().description());
   AddText(fieldData, "Precision", pbf::toString(simulation.stepper().precision()));
   AddText(fieldData, "Scene", simulation.scene().name);
-  output->SetFieldData(fieldData);
+  return fieldData;
 }
 
 std::string ReadWholeFile(const std::string& path)
@@ -282,17 +317,78 @@ std::string ReadWholeFile(const std::string& path)
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
+double Milliseconds(std::chrono::steady_clock::time_point since)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since)
+    .count();
+}
+
+const double NaN = std::numeric_limits<double>::quiet_NaN();
+
+// One row of the diagnostics table.
+struct FrameRow
+{
+  double Time = 0;
+  double AverageDensityError = 0; // percent
+  double MaxDensityError = 0;     // percent
+  double AverageNeighbors = 0;
+  double SolverIterations = NaN;    // per step, averaged over the frame's substeps
+  double MillisecondsPerStep = NaN; // likewise
+  double MaxSpeed = 0;
+  double KineticEnergy = 0;
+  vtkIdType Particles = 0;
+  std::string Backend;
+};
+
 } // namespace
 
 class vtkPBFSimulation::vtkInternals
 {
 public:
-  // The simulation of LiveConfiguration at its current step; null when none is valid.
-  std::unique_ptr<pbf::Simulation> Live;
-  Configuration LiveConfiguration;
+  // What the live simulation, the checkpoints, the rows and the reusable output were computed
+  // for; all of them are dropped together when it changes.
+  Configuration Key;
+  bool HasKey = false;
 
-  // What the last successful request produced: a failed request hands it out again.
+  // The simulation of Key at its current step (a whole step, not always a whole frame: an
+  // aborted request leaves it where it stopped); null when none is valid.
+  std::unique_ptr<pbf::Simulation> Live;
+  // The solver steps already taken towards the next frame of Live, so that its row counts every
+  // substep even when the frame was finished by a later request.
+  long PendingIterations = 0;
+  double PendingMilliseconds = 0;
+  int PendingSteps = 0;
+
+  // Checkpoints by frame, and the interval new ones are taken at (CheckpointInterval, doubled
+  // each time the budget forced a thinning).
+  std::map<int, pbf::SimulationCheckpoint> Checkpoints;
+  std::size_t CheckpointBytes = 0;
+  int RequestedInterval = 0;
+  int Stride = 0;
+  // The backend cannot load a checkpoint: none is kept, and earlier frames start over.
+  bool RestoreUnsupported = false;
+
+  // Diagnostics by frame, and the table last put on port 1.
+  std::map<int, FrameRow> Rows;
+  bool TableStale = true;
+  vtkSmartPointer<vtkTable> Table = vtkSmartPointer<vtkTable>::New();
+
+  // What the last successful request produced (a failed or aborted request hands it out again)
+  // and, when it is a frame of Key, which one (-1 otherwise).
   vtkSmartPointer<vtkPolyData> LastOutput = vtkSmartPointer<vtkPolyData>::New();
+  int LastFrame = -1;
+
+  // Reused from frame to frame: the host copy of the particles and the vertex cells.
+  pbf::Snapshot<float> SingleSnapshot;
+  pbf::Snapshot<double> DoubleSnapshot;
+  vtkSmartPointer<vtkCellArray> Vertices;
+
+  // The cost of the last request.
+  double SimulationMilliseconds = 0;
+  double DiagnosticsMilliseconds = 0;
+  double CheckpointMilliseconds = 0;
+  double DeliveryMilliseconds = 0;
+  vtkIdType RequestSteps = 0;
 
   // CUDA is probed once: a device does not come and go while ParaView runs.
   bool CudaProbed = false;
@@ -310,45 +406,161 @@ public:
     return this->CudaPresent;
   }
 
-  // True when the live simulation is of this configuration and not past targetStep: stepping on
-  // from it gives what a run from the initial state would, bit for bit.
-  bool CanStepTo(const Configuration& configuration, std::uint64_t targetStep) const
+  // Drops everything computed for another configuration; the last output stays, for failures.
+  void Adopt(const Configuration& configuration)
   {
-    return this->Live && this->LiveConfiguration == configuration &&
-      this->Live->stepCount() <= targetStep;
+    if (this->HasKey && this->Key == configuration)
+    {
+      return;
+    }
+    // Free the old state first: two large simulations need not fit at once.
+    this->Live.reset();
+    this->ResetPending();
+    this->Checkpoints.clear();
+    this->CheckpointBytes = 0;
+    this->Stride = this->RequestedInterval;
+    this->RestoreUnsupported = false;
+    this->Rows.clear();
+    this->TableStale = true;
+    this->LastFrame = -1;
+    this->Key = configuration;
+    this->HasKey = true;
   }
 
-  // Positions the live simulation at targetStep of the configuration: steps on when it can,
-  // otherwise starts over from the initial state (scene, or initial when the input gives it). A
-  // checkpoint cache slots in here: restore the latest checkpoint of this configuration at or
-  // before targetStep instead of step 0; stepping is deterministic, so frames stay bit-identical.
-  pbf::Simulation& Seek(const Configuration& configuration, const pbf::Scene& scene,
-    const pbf::ParticleBatch* initial, std::uint64_t targetStep, vtkPBFSimulation* self)
+  void ResetPending()
   {
-    if (!this->CanStepTo(configuration, targetStep))
+    this->PendingIterations = 0;
+    this->PendingMilliseconds = 0;
+    this->PendingSteps = 0;
+  }
+
+  // Applies CheckpointInterval and CheckpointMemoryMB; checkpoints already taken stay valid.
+  void ConfigureCheckpoints(int interval, std::size_t budget)
+  {
+    if (interval != this->RequestedInterval)
     {
-      // Free the old state first: two large simulations need not fit at once.
-      this->Live.reset();
-      const Configuration& c = configuration;
-      if (initial)
-      {
-        this->Live =
-          std::make_unique<pbf::Simulation>(scene, c.Parameters, c.Backend, c.Precision, *initial);
-      }
-      else
-      {
-        this->Live = std::make_unique<pbf::Simulation>(scene, c.Parameters, c.Backend, c.Precision);
-      }
-      this->LiveConfiguration = configuration;
+      this->RequestedInterval = interval;
+      this->Stride = interval;
     }
-    const std::uint64_t first = this->Live->stepCount();
-    const double total = static_cast<double>(targetStep - first);
-    while (this->Live->stepCount() < targetStep)
+    if (interval <= 0 || this->RestoreUnsupported)
     {
-      this->Live->advance(1);
-      self->UpdateProgress(static_cast<double>(this->Live->stepCount() - first) / total);
+      this->Checkpoints.clear();
+      this->CheckpointBytes = 0;
+      return;
     }
-    return *this->Live;
+    this->FitBudget(budget);
+  }
+
+  // The thinning policy: while over budget, double the interval and drop the checkpoints off it.
+  // The earliest checkpoint (frame 0 unless checkpoints were switched on late) always stays.
+  void FitBudget(std::size_t budget)
+  {
+    while (this->CheckpointBytes > budget && this->Checkpoints.size() > 1)
+    {
+      this->Stride *= 2;
+      const int earliest = this->Checkpoints.begin()->first;
+      for (auto it = this->Checkpoints.begin(); it != this->Checkpoints.end();)
+      {
+        if (it->first != earliest && it->first % this->Stride != 0)
+        {
+          this->CheckpointBytes -= it->second.bytes();
+          it = this->Checkpoints.erase(it);
+        }
+        else
+        {
+          ++it;
+        }
+      }
+    }
+  }
+
+  void TakeCheckpoint(int frame, std::size_t budget)
+  {
+    if (this->Stride <= 0 || this->RestoreUnsupported || frame % this->Stride != 0 ||
+      this->Checkpoints.count(frame))
+    {
+      return;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    pbf::SimulationCheckpoint checkpoint = this->Live->checkpoint();
+    this->CheckpointBytes += checkpoint.bytes();
+    this->Checkpoints.emplace(frame, std::move(checkpoint));
+    this->FitBudget(budget);
+    this->CheckpointMilliseconds += Milliseconds(start);
+  }
+
+  // The row of the frame the live simulation has just reached.
+  void RecordFrame(int frame)
+  {
+    const auto start = std::chrono::steady_clock::now();
+    const pbf::Stepper& stepper = this->Live->stepper();
+    const pbf::Statistics statistics = stepper.statistics();
+    FrameRow row;
+    row.Time = this->Live->time();
+    row.AverageDensityError = 100.0 * statistics.averageDensityError;
+    row.MaxDensityError = 100.0 * statistics.maxDensityError;
+    row.AverageNeighbors = statistics.averageNeighbors;
+    if (this->PendingSteps > 0)
+    {
+      row.SolverIterations = static_cast<double>(this->PendingIterations) / this->PendingSteps;
+      row.MillisecondsPerStep = this->PendingMilliseconds / this->PendingSteps;
+    }
+    row.MaxSpeed = statistics.maxSpeed;
+    row.KineticEnergy = statistics.kineticEnergy;
+    row.Particles = static_cast<vtkIdType>(statistics.particles);
+    row.Backend = stepper.description();
+    this->Rows[frame] = row;
+    this->TableStale = true;
+    this->ResetPending();
+    this->DiagnosticsMilliseconds += Milliseconds(start);
+  }
+
+  vtkTable* DiagnosticsTable()
+  {
+    if (!this->TableStale)
+    {
+      return this->Table;
+    }
+    const auto rows = static_cast<vtkIdType>(this->Rows.size());
+    auto time = NewArray<vtkDoubleArray>("Time", 1, rows);
+    auto frame = NewArray<vtkIdTypeArray>("Frame", 1, rows);
+    auto averageError = NewArray<vtkDoubleArray>("AverageDensityError", 1, rows);
+    auto maxError = NewArray<vtkDoubleArray>("MaxDensityError", 1, rows);
+    auto neighbors = NewArray<vtkDoubleArray>("AverageNeighbors", 1, rows);
+    auto iterations = NewArray<vtkDoubleArray>("SolverIterations", 1, rows);
+    auto milliseconds = NewArray<vtkDoubleArray>("MillisecondsPerStep", 1, rows);
+    auto maxSpeed = NewArray<vtkDoubleArray>("MaxSpeed", 1, rows);
+    auto kinetic = NewArray<vtkDoubleArray>("KineticEnergy", 1, rows);
+    auto particles = NewArray<vtkIdTypeArray>("Particles", 1, rows);
+    vtkNew<vtkStringArray> backend;
+    backend->SetName("Backend");
+    backend->SetNumberOfValues(rows);
+    vtkIdType r = 0;
+    for (const auto& entry : this->Rows)
+    {
+      const FrameRow& row = entry.second;
+      time->SetValue(r, row.Time);
+      frame->SetValue(r, entry.first);
+      averageError->SetValue(r, row.AverageDensityError);
+      maxError->SetValue(r, row.MaxDensityError);
+      neighbors->SetValue(r, row.AverageNeighbors);
+      iterations->SetValue(r, row.SolverIterations);
+      milliseconds->SetValue(r, row.MillisecondsPerStep);
+      maxSpeed->SetValue(r, row.MaxSpeed);
+      kinetic->SetValue(r, row.KineticEnergy);
+      particles->SetValue(r, row.Particles);
+      backend->SetValue(r, row.Backend);
+      ++r;
+    }
+    this->Table = vtkSmartPointer<vtkTable>::New();
+    for (vtkAbstractArray* column : std::initializer_list<vtkAbstractArray*>{ time, frame,
+           averageError, maxError, neighbors, iterations, milliseconds, maxSpeed, kinetic,
+           particles, backend })
+    {
+      this->Table->AddColumn(column);
+    }
+    this->TableStale = false;
+    return this->Table;
   }
 };
 
@@ -377,15 +589,23 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->Gravity[0] = defaults.gravity.x;
   this->Gravity[1] = defaults.gravity.y;
   this->Gravity[2] = defaults.gravity.z;
+  // The solver's default is the fixed count (densityErrorTolerance 0); the tolerance shown when
+  // adaptive iterations are switched on is a tenth of a percent.
+  this->AdaptiveIterations = defaults.densityErrorTolerance > 0;
+  this->DensityErrorTolerance =
+    defaults.densityErrorTolerance > 0 ? defaults.densityErrorTolerance : 0.1;
   this->FrameInterval = 1.0 / 60.0;
   this->SubstepsPerFrame = 4;
   this->NumberOfFrames = 120;
+  this->CheckpointInterval = 10;
+  this->CheckpointMemoryMB = 1024.0;
   this->Backend = BACKEND_AUTO;
   this->Precision = PRECISION_SINGLE;
 
   // Port 0 is optional: without an input the algorithm is a source.
   this->SetNumberOfInputPorts(1);
-  this->SetNumberOfOutputPorts(1);
+  // Port 0: the particles of the frame; port 1: the diagnostics table.
+  this->SetNumberOfOutputPorts(2);
 }
 
 //------------------------------------------------------------------------------
@@ -401,6 +621,36 @@ const char* vtkPBFSimulation::GetPresetName() const
 }
 
 //------------------------------------------------------------------------------
+double vtkPBFSimulation::GetLastSimulationMilliseconds() const
+{
+  return this->Internals->SimulationMilliseconds;
+}
+
+//------------------------------------------------------------------------------
+double vtkPBFSimulation::GetLastDiagnosticsMilliseconds() const
+{
+  return this->Internals->DiagnosticsMilliseconds;
+}
+
+//------------------------------------------------------------------------------
+double vtkPBFSimulation::GetLastCheckpointMilliseconds() const
+{
+  return this->Internals->CheckpointMilliseconds;
+}
+
+//------------------------------------------------------------------------------
+double vtkPBFSimulation::GetLastDeliveryMilliseconds() const
+{
+  return this->Internals->DeliveryMilliseconds;
+}
+
+//------------------------------------------------------------------------------
+vtkIdType vtkPBFSimulation::GetLastRequestSteps() const
+{
+  return this->Internals->RequestSteps;
+}
+
+//------------------------------------------------------------------------------
 int vtkPBFSimulation::FillInputPortInformation(int port, vtkInformation* info)
 {
   if (port != 0)
@@ -410,6 +660,17 @@ int vtkPBFSimulation::FillInputPortInformation(int port, vtkInformation* info)
   info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPointSet");
   info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
   return 1;
+}
+
+//------------------------------------------------------------------------------
+int vtkPBFSimulation::FillOutputPortInformation(int port, vtkInformation* info)
+{
+  if (port == 1)
+  {
+    info->Set(vtkDataObject::DATA_TYPE_NAME(), "vtkTable");
+    return 1;
+  }
+  return this->Superclass::FillOutputPortInformation(port, info);
 }
 
 //------------------------------------------------------------------------------
@@ -427,19 +688,23 @@ int vtkPBFSimulation::FrameForTime(double time) const
 int vtkPBFSimulation::RequestInformation(
   vtkInformation*, vtkInformationVector**, vtkInformationVector* outputVector)
 {
-  vtkInformation* outInfo = outputVector->GetInformationObject(0);
-  // The time steps are this algorithm's frames, whatever the input's were.
+  // The time steps are this algorithm's frames, whatever the input's were. Both ports announce
+  // them: the table grows as frames are computed.
   std::vector<double> times(static_cast<std::size_t>(this->NumberOfFrames) + 1);
   for (std::size_t k = 0; k < times.size(); ++k)
   {
     times[k] = static_cast<double>(k) * this->FrameInterval;
   }
-  outInfo->Set(
-    vtkStreamingDemandDrivenPipeline::TIME_STEPS(), times.data(), static_cast<int>(times.size()));
   const double range[2] = { times.front(), times.back() };
-  outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_RANGE(), range, 2);
-  // One piece only until the fluid is partitioned: the executive then runs a source on piece 0.
-  outInfo->Remove(vtkAlgorithm::CAN_HANDLE_PIECE_REQUEST());
+  for (int port = 0; port < this->GetNumberOfOutputPorts(); ++port)
+  {
+    vtkInformation* outInfo = outputVector->GetInformationObject(port);
+    outInfo->Set(
+      vtkStreamingDemandDrivenPipeline::TIME_STEPS(), times.data(), static_cast<int>(times.size()));
+    outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_RANGE(), range, 2);
+    // One piece only until the fluid is partitioned: the executive then runs a source on piece 0.
+    outInfo->Remove(vtkAlgorithm::CAN_HANDLE_PIECE_REQUEST());
+  }
   return 1;
 }
 
@@ -474,27 +739,64 @@ int vtkPBFSimulation::RequestUpdateExtent(
 
 //------------------------------------------------------------------------------
 int vtkPBFSimulation::RequestData(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
   vtkPolyData* output = vtkPolyData::GetData(outInfo);
+  vtkTable* table = vtkTable::GetData(outputVector, 1);
+  vtkInternals& internals = *this->Internals;
+  internals.SimulationMilliseconds = 0;
+  internals.DiagnosticsMilliseconds = 0;
+  internals.CheckpointMilliseconds = 0;
+  internals.DeliveryMilliseconds = 0;
+  internals.RequestSteps = 0;
 
-  double requested = 0.0;
-  if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
+  // The request may come through either port; both carry the same time.
+  int requestPort = request->Has(vtkDemandDrivenPipeline::FROM_OUTPUT_PORT())
+    ? request->Get(vtkDemandDrivenPipeline::FROM_OUTPUT_PORT())
+    : 0;
+  if (requestPort < 0 || requestPort >= this->GetNumberOfOutputPorts())
   {
-    requested = outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
+    requestPort = 0;
+  }
+  vtkInformation* requestInfo = outputVector->GetInformationObject(requestPort);
+  double requested = 0.0;
+  if (requestInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
+  {
+    requested = requestInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
   }
   const int frame = this->FrameForTime(requested);
   const double frameTime = static_cast<double>(frame) * this->FrameInterval;
 
-  const int piece = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
-    ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
+  const int piece = requestInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
+    ? requestInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
     : 0;
   if (piece > 0)
   {
     // Piece 0 holds the whole fluid; see the class documentation.
     output->Initialize();
     output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
+    table->Initialize();
+    table->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
+    return 1;
+  }
+
+  // Hands out the last good output (with its own time) and the diagnostics known so far.
+  auto deliverPrevious = [&]() {
+    output->ShallowCopy(internals.LastOutput);
+    table->ShallowCopy(internals.DiagnosticsTable());
+    vtkInformation* last = internals.LastOutput->GetInformation();
+    if (last->Has(vtkDataObject::DATA_TIME_STEP()))
+    {
+      const double shown = last->Get(vtkDataObject::DATA_TIME_STEP());
+      output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), shown);
+      table->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), shown);
+    }
+  };
+
+  if (this->GetAbortOutput())
+  {
+    // An upstream algorithm aborted: the executive empties the outputs and marks them aborted.
     return 1;
   }
 
@@ -515,6 +817,7 @@ int vtkPBFSimulation::RequestData(
     p.particleSpacing = this->ParticleSpacing;
     p.smoothingRatio = this->SmoothingRatio;
     p.solverIterations = this->SolverIterations;
+    p.densityErrorTolerance = this->AdaptiveIterations ? this->DensityErrorTolerance : 0.0;
     p.relaxation = this->RelaxationEpsilon;
     p.sCorrK = this->SCorrK;
     p.sCorrN = this->SCorrN;
@@ -525,16 +828,18 @@ int vtkPBFSimulation::RequestData(
     p.mirrorWalls = this->MirrorWalls;
     p.gravity = pbf::Vec3d{ this->Gravity[0], this->Gravity[1], this->Gravity[2] };
     p.timeStep = this->FrameInterval / this->SubstepsPerFrame;
+    configuration.FrameInterval = this->FrameInterval;
+    configuration.Substeps = this->SubstepsPerFrame;
 
     configuration.Precision =
       this->Precision == PRECISION_DOUBLE ? pbf::Precision::Double : pbf::Precision::Single;
     switch (this->Backend)
     {
       case BACKEND_CUDA:
-        if (!this->Internals->HasCuda())
+        if (!internals.HasCuda())
         {
           throw std::runtime_error("Backend = CUDA: CUDA backend unavailable: " +
-            this->Internals->CudaAbsence + " (choose Auto or CPU (OpenMP))");
+            internals.CudaAbsence + " (choose Auto or CPU (OpenMP))");
         }
         configuration.Backend = pbf::Backend::CUDA;
         break;
@@ -545,19 +850,19 @@ int vtkPBFSimulation::RequestData(
         configuration.Backend = pbf::Backend::Serial;
         break;
       default:
-        if (this->Internals->HasCuda())
+        if (internals.HasCuda())
         {
           configuration.Backend = pbf::Backend::CUDA;
         }
         else
         {
           configuration.Backend = pbf::Backend::OpenMP;
-          if (!this->Internals->FallbackReported)
+          if (!internals.FallbackReported)
           {
-            this->Internals->FallbackReported = true;
+            internals.FallbackReported = true;
             std::ostringstream text;
             text << this->GetClassName() << " (" << this << "): Backend Auto: no CUDA ("
-                 << this->Internals->CudaAbsence << "); falling back to CPU (OpenMP).\n";
+                 << internals.CudaAbsence << "); falling back to CPU (OpenMP).\n";
             vtkOutputWindowDisplayText(text.str().c_str());
           }
         }
@@ -567,38 +872,175 @@ int vtkPBFSimulation::RequestData(
     configuration.HasInput = input != nullptr;
     configuration.InputMTime = input ? input->GetMTime() : 0;
 
-    const std::uint64_t targetStep =
-      static_cast<std::uint64_t>(frame) * static_cast<std::uint64_t>(this->SubstepsPerFrame);
+    const int substeps = this->SubstepsPerFrame;
+    const std::size_t budget =
+      static_cast<std::size_t>(std::min(this->CheckpointMemoryMB * 1048576.0, 1e18));
+    internals.Adopt(configuration);
+    internals.ConfigureCheckpoints(this->CheckpointInterval, budget);
 
-    // The scene and the input are read only when the simulation is rebuilt.
-    pbf::Scene scene;
-    pbf::ParticleBatch initial;
-    if (!this->Internals->CanStepTo(configuration, targetStep))
+    // The frame just delivered: hand it out again, arrays shared, nothing stepped or copied.
+    if (internals.LastFrame == frame)
     {
-      scene =
-        sceneFile.empty() ? pbf::presetScene(this->GetPresetName()) : pbf::loadSceneFile(sceneFile);
-      if (input)
-      {
-        initial = BatchFromInput(input);
-      }
+      output->ShallowCopy(internals.LastOutput);
+      vtkNew<vtkFieldData> fieldData;
+      fieldData->ShallowCopy(internals.LastOutput->GetFieldData());
+      AddInteger(fieldData, "RequestSteps", 0);
+      AddText(fieldData, "ResumedFrom", "output");
+      AddInteger(fieldData, "ResumedFromStep",
+        static_cast<vtkIdType>(frame) * static_cast<vtkIdType>(substeps));
+      output->SetFieldData(fieldData);
+      output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
+      table->ShallowCopy(internals.DiagnosticsTable());
+      table->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
+      return 1;
     }
 
-    pbf::Simulation& simulation =
-      this->Internals->Seek(configuration, scene, input ? &initial : nullptr, targetStep, this);
+    const std::uint64_t targetStep =
+      static_cast<std::uint64_t>(frame) * static_cast<std::uint64_t>(substeps);
 
+    // Builds the live simulation at step 0 (the scene and the input are read only then).
+    auto build = [&]() {
+      internals.Live.reset();
+      internals.ResetPending();
+      const pbf::Scene scene =
+        sceneFile.empty() ? pbf::presetScene(this->GetPresetName()) : pbf::loadSceneFile(sceneFile);
+      const Configuration& c = configuration;
+      if (input)
+      {
+        internals.Live = std::make_unique<pbf::Simulation>(
+          scene, c.Parameters, c.Backend, c.Precision, BatchFromInput(input));
+      }
+      else
+      {
+        internals.Live = std::make_unique<pbf::Simulation>(scene, c.Parameters, c.Backend, c.Precision);
+      }
+      if (!internals.Rows.count(0))
+      {
+        internals.RecordFrame(0);
+      }
+      internals.TakeCheckpoint(0, budget);
+    };
+
+    // Where to start: the live simulation when it is not past the frame, unless a checkpoint is
+    // nearer; otherwise the latest checkpoint at or before the frame; otherwise step 0.
+    std::string resumedFrom = "live";
+    const pbf::SimulationCheckpoint* checkpoint = nullptr;
+    auto after = internals.Checkpoints.upper_bound(frame);
+    if (after != internals.Checkpoints.begin())
+    {
+      checkpoint = &std::prev(after)->second;
+    }
+    const bool liveUsable = internals.Live && internals.Live->stepCount() <= targetStep;
+    if (!(liveUsable && (!checkpoint || checkpoint->steps <= internals.Live->stepCount())))
+    {
+      if (checkpoint)
+      {
+        if (!internals.Live)
+        {
+          build();
+        }
+        try
+        {
+          internals.Live->restore(*checkpoint);
+          internals.ResetPending();
+          resumedFrom = "checkpoint";
+        }
+        catch (const std::exception& error)
+        {
+          // This backend cannot load a state yet: keep no checkpoints, start over from step 0.
+          internals.RestoreUnsupported = true;
+          internals.Checkpoints.clear();
+          internals.CheckpointBytes = 0;
+          std::ostringstream text;
+          text << this->GetClassName() << " (" << this << "): checkpoints disabled: "
+               << error.what() << "; an earlier frame starts over from the initial state.\n";
+          vtkOutputWindowDisplayText(text.str().c_str());
+          build();
+          resumedFrom = "initial";
+        }
+      }
+      else
+      {
+        build();
+        resumedFrom = "initial";
+      }
+    }
+    pbf::Simulation& simulation = *internals.Live;
+    const std::uint64_t resumedFromStep = simulation.stepCount();
+
+    // Step to the frame, one solver step at a time: progress and abort are checked after each.
+    const double total = static_cast<double>(targetStep - resumedFromStep);
+    bool aborted = false;
+    while (simulation.stepCount() < targetStep)
+    {
+      const pbf::AdvanceReport report = simulation.advance(1);
+      internals.PendingIterations += report.iterations;
+      internals.PendingMilliseconds += report.milliseconds;
+      internals.PendingSteps += static_cast<int>(report.steps);
+      internals.SimulationMilliseconds += report.milliseconds;
+      internals.RequestSteps += static_cast<vtkIdType>(report.steps);
+      if (simulation.stepCount() % static_cast<std::uint64_t>(substeps) == 0)
+      {
+        const int reached = static_cast<int>(simulation.stepCount() / substeps);
+        internals.RecordFrame(reached);
+        internals.TakeCheckpoint(reached, budget);
+      }
+      this->UpdateProgress(static_cast<double>(simulation.stepCount() - resumedFromStep) / total);
+      // AbortExecute stays set, as VTK has it: whoever set it clears it (SetAbortExecute(0) also
+      // marks this algorithm modified, so that the same time asked again re-executes).
+      if (this->GetAbortExecute() && simulation.stepCount() < targetStep)
+      {
+        aborted = true;
+        break;
+      }
+    }
+    if (aborted)
+    {
+      std::ostringstream text;
+      text << this->GetClassName() << " (" << this << "): aborted at step "
+           << simulation.stepCount() << " on the way to frame " << frame << " (step " << targetStep
+           << "); the previous output stays.\n";
+      vtkOutputWindowDisplayText(text.str().c_str());
+      deliverPrevious();
+      return 1;
+    }
+
+    const auto deliveryStart = std::chrono::steady_clock::now();
     vtkNew<vtkPolyData> result;
     if (simulation.stepper().precision() == pbf::Precision::Double)
     {
-      FillParticles<double>(simulation.stepper(), result);
+      FillParticles<double>(
+        simulation.stepper(), internals.DoubleSnapshot, internals.Vertices, result);
     }
     else
     {
-      FillParticles<float>(simulation.stepper(), result);
+      FillParticles<float>(
+        simulation.stepper(), internals.SingleSnapshot, internals.Vertices, result);
     }
-    FillParameters(simulation, frame, this->FrameInterval, this->SubstepsPerFrame, result);
+    vtkSmartPointer<vtkFieldData> fieldData =
+      FrameFieldData(simulation, frame, this->FrameInterval, substeps);
+    AddInteger(fieldData, "RequestSteps", internals.RequestSteps);
+    AddText(fieldData, "ResumedFrom", resumedFrom);
+    AddInteger(fieldData, "ResumedFromStep", static_cast<vtkIdType>(resumedFromStep));
+    vtkNew<vtkIdTypeArray> held;
+    held->SetName("CheckpointFrames");
+    held->SetNumberOfTuples(static_cast<vtkIdType>(internals.Checkpoints.size()));
+    vtkIdType k = 0;
+    for (const auto& entry : internals.Checkpoints)
+    {
+      held->SetValue(k++, entry.first);
+    }
+    fieldData->AddArray(held);
+    AddValue(fieldData, "CheckpointMemoryMB", internals.CheckpointBytes / 1048576.0);
+    result->SetFieldData(fieldData);
+    result->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
+    internals.LastOutput = result;
+    internals.LastFrame = frame;
     output->ShallowCopy(result);
     output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
-    this->Internals->LastOutput->ShallowCopy(output);
+    table->ShallowCopy(internals.DiagnosticsTable());
+    table->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
+    internals.DeliveryMilliseconds = Milliseconds(deliveryStart);
     return 1;
   }
   catch (const pbf::InvalidInput& error)
@@ -613,9 +1055,12 @@ int vtkPBFSimulation::RequestData(
   {
     vtkErrorMacro(<< error.what());
   }
-  // A failed request may have stopped a simulation half way: never step on from it.
-  this->Internals->Live.reset();
-  output->ShallowCopy(this->Internals->LastOutput);
+  // A failed request may have stopped a simulation half way through a step: never step on from
+  // it. Checkpoints and rows are of whole frames and stay.
+  internals.Live.reset();
+  internals.ResetPending();
+  internals.LastFrame = -1;
+  deliverPrevious();
   return 0;
 }
 
@@ -629,6 +1074,8 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "ParticleSpacing: " << this->ParticleSpacing << "\n";
   os << indent << "SmoothingRatio: " << this->SmoothingRatio << "\n";
   os << indent << "SolverIterations: " << this->SolverIterations << "\n";
+  os << indent << "AdaptiveIterations: " << (this->AdaptiveIterations ? "On" : "Off") << "\n";
+  os << indent << "DensityErrorTolerance: " << this->DensityErrorTolerance << "\n";
   os << indent << "RelaxationEpsilon: " << this->RelaxationEpsilon << "\n";
   os << indent << "SCorrK: " << this->SCorrK << "\n";
   os << indent << "SCorrN: " << this->SCorrN << "\n";
@@ -642,6 +1089,8 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "FrameInterval: " << this->FrameInterval << "\n";
   os << indent << "SubstepsPerFrame: " << this->SubstepsPerFrame << "\n";
   os << indent << "NumberOfFrames: " << this->NumberOfFrames << "\n";
+  os << indent << "CheckpointInterval: " << this->CheckpointInterval << "\n";
+  os << indent << "CheckpointMemoryMB: " << this->CheckpointMemoryMB << "\n";
   os << indent << "Backend: " << this->Backend << "\n";
   os << indent << "Precision: " << this->Precision << "\n";
 }

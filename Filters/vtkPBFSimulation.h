@@ -22,10 +22,29 @@
  * Time: frame k is at time k * FrameInterval, for k = 0..NumberOfFrames, and is
  * k * SubstepsPerFrame solver steps of FrameInterval / SubstepsPerFrame from the initial state. A
  * request is answered with the nearest frame. Any frame, asked in any order, is bit-identical to
- * a run straight to it: the live simulation steps forward to a later frame and is rebuilt from
- * the initial state for an earlier frame or when anything that shapes the motion changed (a
- * physics property, the scene or its file's contents, the input, the backend or the precision;
- * NumberOfFrames is not one of them).
+ * a run straight to it, whichever way it is reached: the frame just delivered is handed out again
+ * without stepping or copying; a later frame steps the live simulation on; an earlier one resumes
+ * from the latest checkpoint at or before it (see CheckpointInterval), or from the initial state
+ * when there is none. Anything that shapes the motion (a physics property, the time step, the
+ * scene or its file's contents, the input, the backend or the precision) invalidates the live
+ * simulation, the checkpoints and the diagnostics; NumberOfFrames, the checkpoint settings and
+ * display properties do not.
+ *
+ * Long requests report progress (UpdateProgress after every solver step) and honour
+ * AbortExecute, checked after every solver step: an aborted request outputs the previous frame
+ * (with its own time and Frame) and the diagnostics of the frames completed so far, keeps the
+ * live simulation at the last whole step (a valid state that the next request steps on from,
+ * never mistaken for a frame) and succeeds. As in VTK, AbortExecute stays set until whoever set
+ * it clears it; SetAbortExecute(0) also marks the algorithm modified, so that the same time asked
+ * again is computed.
+ *
+ * Output port 1 is a vtkTable of diagnostics, one row per frame computed so far (frames 0 to the
+ * furthest computed, in order, kept while scrubbing and replaced when the physics change): Time,
+ * Frame, AverageDensityError and MaxDensityError [%] (mean and maximum of max(rho_i / rho_0 - 1,
+ * 0)), AverageNeighbors, SolverIterations (constraint projections per step, averaged over the
+ * frame's substeps), MillisecondsPerStep (wall time of the frame's solver steps per step, queued
+ * GPU work included), MaxSpeed [m/s], KineticEnergy [J], Particles and Backend. Frame 0 took no
+ * step: its SolverIterations and MillisecondsPerStep are NaN.
  *
  * Parallel runs: the algorithm does not partition the fluid yet. Piece 0 (rank 0) simulates all
  * of it and other pieces output an empty vtkPolyData; as a filter it asks its input for the whole
@@ -160,6 +179,35 @@ public:
 
   ///@{
   /**
+   * Adaptive iterations: when on, a solver step stops projecting the density constraint as soon
+   * as the mean compression max(rho_i / rho_0 - 1, 0) is at or below DensityErrorTolerance
+   * [percent] (default 0.1), and SolverIterations becomes the most it may take. Off (the
+   * default): always SolverIterations projections per step.
+   */
+  vtkSetMacro(AdaptiveIterations, bool);
+  vtkGetMacro(AdaptiveIterations, bool);
+  vtkBooleanMacro(AdaptiveIterations, bool);
+  vtkSetClampMacro(DensityErrorTolerance, double, 1e-6, 100.0);
+  vtkGetMacro(DensityErrorTolerance, double);
+  ///@}
+
+  ///@{
+  /**
+   * Checkpoints: a copy of the solver state (in host memory) is kept every CheckpointInterval
+   * frames (default 10; 0 keeps none and frees those held), so that an earlier frame resumes from
+   * the latest checkpoint at or before it instead of from the initial state. CheckpointMemoryMB
+   * (default 1024) bounds the memory they hold: past it, the interval doubles and the checkpoints
+   * off the doubled interval are dropped, until they fit, so the survivors stay evenly spread;
+   * frame 0 (the earliest held) is always kept. Neither setting changes a frame.
+   */
+  vtkSetClampMacro(CheckpointInterval, int, 0, 1000000);
+  vtkGetMacro(CheckpointInterval, int);
+  vtkSetClampMacro(CheckpointMemoryMB, double, 0.0, 1e9);
+  vtkGetMacro(CheckpointMemoryMB, double);
+  ///@}
+
+  ///@{
+  /**
    * Where the solver runs: BACKEND_AUTO (the default) takes CUDA when pbf::cudaAvailable() and
    * OpenMP otherwise, saying so once; BACKEND_CUDA without a device is an error naming the
    * reason. Precision is that of the solver's state and of the output arrays.
@@ -170,11 +218,27 @@ public:
   vtkGetMacro(Precision, int);
   ///@}
 
+  ///@{
+  /**
+   * What the last request cost, for tools that time the pipeline (Testing/Pipeline): the wall
+   * time of its solver steps as pbf::Simulation::advance reports it (GPU work included), of the
+   * diagnostics (Stepper::statistics, once per frame stepped through), of the checkpoints taken
+   * and of the delivery (copying the particles back and building the output arrays), in
+   * milliseconds, and the solver steps it took. All 0 for a request answered without stepping.
+   */
+  double GetLastSimulationMilliseconds() const;
+  double GetLastDiagnosticsMilliseconds() const;
+  double GetLastCheckpointMilliseconds() const;
+  double GetLastDeliveryMilliseconds() const;
+  vtkIdType GetLastRequestSteps() const;
+  ///@}
+
 protected:
   vtkPBFSimulation();
   ~vtkPBFSimulation() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
+  int FillOutputPortInformation(int port, vtkInformation* info) override;
   int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
@@ -201,10 +265,15 @@ protected:
   bool Unilateral;
   bool MirrorWalls;
   double Gravity[3];
+  bool AdaptiveIterations;
+  double DensityErrorTolerance;
 
   double FrameInterval;
   int SubstepsPerFrame;
   int NumberOfFrames;
+
+  int CheckpointInterval;
+  double CheckpointMemoryMB;
 
   int Backend;
   int Precision;
@@ -213,7 +282,8 @@ private:
   vtkPBFSimulation(const vtkPBFSimulation&) = delete;
   void operator=(const vtkPBFSimulation&) = delete;
 
-  // The live simulation and the last good output; solver types stay in the .cxx.
+  // The live simulation, its checkpoints and diagnostics and the last good output; solver types
+  // stay in the .cxx.
   class vtkInternals;
   std::unique_ptr<vtkInternals> Internals;
 };

@@ -17,6 +17,8 @@ FIELDS = {
     "particleSpacing": ("ParticleSpacing", "ParticleSpacing"),
     "smoothingRatio": ("SmoothingRatio", "SmoothingRatio"),
     "solverIterations": ("SolverIterations", "SolverIterations"),
+    # AdaptiveIterations ? DensityErrorTolerance : 0 (the solver's fixed mode); checked below.
+    "densityErrorTolerance": (None, "DensityErrorTolerance"),
     "relaxation": ("RelaxationEpsilon", "RelaxationEpsilon"),
     "sCorrK": ("SCorrK", "SCorrK"),
     "sCorrN": ("SCorrN", "SCorrN"),
@@ -80,6 +82,15 @@ expect(source.FrameInterval / source.SubstepsPerFrame == defaults["timeStep"],
        % (source.FrameInterval / source.SubstepsPerFrame, defaults["timeStep"]))
 expect(source.FrameInterval == 1.0 / 60.0 and source.SubstepsPerFrame == 4 and
        source.NumberOfFrames == 120, "time defaults are not 1/60 s, 4 substeps, 120 frames")
+# The solver's default is the fixed count; the tolerance offered with it is 0.1 %.
+expect(defaults["densityErrorTolerance"] == 0 and source.AdaptiveIterations == 0 and
+       source.DensityErrorTolerance == 0.1,
+       "adaptive defaults: AdaptiveIterations %r, DensityErrorTolerance %r, solver tolerance %r"
+       % (source.AdaptiveIterations, source.DensityErrorTolerance,
+          defaults["densityErrorTolerance"]))
+expect(source.CheckpointInterval == 10 and source.CheckpointMemoryMB == 1024,
+       "checkpoint defaults: every %r frames, %r MiB"
+       % (source.CheckpointInterval, source.CheckpointMemoryMB))
 
 # The defaults as the solver saw them (frame 0 needs no step, so the full dam break is quick).
 data = T.output_at(source, 0.0)
@@ -106,7 +117,13 @@ for prop, value in changed.items():
     source.SetPropertyWithName(prop, value)
 source.FrameInterval = 0.02
 source.SubstepsPerFrame = 5
+source.AdaptiveIterations = 1
+source.DensityErrorTolerance = 0.5
 data = T.output_at(source, 0.02)
+expect(T.field_value(data, "DensityErrorTolerance") == 0.5 and
+       T.field_value(data, "AdaptiveIterations") == 1,
+       "AdaptiveIterations on, DensityErrorTolerance 0.5 reached the solver as %r, %r"
+       % (T.field_value(data, "AdaptiveIterations"), T.field_value(data, "DensityErrorTolerance")))
 for field, (prop, array) in FIELDS.items():
     if prop is None:
         continue
