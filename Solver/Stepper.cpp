@@ -26,21 +26,6 @@ const char* toString(Precision precision)
   return precision == Precision::Single ? "single" : "double";
 }
 
-StepReport Stepper::lastStep() const
-{
-  throw std::runtime_error(description() + ": this backend does not report its steps yet");
-}
-
-void Stepper::load(const Snapshot<float>&)
-{
-  throw std::runtime_error(description() + ": this backend cannot load a checkpoint yet");
-}
-
-void Stepper::load(const Snapshot<double>&)
-{
-  throw std::runtime_error(description() + ": this backend cannot load a checkpoint yet");
-}
-
 #ifdef PBF_WITH_CUDA
 // Defined in CudaStepper.cu; declared here so that no CUDA header reaches the CPU build.
 std::unique_ptr<Stepper> makeCudaStepper(

@@ -91,7 +91,7 @@ public:
 
   virtual Statistics statistics() const = 0;
 
-  virtual StepReport lastStep() const;
+  virtual StepReport lastStep() const = 0;
 
   // Returns when the queued steps are done (a GPU queues them); a no-op on the CPU.
   virtual void synchronize() const {}
@@ -100,8 +100,8 @@ public:
   // order: the steps that follow are then bit-identical to those that followed the read. This is
   // what checkpoints restore. Throws InvalidInput for a snapshot of another precision or with
   // arrays of different lengths.
-  virtual void load(const Snapshot<float>& state);
-  virtual void load(const Snapshot<double>& state);
+  virtual void load(const Snapshot<float>& state) = 0;
+  virtual void load(const Snapshot<double>& state) = 0;
 };
 
 // Throws InvalidInput for bad parameters or positions, std::runtime_error when the backend is
