@@ -73,27 +73,15 @@ bench cuda_double 60 --backend cuda --precision double --sweep 16000,64000,25600
   --warmup 20 --steps 100
 bench cuda_walk 60 --backend cuda --neighbors walk --sweep 64000,256000,1000000,4000000 --warmup 20 \
   --steps 50
-for skin in 0.05 0.2; do
+for skin in 0.05 0.1; do
   bench "cuda_skin_$skin" 20 --backend cuda --skin "$skin" --particles 1000000 --warmup 20 --steps 100
 done
+# What the mirror walls (Equations.h) cost: the same run without them.
+bench cuda_nowalls 20 --backend cuda --walls 0 --particles 1000000 --warmup 20 --steps 100
 bench cuda_nographs 30 --backend cuda --graphs 0 --sweep 16000,64000,1000000 --warmup 20 --steps 100
 bench serial 90 --backend serial --sweep 16000,64000,256000 --warmup 1 --steps 3
 bench serial_1M 40 --backend serial --particles 1000000 --warmup 0 --steps 1
 bench openmp 40 --backend openmp --sweep 64000,256000,1000000 --warmup 1 --steps 3
-
-phase "approximate division and square root (PBF_CUDA_APPROX_DIVSQRT=ON)"
-if timeout "$(limit 120)" cmake -S "$root" -B "$build-approx" "${generator[@]}" \
-    -DCMAKE_BUILD_TYPE=Release -DPBF_SOLVER_ONLY=ON -DCMAKE_CUDA_ARCHITECTURES=90 \
-    -DPBF_CUDA_APPROX_DIVSQRT=ON -DBUILD_TESTING=OFF -DPBF_JSON_INCLUDE_DIR="$root/.deps/json" \
-    >"$work/configure-approx.log" 2>&1 &&
-  timeout "$(limit 120)" cmake --build "$build-approx" -j "$(nproc)" --target pbf_bench \
-    >"$work/build-approx.log" 2>&1; then
-  bench=$build-approx/Solver/Tools/pbf_bench
-  bench cuda_approx 40 --backend cuda --sweep 1000000,10000000 --warmup 20 --steps 50
-  bench=$build/Solver/Tools/pbf_bench
-else
-  record "approximate build: FAILED or cut"
-fi
 
 phase "ctest (gpu, solver)"
 (cd "$build" && timeout "$(limit 240)" ctest -L 'gpu|solver' -j "$(nproc)" --timeout 300 \
@@ -128,19 +116,22 @@ sanitize memcheck "$run" --backend cuda --scene stream --spacing 0.01 --steps 20
 sanitize racecheck "$bench" "${small[@]}"
 
 phase "ncu"
-# One step at 1M: the kernels of construction (evaluateAtRest) and of 2 warm-up steps first.
+# One step at 1M in the flow that the benchmark times: construction (evaluateAtRest: 13 kernels)
+# and 60 warm-up steps (22 kernels each) are skipped.
 timeout "$(limit 60)" ncu --clock-control none --metrics gpu__time_duration.sum --csv --page raw \
-  "$bench" --backend cuda --particles 1000000 --warmup 2 --steps 1 >"$out/ncu_times.csv" 2>&1 ||
+  --launch-skip 1333 --launch-count 22 \
+  "$bench" --backend cuda --particles 1000000 --warmup 60 --steps 1 >"$out/ncu_times.csv" 2>&1 ||
   record "ncu times: FAILED or cut"
-timeout "$(limit 90)" ncu --clock-control none --kernel-name-base demangled \
-  -k 'regex:DensityStage|CorrectionStage|VorticityStage|ConfinementStage' --launch-skip 1 \
+# The neighbour passes of the same step: 1 density pass at construction, 10 a step.
+timeout "$(limit 100)" ncu --clock-control none --kernel-name-base demangled \
+  -k 'regex:DensityStage|CorrectionStage|VorticityStage|ConfinementStage' --launch-skip 601 \
   --launch-count 10 --section SpeedOfLight --section Occupancy --section SchedulerStats \
-  --section WarpStateStats --section MemoryWorkloadAnalysis \
+  --section WarpStateStats --section MemoryWorkloadAnalysis --section LaunchStats \
   --metrics smsp__thread_inst_executed_per_inst_executed.ratio,smsp__inst_executed.sum \
-  "$bench" --backend cuda --particles 1000000 --warmup 0 --steps 1 >"$out/ncu_sections.txt" 2>&1 ||
+  "$bench" --backend cuda --particles 1000000 --warmup 60 --steps 1 >"$out/ncu_sections.txt" 2>&1 ||
   record "ncu sections: FAILED or cut"
-grep -E "Stage|Duration|Throughput|Achieved Occupancy|Issue Slots Busy|thread_inst_executed_per" \
-  "$out/ncu_sections.txt" | head -60
+grep -E "Stage|Duration|Throughput|Achieved Occupancy|Issue Slots Busy|thread_inst_executed_per|Registers" \
+  "$out/ncu_sections.txt" | head -80
 
 phase "summary"
 python3 - "$work" "$out/bench.json" <<'PY'
@@ -194,7 +185,7 @@ for n in sorted(walk):
     m = min(single, key=lambda k: abs(k - n))
     print("walk %9d: %8.3f ms   masks: %8.3f ms" % (n, walk[n]["median_ms"], single[m]["median_ms"]))
 for r in runs:
-    if r["label"].startswith(("cuda_skin", "cuda_approx")) or r["label"] == "cuda_nographs":
+    if r["label"].startswith(("cuda_skin", "cuda_nowalls")) or r["label"] == "cuda_nographs":
         print("%-14s %9d: %8.3f ms  builds/step %.2f" % (r["label"], r["particles"], r["median_ms"],
               r["mask_builds_per_step"]))
 PY

@@ -35,8 +35,11 @@ struct Options
 {
   NeighborSearch search = NeighborSearch::RowMasks;
   // How far beyond h the masks reach, as a fraction of h: larger means more candidates per pass
-  // but fewer rebuilds within a step. Results do not depend on it.
-  double skin = 0.1;
+  // but fewer rebuilds within a step. Results do not depend on it. On the H200's dam break the
+  // largest correction of a million particles outgrows any skin up to 0.1 h in nearly every
+  // iteration, so the masks are rebuilt at nearly every pass anyway and a thin skin is fastest
+  // (Testing/Benchmarks/README.md).
+  double skin = 0.02;
   // Replay each step as one CUDA graph (no launch gaps); off: launch the kernels one by one.
   bool graphs = true;
   // Threads per block of the neighbour passes: a multiple of 32 up to 128.

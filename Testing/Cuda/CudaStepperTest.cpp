@@ -381,9 +381,10 @@ TEST(CudaStepper, AdaptiveIterationsFollowTheSerialBackend)
 {
   PBF_REQUIRE_GPU();
   // Adaptive mode stops projecting once the mean compression is within the tolerance. The GPU sums
-  // that mean in another order than the CPU (a relative difference of ~1e-15 in double), which
-  // can flip a decision only when the mean lands within that of the tolerance: the iteration
-  // counts of 40 steps must agree, and the last density errors to the same 1e-15 (1e-9 allowed).
+  // that mean in another order than the CPU and rounds differently (FMA) throughout, so the runs
+  // drift apart by rounding: over 40 steps in double that moved the final mean by 9e-7 relative
+  // on the H200, far too little to flip a decision unless the mean lands within that of the
+  // tolerance. So the iteration counts must agree, and the final errors within 1e-4 relative.
   Parameters p = smallParameters(0.04);
   p.solverIterations = 6;
   p.densityErrorTolerance = 0.05;
@@ -393,5 +394,5 @@ TEST(CudaStepper, AdaptiveIterationsFollowTheSerialBackend)
   const AdvanceReport b = gpu.advance(40);
   EXPECT_EQ(b.iterations, a.iterations);
   EXPECT_LT(a.iterations, 40 * 6); // some steps stopped early
-  EXPECT_NEAR(b.densityError, a.densityError, 1e-9 * a.densityError);
+  EXPECT_NEAR(b.densityError, a.densityError, 1e-4 * a.densityError);
 }
