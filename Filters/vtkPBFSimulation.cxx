@@ -489,9 +489,16 @@ public:
     this->CheckpointMilliseconds += Milliseconds(start);
   }
 
-  // The row of the frame the live simulation has just reached.
+  // The row of the frame the live simulation has just reached. A frame computed again (after
+  // going back) keeps its first row: the same state, so only the timing could differ, and a
+  // plotted curve should not jitter while scrubbing.
   void RecordFrame(int frame)
   {
+    if (this->Rows.count(frame))
+    {
+      this->ResetPending();
+      return;
+    }
     const auto start = std::chrono::steady_clock::now();
     const pbf::Stepper& stepper = this->Live->stepper();
     const pbf::Statistics statistics = stepper.statistics();
@@ -914,10 +921,7 @@ int vtkPBFSimulation::RequestData(
       {
         internals.Live = std::make_unique<pbf::Simulation>(scene, c.Parameters, c.Backend, c.Precision);
       }
-      if (!internals.Rows.count(0))
-      {
-        internals.RecordFrame(0);
-      }
+      internals.RecordFrame(0);
       internals.TakeCheckpoint(0, budget);
     };
 

@@ -39,12 +39,13 @@
  * again is computed.
  *
  * Output port 1 is a vtkTable of diagnostics, one row per frame computed so far (frames 0 to the
- * furthest computed, in order, kept while scrubbing and replaced when the physics change): Time,
- * Frame, AverageDensityError and MaxDensityError [%] (mean and maximum of max(rho_i / rho_0 - 1,
- * 0)), AverageNeighbors, SolverIterations (constraint projections per step, averaged over the
- * frame's substeps), MillisecondsPerStep (wall time of the frame's solver steps per step, queued
- * GPU work included), MaxSpeed [m/s], KineticEnergy [J], Particles and Backend. Frame 0 took no
- * step: its SolverIterations and MillisecondsPerStep are NaN.
+ * furthest computed, in order; a frame computed again keeps its first row; all are replaced when
+ * the physics change): Time, Frame, AverageDensityError and MaxDensityError [%] (mean and
+ * maximum of max(rho_i / rho_0 - 1, 0)), AverageNeighbors, SolverIterations (constraint
+ * projections per step, averaged over the frame's substeps), MillisecondsPerStep (wall time of
+ * the frame's solver steps per step, queued GPU work included), MaxSpeed [m/s], KineticEnergy
+ * [J], Particles and Backend. Frame 0 took no step: its SolverIterations and MillisecondsPerStep
+ * are NaN.
  *
  * Parallel runs: the algorithm does not partition the fluid yet. Piece 0 (rank 0) simulates all
  * of it and other pieces output an empty vtkPolyData; as a filter it asks its input for the whole

@@ -39,14 +39,39 @@ void pqPBFRepresentationDefaults::shutdown()
 void pqPBFRepresentationDefaults::onRepresentationAdded(pqRepresentation* representation)
 {
   vtkSMProxy* display = representation ? representation->getProxy() : nullptr;
-  // Only data representations that can draw Point Gaussians (render views) have both.
-  if (!display || !display->GetProperty("Input") || !display->GetProperty("GaussianRadius"))
+  if (!display || !display->GetProperty("Input"))
   {
     return;
   }
-  vtkSMProxy* producer = vtkSMPropertyHelper(display, "Input", /*quiet=*/true).GetAsProxy();
+  vtkSMPropertyHelper input(display, "Input", /*quiet=*/true);
+  vtkSMProxy* producer = input.GetAsProxy();
   if (!producer || !producer->GetVTKClassName() ||
     std::strcmp(producer->GetVTKClassName(), "vtkPBFSimulation") != 0)
+  {
+    return;
+  }
+  // The diagnostics (port 1) in a chart: against Time (ParaView's default X array when a column
+  // has that name), the two density errors only, both in percent; the other columns are on
+  // other scales and one click away in the series list.
+  if (input.GetOutputPort() == 1 && display->GetProperty("SeriesVisibility"))
+  {
+    static const char* const columns[] = { "AverageDensityError", "MaxDensityError",
+      "AverageNeighbors", "SolverIterations", "MillisecondsPerStep", "MaxSpeed", "KineticEnergy",
+      "Frame", "Particles" };
+    vtkSMPropertyHelper visibility(display, "SeriesVisibility");
+    unsigned int element = 0;
+    for (const char* column : columns)
+    {
+      const bool shown = std::strcmp(column, "AverageDensityError") == 0 ||
+        std::strcmp(column, "MaxDensityError") == 0;
+      visibility.Set(element++, column);
+      visibility.Set(element++, shown ? "1" : "0");
+    }
+    display->UpdateVTKObjects();
+    return;
+  }
+  // Only data representations that can draw Point Gaussians (render views) have a radius.
+  if (!display->GetProperty("GaussianRadius"))
   {
     return;
   }

@@ -3,7 +3,9 @@
 // - the Point Gaussian radius is half the ParticleSpacing, so that neighbouring particles touch
 //   and the fluid reads as a volume (the representation's own default is 0.5% of the bounds);
 // - the "velocity" color map grows every time step, because frame 0 is at rest (all speeds 0)
-//   and a range taken on Apply would saturate as soon as the animation plays.
+//   and a range taken on Apply would saturate as soon as the animation plays;
+// - the Diagnostics table (output port 1) in a Line Chart View plots the two density errors (in
+//   percent) against Time, instead of every column on one axis.
 #ifndef pqPBFRepresentationDefaults_h
 #define pqPBFRepresentationDefaults_h
 

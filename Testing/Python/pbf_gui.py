@@ -1,6 +1,8 @@
 """ParaView's GUI (run by smTestDriver under Xvfb, the plugin loaded with --plugins) creates the
 source with its defaults, shows it as the proxy's hints say, plays the animation to the last frame
-and saves a screenshot in which the particles must be visible and colored by |velocity|.
+and saves a screenshot in which the particles must be visible and colored by |velocity|. Going
+back in time resumes from a checkpoint; the Diagnostics output, shown in a Line Chart View,
+holds a row per frame and plots the density errors as lines.
 
 PBF_GUI_FRAMES, when set, shortens the animation (NumberOfFrames); everything else is default."""
 import os
@@ -92,5 +94,47 @@ expect(fraction > 0.005, "only %.3f%% of the screenshot shows particles" % (100 
 colors = {tuple(c // 16) for c in with_fluid[changed]}
 expect(len(colors) >= 8, "the particles show only %d distinct colors: not colored by |velocity|"
        % len(colors))
-print("pbf_gui: frame %d of %d, %.1f%% of the view is particles in %d colors; saved %s"
-      % (frame, source.NumberOfFrames, 100 * fraction, len(colors), shot))
+# Scrubbing back: frame 13 resumes from the checkpoint of frame 10, one of those taken on Play.
+scene.AnimationTime = steps[13]
+data = source.GetClientSideObject().GetOutputDataObject(0)
+resumed = data.GetFieldData().GetAbstractArray("ResumedFrom").GetValue(0)
+stepped = int(data.GetFieldData().GetArray("RequestSteps").GetTuple1(0))
+expect(int(data.GetFieldData().GetArray("Frame").GetTuple1(0)) == 13 and resumed == "checkpoint"
+       and stepped == 3 * source.SubstepsPerFrame,
+       "going back to frame 13 resumed from %s with %d steps" % (resumed, stepped))
+
+# The diagnostics in a Line Chart View: a row per frame played, the density errors against Time.
+table = source.GetClientSideObject().GetOutputDataObject(1)
+expect(table.GetNumberOfRows() == len(steps), "the diagnostics hold %d rows for %d frames"
+       % (table.GetNumberOfRows(), len(steps)))
+chart = simple.CreateView("XYChartView")
+chart.ViewSize = [800, 450]
+simple.AssignViewToLayout(view=chart, layout=simple.GetLayout(view), hint=0)
+plot = simple.Show(simple.OutputPort(source, 1), chart)
+expect(plot.XArrayName == "Time" and not plot.UseIndexForXAxis,
+       "the diagnostics are plotted against %s" % ("the row index" if plot.UseIndexForXAxis
+                                                   else plot.XArrayName))
+expect(sorted(plot.SeriesVisibility) == ["AverageDensityError", "MaxDensityError"],
+       "the chart shows %s, not the density errors" % list(plot.SeriesVisibility))
+simple.Render(chart)
+lines = os.path.join(output_dir, "pbf_gui_diagnostics.png")
+simple.SaveScreenshot(lines, chart, ImageResolution=[800, 450])
+simple.Hide(simple.OutputPort(source, 1), chart)
+simple.Render(chart)
+axes = os.path.join(output_dir, "pbf_gui_diagnostics_empty.png")
+simple.SaveScreenshot(axes, chart, ImageResolution=[800, 450])
+# The plotted lines are the pixels that change when the series are hidden, and they are colored
+# (the series colors), not the axes' gray or black.
+with_lines, without_lines = read_png(lines), read_png(axes)
+changed = numpy.any(with_lines != without_lines, axis=2)
+pixels = with_lines[changed]
+colored = pixels[(pixels.max(axis=1) - pixels.min(axis=1)) > 60]
+columns = numpy.unique(numpy.nonzero(changed)[1])
+expect(len(colored) > 200 and len(columns) > 300,
+       "the chart shows %d colored line pixels over %d columns: no plotted line"
+       % (len(colored), len(columns)))
+
+print("pbf_gui: frame %d of %d, %.1f%% of the view is particles in %d colors; saved %s; "
+      "diagnostics: %d rows, %d line pixels" % (frame, source.NumberOfFrames, 100 * fraction,
+                                                len(colors), shot, table.GetNumberOfRows(),
+                                                len(colored)))

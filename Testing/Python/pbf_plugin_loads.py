@@ -88,6 +88,24 @@ def check_proxy(proxy, label):
            representation.GetAttribute("type") in ("Point Gaussian", "Points"),
            "%s: no RepresentationType hint that shows particles" % label)
 
+    # Two output ports: the particles, and the diagnostics table that Apply shows in a Line Chart
+    # View.
+    ports = [sm.GetOutputPortName(i) for i in range(sm.GetNumberOfOutputPorts())]
+    expect(ports == ["Particles", "Diagnostics"], "%s: output ports %s" % (label, ports))
+    views = [hints.GetNestedElement(i) for i in range(hints.GetNumberOfNestedElements())
+             if hints.GetNestedElement(i).GetName() == "View"]
+    expect([(v.GetAttribute("type"), v.GetAttribute("port")) for v in views] ==
+           [("XYChartView", "1")], "%s: the diagnostics port is not shown in a Line Chart View"
+           % label)
+
+    # SceneFile: the GUI's file dialog, filtered to JSON scenes.
+    scene_file = sm.GetProperty("SceneFile")
+    expect(scene_file.FindDomain("vtkSMFileListDomain") is not None,
+           "%s.SceneFile has no file list domain (no file dialog)" % label)
+    chooser = scene_file.GetHints().FindNestedElementByName("FileChooser")
+    expect(chooser is not None and chooser.GetAttribute("extensions") == "json",
+           "%s.SceneFile: the file dialog is not filtered to .json" % label)
+
 
 check_proxy(source, "source")
 check_proxy(fluid_filter, "filter")

@@ -91,7 +91,12 @@ def field_value(data, name):
 
 def frame(proxy, time):
     """The particles of the frame answering time, as numpy arrays sorted by particle id."""
-    data = output_at(proxy, time)
+    return particles_of(output_at(proxy, time))
+
+
+def particles_of(data):
+    """A frame's particles (a vtkPolyData of this plugin, live or read back from a file) as numpy
+    arrays sorted by particle id."""
     n = data.GetNumberOfPoints()
     point_data = data.GetPointData()
     ids = numpy_support.vtk_to_numpy(point_data.GetArray("id")).copy()
@@ -128,3 +133,41 @@ def passed(name):
 def finite(values):
     return bool(numpy.all(numpy.isfinite(values)))
 
+
+
+def save_frame(path, result):
+    """Writes a frame() result to an .npz file (the child side of the replay tests)."""
+    numpy.savez(path, **{k: numpy.asarray(v) for k, v in result.items() if v is not None})
+
+
+def load_frame(path):
+    with numpy.load(path) as data:
+        result = {k: data[k] for k in data.files}
+    for key in ("n", "step", "frame"):
+        result[key] = int(result[key])
+    return result
+
+
+def run_pvbatch(script, *arguments):
+    """Runs script in a fresh pvbatch ($PBF_PVBATCH, else pvbatch on the PATH) with the plugin
+    path after --plugin; returns its output, failing the test on a non-zero exit or a VTK error."""
+    import subprocess
+    pvbatch = os.environ.get("PBF_PVBATCH", "pvbatch")
+    command = [pvbatch, "--dr", script, "--plugin", plugin_path()] + [str(a) for a in arguments]
+    run = subprocess.run(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    expect(run.returncode == 0 and "ERR|" not in run.stdout and "ERROR: " not in run.stdout,
+           "%s exited with %d:\n%s" % (" ".join(command), run.returncode, run.stdout))
+    return run.stdout
+
+
+def diagnostics(proxy):
+    """The diagnostics table (output port 1) as a dict of numpy arrays (strings as lists)."""
+    table = proxy.GetClientSideObject().GetOutputDataObject(1)
+    columns = {}
+    for c in range(table.GetNumberOfColumns()):
+        array = table.GetColumn(c)
+        if array.IsA("vtkStringArray"):
+            columns[array.GetName()] = [array.GetValue(r) for r in range(array.GetNumberOfValues())]
+        else:
+            columns[array.GetName()] = numpy_support.vtk_to_numpy(array).copy()
+    return columns

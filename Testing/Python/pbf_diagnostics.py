@@ -1,0 +1,108 @@
+"""The second output port, Diagnostics, is a vtkTable with one row per computed frame (0 to the
+furthest computed, in order), kept while scrubbing and replaced after a physics change, with sane
+values; and adaptive iterations stop early within the SolverIterations cap."""
+import os
+import sys
+
+import numpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import pbf_testing as T  # noqa: E402
+from paraview import servermanager  # noqa: E402
+
+T.load_plugin(globals())
+expect = T.expect
+
+INTERVAL = 1.0 / 60.0
+SUBSTEPS = 2
+COLUMNS = ["Time", "Frame", "AverageDensityError", "MaxDensityError", "AverageNeighbors",
+           "SolverIterations", "MillisecondsPerStep", "MaxSpeed", "KineticEnergy", "Particles",
+           "Backend"]
+DETERMINISTIC = [c for c in COLUMNS if c != "MillisecondsPerStep"]
+
+source = PositionBasedFluids(ParticleSpacing=T.QUICK_SPACING, NumberOfFrames=12,  # noqa: F821
+                             SubstepsPerFrame=SUBSTEPS)
+expect(source.SMProxy.GetOutputPortName(1) == "Diagnostics",
+       "output port 1 is named %r" % source.SMProxy.GetOutputPortName(1))
+particles = T.output_at(source, 8 * INTERVAL)
+table_object = source.GetClientSideObject().GetOutputDataObject(1)
+expect(table_object.IsA("vtkTable"), "port 1 is a %s" % table_object.GetClassName())
+# Through the server manager too, as a Line Chart View or a spreadsheet gets it.
+fetched = servermanager.Fetch(source, idx=1)
+expect(fetched.IsA("vtkTable") and fetched.GetNumberOfRows() == 9,
+       "Fetch of port 1 gave a %s of %d rows" % (fetched.GetClassName(), fetched.GetNumberOfRows()))
+
+table = T.diagnostics(source)
+expect(list(table) == COLUMNS, "columns %s, expected %s" % (list(table), COLUMNS))
+expect(table_object.GetColumnByName("Backend").IsA("vtkStringArray"), "Backend is not a string column")
+frames = numpy.arange(9)
+expect(list(table["Frame"]) == list(frames), "rows of frames %s, expected 0..8" % list(table["Frame"]))
+# Frame k is k * SUBSTEPS steps of INTERVAL / SUBSTEPS: the time as the solver counts it.
+expect(numpy.allclose(table["Time"], frames * INTERVAL, rtol=0, atol=1e-12), "times %s" % table["Time"])
+expect(all(table["Particles"] == T.QUICK_PARTICLES), "particles %s" % table["Particles"])
+expect(table["Backend"] == [T.field_value(particles, "Backend")] * 9,
+       "backend %s, the frame says %s" % (table["Backend"], T.field_value(particles, "Backend")))
+# The rest lattice: about 25 neighbours within h = 2 s at this spacing (30 in the bulk, fewer at
+# the free surface), no compression; then the column falls and compresses a little.
+expect(numpy.all((table["AverageNeighbors"] > 15) & (table["AverageNeighbors"] < 40)),
+       "average neighbours %s" % table["AverageNeighbors"])
+expect(table["AverageDensityError"][0] < 1e-3, "frame 0 compressed by %g %%"
+       % table["AverageDensityError"][0])
+expect(numpy.all(table["AverageDensityError"] >= 0) and
+       numpy.all(table["AverageDensityError"] <= table["MaxDensityError"]) and
+       numpy.all(table["MaxDensityError"] < 20),
+       "density errors [%%]: average %s, max %s" % (table["AverageDensityError"],
+                                                     table["MaxDensityError"]))
+expect(numpy.all(numpy.diff(table["MaxSpeed"][:6]) > 0) and table["KineticEnergy"][8] > 0,
+       "the falling column does not speed up: %s" % table["MaxSpeed"])
+# Frame 0 took no step; every later frame took SUBSTEPS steps of SolverIterations (fixed mode).
+expect(numpy.isnan(table["SolverIterations"][0]) and numpy.isnan(table["MillisecondsPerStep"][0]),
+       "frame 0 has per-step values")
+expect(numpy.all(table["SolverIterations"][1:] == source.SolverIterations),
+       "iterations per step %s, fixed at %d" % (table["SolverIterations"], source.SolverIterations))
+expect(numpy.all((table["MillisecondsPerStep"][1:] > 0) & (table["MillisecondsPerStep"][1:] < 1e4)),
+       "milliseconds per step %s" % table["MillisecondsPerStep"])
+
+# Scrubbing back keeps the rows; going further adds rows in order.
+first = table
+T.output_at(source, 3 * INTERVAL)
+table = T.diagnostics(source)
+expect(list(table["Frame"]) == list(frames), "after going back to 3 the rows are %s"
+       % list(table["Frame"]))
+for name in DETERMINISTIC:
+    same = table[name] == first[name] if name == "Backend" else \
+        numpy.array_equal(table[name], first[name], equal_nan=name == "SolverIterations")
+    expect(same, "going back to 3 changed the %s column" % name)
+T.output_at(source, 12 * INTERVAL)
+table = T.diagnostics(source)
+expect(list(table["Frame"]) == list(range(13)), "after frame 12 the rows are %s"
+       % list(table["Frame"]))
+
+# A physics change replaces the rows by those of the new run.
+source.SolverIterations = 2
+T.output_at(source, 4 * INTERVAL)
+table = T.diagnostics(source)
+expect(list(table["Frame"]) == list(range(5)), "after SolverIterations 2 the rows are %s"
+       % list(table["Frame"]))
+expect(numpy.all(table["SolverIterations"][1:] == 2), "iterations %s after SolverIterations 2"
+       % table["SolverIterations"])
+expect(not numpy.array_equal(table["AverageDensityError"][1:], first["AverageDensityError"][1:5]),
+       "SolverIterations 2 left the density errors unchanged")
+
+# Adaptive iterations: at most SolverIterations per step, fewer where the fluid is barely
+# compressed (1 %), all of them where the tolerance cannot be met (1e-6 %).
+source.SolverIterations = 6
+source.AdaptiveIterations = 1
+source.DensityErrorTolerance = 1.0
+data = T.output_at(source, 10 * INTERVAL)
+expect(T.field_value(data, "DensityErrorTolerance") == 1.0, "the tolerance did not reach the solver")
+iterations = T.diagnostics(source)["SolverIterations"][1:]
+expect(numpy.all((iterations >= 0) & (iterations <= 6)) and iterations.min() < 6,
+       "adaptive iterations per step at 1 %%: %s (cap 6)" % iterations)
+source.DensityErrorTolerance = 1e-6
+T.output_at(source, 3 * INTERVAL)
+iterations = T.diagnostics(source)["SolverIterations"][1:]
+expect(numpy.all(iterations == 6), "adaptive iterations at 1e-6 %%: %s, expected the cap 6"
+       % iterations)
+
+T.passed("Diagnostics")
