@@ -20,7 +20,8 @@ def series(runs, label):
 
 
 def main(source, target):
-    runs = json.load(open(source))["runs"]
+    data = json.load(open(source))
+    runs = data["runs"]
     fig, ax = plt.subplots(figsize=(7, 4.6), dpi=110)
     single = [r for r in runs if r["label"] in ("cuda_single", "cuda_10M", "cuda_100M")]
     xs, ys = zip(*sorted((r["particles"], r["median_ms"]) for r in single))
@@ -34,6 +35,9 @@ def main(source, target):
         if x:
             ax.plot(x, y, style, color=color, label=name)
     x, y = series(runs, "serial")
+    x1, y1 = series(runs, "serial_1M")
+    points = sorted(zip(x + x1, y + y1))
+    x, y = [p[0] for p in points], [p[1] for p in points]
     if x:
         ax.plot(x, y, "o-", color="tab:red", label="serial, single (measured)")
         per = y[-1] / x[-1]
@@ -44,12 +48,13 @@ def main(source, target):
     ax.plot([1e7], [10.0], "k*", markersize=10)
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("particles (dam break scaled to N)")
+    ax.set_xlabel("particles (dam break widened to N)")
     ax.set_ylabel("ms per step (median; 4 iterations, XSPH, vorticity)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
-    device = next((r["device"] for r in single), "")
-    ax.set_title("Position Based Fluids on " + device.replace("CUDA, ", ""), fontsize=10)
+    machine = data.get("machine", "")
+    ax.set_title("Position Based Fluids, dam break: " + machine.split(" (")[0].replace("one ", ""),
+                 fontsize=10)
     fig.tight_layout()
     fig.savefig(target)
 
