@@ -2,6 +2,7 @@
 
 #include "CpuStepper.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace pbf
@@ -24,6 +25,39 @@ const char* toString(Backend backend)
 const char* toString(Precision precision)
 {
   return precision == Precision::Single ? "single" : "double";
+}
+
+namespace
+{
+
+template <class Real>
+void readThroughSnapshot(const Stepper& stepper, const SnapshotView<Real>& out)
+{
+  Snapshot<Real> snapshot;
+  stepper.read(snapshot);
+  const auto copy = [](const auto& from, auto* to) {
+    if (to)
+    {
+      std::copy(from.begin(), from.end(), to);
+    }
+  };
+  copy(snapshot.position, out.position);
+  copy(snapshot.velocity, out.velocity);
+  copy(snapshot.density, out.density);
+  copy(snapshot.lambda, out.lambda);
+  copy(snapshot.id, out.id);
+}
+
+} // namespace
+
+void Stepper::readInto(const SnapshotView<float>& out) const
+{
+  readThroughSnapshot(*this, out);
+}
+
+void Stepper::readInto(const SnapshotView<double>& out) const
+{
+  readThroughSnapshot(*this, out);
 }
 
 #ifdef PBF_WITH_CUDA

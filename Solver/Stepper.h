@@ -41,6 +41,18 @@ struct Snapshot
   std::vector<std::int64_t> id;
 };
 
+// Caller-owned host arrays of size() particles laid out as a Snapshot's (a Vec3 is three packed
+// reals, as VTK's interleaved arrays are), for Stepper::readInto. A null pointer skips the array.
+template <class Real>
+struct SnapshotView
+{
+  Vec3<Real>* position = nullptr;
+  Vec3<Real>* velocity = nullptr;
+  Real* density = nullptr;
+  Real* lambda = nullptr;
+  std::int64_t* id = nullptr;
+};
+
 // New particles (emitters); ids are given by the caller so they stay unique across backends.
 struct ParticleBatch
 {
@@ -88,6 +100,10 @@ public:
   // Copies the state to the host; the Snapshot of the other precision is converted.
   virtual void read(Snapshot<float>& out) const = 0;
   virtual void read(Snapshot<double>& out) const = 0;
+  // As read(), into the caller's arrays: the VTK layer fills its output arrays without a Snapshot
+  // in between. The default goes through read(); the CUDA backend copies straight into them.
+  virtual void readInto(const SnapshotView<float>& out) const;
+  virtual void readInto(const SnapshotView<double>& out) const;
 
   virtual Statistics statistics() const = 0;
 

@@ -17,6 +17,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace pbf
@@ -156,6 +157,8 @@ public:
 
   void read(Snapshot<float>& out) const override { copyOut(out); }
   void read(Snapshot<double>& out) const override { copyOut(out); }
+  void readInto(const SnapshotView<float>& out) const override { copyInto(out); }
+  void readInto(const SnapshotView<double>& out) const override { copyInto(out); }
   Statistics statistics() const override;
   StepReport lastStep() const override;
   void load(const Snapshot<float>& state) override { loadState(state); }
@@ -190,6 +193,8 @@ private:
     const std::vector<std::int64_t>& id);
   template <class Out>
   void copyOut(Snapshot<Out>& out) const;
+  template <class Out>
+  void copyInto(const SnapshotView<Out>& out) const;
   template <class In>
   void loadState(const Snapshot<In>& state);
 
@@ -639,10 +644,52 @@ void CudaStepper<Real>::synchronize() const
   check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
 }
 
+// Straight from the device into the caller's arrays: no host temporaries, no pass over the
+// particles on the CPU (page-locked destinations are copied at the full bus speed).
+template <class Real>
+template <class Out>
+void CudaStepper<Real>::copyInto(const SnapshotView<Out>& out) const
+{
+  if constexpr (!std::is_same<Out, Real>::value)
+  {
+    Stepper::readInto(out); // converts through read()
+  }
+  else
+  {
+    selectDevice();
+    const std::size_t n = n_;
+    const auto copy = [this, n](void* to, const void* from, std::size_t size) {
+      if (to && n > 0)
+      {
+        check(cudaMemcpyAsync(to, from, n * size, cudaMemcpyDeviceToHost, stream_),
+          "cudaMemcpyAsync");
+      }
+    };
+    copy(out.position, buffers_.vec[roles_.x], sizeof(Vec3<Real>));
+    copy(out.velocity, buffers_.vec[roles_.v], sizeof(Vec3<Real>));
+    copy(out.density, buffers_.density, sizeof(Real));
+    copy(out.lambda, buffers_.lambda, sizeof(Real));
+    copy(out.id, buffers_.id, sizeof(std::int64_t));
+    check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
+  }
+}
+
 template <class Real>
 template <class Out>
 void CudaStepper<Real>::copyOut(Snapshot<Out>& out) const
 {
+  if constexpr (std::is_same<Out, Real>::value)
+  {
+    // Same precision (checkpoints): straight into the snapshot's vectors.
+    out.position.resize(n_);
+    out.velocity.resize(n_);
+    out.density.resize(n_);
+    out.lambda.resize(n_);
+    out.id.resize(n_);
+    copyInto(SnapshotView<Real>{ out.position.data(), out.velocity.data(), out.density.data(),
+      out.lambda.data(), out.id.data() });
+    return;
+  }
   selectDevice();
   const std::size_t n = n_;
   std::vector<Vec3<Real>> x(n), v(n);
