@@ -1,4 +1,5 @@
 #include "vtkPBFSimulation.h"
+#include "vtkPBFPageLocked.h"
 
 #include "vtkCellArray.h"
 #include "vtkDataArray.h"
@@ -187,36 +188,54 @@ vtkSmartPointer<vtkCellArray> VertexCells(vtkIdType n)
   return cells;
 }
 
-// The particles in the solver's (cell-sorted) order, copied straight into the VTK arrays'
-// memory: pbf::Vec3 is three packed reals, as VTK's interleaved 3-component arrays are.
+// An output array of the given size, in page-locked memory when asked and available (the GPU
+// then copies into it at the full bus speed); the array gives the memory back to the pool.
+template <class Array>
+vtkSmartPointer<Array> NewOutputArray(const char* name, int components, vtkIdType tuples, bool pinned)
+{
+  using Value = typename Array::ValueType;
+  const auto values = static_cast<std::size_t>(tuples) * static_cast<std::size_t>(components);
+  void* memory = pinned ? vtkPBFPageLocked::Allocate(values * sizeof(Value)) : nullptr;
+  if (!memory)
+  {
+    return NewArray<Array>(name, components, tuples);
+  }
+  auto array = vtkSmartPointer<Array>::New();
+  if (name)
+  {
+    array->SetName(name);
+  }
+  array->SetNumberOfComponents(components);
+  array->SetArray(static_cast<Value*>(memory), static_cast<vtkIdType>(values), /*save=*/0,
+    Array::VTK_DATA_ARRAY_USER_DEFINED);
+  array->SetArrayFreeFunction(&vtkPBFPageLocked::Release);
+  return array;
+}
+
+// The particles in the solver's (cell-sorted) order, read by the stepper straight into the VTK
+// arrays' memory: pbf::Vec3 is three packed reals, as VTK's interleaved arrays are, and the ids
+// are 64-bit like vtkIdType. No per-point call, no copy in between.
 template <class Real>
-void FillParticles(const pbf::Stepper& stepper, pbf::Snapshot<Real>& snapshot,
-  vtkSmartPointer<vtkCellArray>& vertices, vtkPolyData* output)
+void FillParticles(
+  const pbf::Stepper& stepper, bool pinned, vtkSmartPointer<vtkCellArray>& vertices, vtkPolyData* output)
 {
   static_assert(sizeof(pbf::Vec3<Real>) == 3 * sizeof(Real), "pbf::Vec3 must be 3 packed reals");
-  stepper.read(snapshot);
-  const auto n = static_cast<vtkIdType>(snapshot.position.size());
-  const auto count = static_cast<std::size_t>(n);
-
-  auto coordinates = NewArray<RealArray<Real>>(nullptr, 3, n);
-  auto velocity = NewArray<RealArray<Real>>("velocity", 3, n);
-  auto density = NewArray<RealArray<Real>>("density", 1, n);
-  auto lambda = NewArray<RealArray<Real>>("lambda", 1, n);
-  auto id = NewArray<vtkIdTypeArray>("id", 1, n);
+  static_assert(sizeof(vtkIdType) == sizeof(std::int64_t), "particle ids are 64-bit vtkIdTypes");
+  const auto n = static_cast<vtkIdType>(stepper.size());
+  auto coordinates = NewOutputArray<RealArray<Real>>(nullptr, 3, n, pinned);
+  auto velocity = NewOutputArray<RealArray<Real>>("velocity", 3, n, pinned);
+  auto density = NewOutputArray<RealArray<Real>>("density", 1, n, pinned);
+  auto lambda = NewOutputArray<RealArray<Real>>("lambda", 1, n, pinned);
+  auto id = NewOutputArray<vtkIdTypeArray>("id", 1, n, pinned);
   if (n > 0)
   {
-    std::memcpy(coordinates->GetPointer(0), snapshot.position.data(), count * 3 * sizeof(Real));
-    std::memcpy(velocity->GetPointer(0), snapshot.velocity.data(), count * 3 * sizeof(Real));
-    std::memcpy(density->GetPointer(0), snapshot.density.data(), count * sizeof(Real));
-    std::memcpy(lambda->GetPointer(0), snapshot.lambda.data(), count * sizeof(Real));
-    if (sizeof(vtkIdType) == sizeof(std::int64_t))
-    {
-      std::memcpy(id->GetPointer(0), snapshot.id.data(), count * sizeof(std::int64_t));
-    }
-    else
-    {
-      std::copy(snapshot.id.begin(), snapshot.id.end(), id->GetPointer(0));
-    }
+    pbf::SnapshotView<Real> view;
+    view.position = reinterpret_cast<pbf::Vec3<Real>*>(coordinates->GetPointer(0));
+    view.velocity = reinterpret_cast<pbf::Vec3<Real>*>(velocity->GetPointer(0));
+    view.density = density->GetPointer(0);
+    view.lambda = lambda->GetPointer(0);
+    view.id = reinterpret_cast<std::int64_t*>(id->GetPointer(0));
+    stepper.readInto(view);
   }
   if (!vertices || vertices->GetNumberOfCells() != n)
   {
@@ -378,9 +397,7 @@ public:
   vtkSmartPointer<vtkPolyData> LastOutput = vtkSmartPointer<vtkPolyData>::New();
   int LastFrame = -1;
 
-  // Reused from frame to frame: the host copy of the particles and the vertex cells.
-  pbf::Snapshot<float> SingleSnapshot;
-  pbf::Snapshot<double> DoubleSnapshot;
+  // Reused from frame to frame while the particle count stays.
   vtkSmartPointer<vtkCellArray> Vertices;
 
   // The cost of the last request.
@@ -606,6 +623,7 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->NumberOfFrames = 120;
   this->CheckpointInterval = 10;
   this->CheckpointMemoryMB = 1024.0;
+  this->PageLockedOutput = true;
   this->Backend = BACKEND_AUTO;
   this->Precision = PRECISION_SINGLE;
 
@@ -1011,15 +1029,15 @@ int vtkPBFSimulation::RequestData(
 
     const auto deliveryStart = std::chrono::steady_clock::now();
     vtkNew<vtkPolyData> result;
+    const bool pinned =
+      this->PageLockedOutput && simulation.stepper().backend() == pbf::Backend::CUDA;
     if (simulation.stepper().precision() == pbf::Precision::Double)
     {
-      FillParticles<double>(
-        simulation.stepper(), internals.DoubleSnapshot, internals.Vertices, result);
+      FillParticles<double>(simulation.stepper(), pinned, internals.Vertices, result);
     }
     else
     {
-      FillParticles<float>(
-        simulation.stepper(), internals.SingleSnapshot, internals.Vertices, result);
+      FillParticles<float>(simulation.stepper(), pinned, internals.Vertices, result);
     }
     vtkSmartPointer<vtkFieldData> fieldData =
       FrameFieldData(simulation, frame, this->FrameInterval, substeps);
@@ -1095,6 +1113,7 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfFrames: " << this->NumberOfFrames << "\n";
   os << indent << "CheckpointInterval: " << this->CheckpointInterval << "\n";
   os << indent << "CheckpointMemoryMB: " << this->CheckpointMemoryMB << "\n";
+  os << indent << "PageLockedOutput: " << (this->PageLockedOutput ? "On" : "Off") << "\n";
   os << indent << "Backend: " << this->Backend << "\n";
   os << indent << "Precision: " << this->Precision << "\n";
 }

@@ -221,6 +221,18 @@ public:
 
   ///@{
   /**
+   * With the CUDA backend, put the output arrays in page-locked host memory, which the GPU copies
+   * into at the full bus speed (ordinary memory is staged by the driver); default on. Memory
+   * released by the arrays is pooled for the next frames, and past 1 GiB in use the arrays fall
+   * back to ordinary memory. Not a ParaView property: Testing/Pipeline's driver compares both.
+   */
+  vtkSetMacro(PageLockedOutput, bool);
+  vtkGetMacro(PageLockedOutput, bool);
+  vtkBooleanMacro(PageLockedOutput, bool);
+  ///@}
+
+  ///@{
+  /**
    * What the last request cost, for tools that time the pipeline (Testing/Pipeline): the wall
    * time of its solver steps as pbf::Simulation::advance reports it (GPU work included), of the
    * diagnostics (Stepper::statistics, once per frame stepped through), of the checkpoints taken
@@ -275,6 +287,7 @@ protected:
 
   int CheckpointInterval;
   double CheckpointMemoryMB;
+  bool PageLockedOutput;
 
   int Backend;
   int Precision;

@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# The pipeline timing (issue 4): how much the VTK layer adds to the solver on the GPU machine,
+# which has no ParaView and no VTK. Two halves:
+#
+#   Utilities/pipeline-gpu-run.sh prepare [BUILD]   # here: build pbf_pipeline (the CUDA backend is
+#                                                   # compiled in by nvcc) and carry it, with
+#                                                   # libPBFFilters and the libraries ldd finds
+#                                                   # (VTK's Common* and vtksys, loguru, pugixml,
+#                                                   # kissfft; not glibc), into .pipeline/ (ignored)
+#   Utilities/pipeline-gpu-run.sh run               # there (device tool, carry [".pipeline"]):
+#                                                   # runs it with LD_LIBRARY_PATH=.pipeline/lib
+#
+# The run times 1M particles at 4 substeps per frame (the target: delivery <= 10% of the frame's
+# simulation), page-locked then pageable output memory, without checkpoints, in double
+# precision, and 4M particles; logs go to $OUT (else output/pipeline). Testing/Benchmarks/PIPELINE.md
+# records the figures.
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+carry=$root/.pipeline
+
+case "${1:-}" in
+prepare)
+  build=${2:-$root/build}
+  if [[ ! -f $build/CMakeCache.txt ]]; then
+    cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DBUILD_SHARED_LIBS=ON
+  fi
+  compgen -G "$build/CMakeFiles/*/CMakeCUDACompiler.cmake" > /dev/null ||
+    { echo "pipeline-gpu-run: $build has no CUDA compiler: the driver would have no CUDA backend" >&2; exit 1; }
+  cmake --build "$build" --target pbf_pipeline -j "$(nproc)"
+  rm -rf "$carry"
+  mkdir -p "$carry/bin" "$carry/lib"
+  cp "$build/bin/pbf_pipeline" "$carry/bin/"
+  # Everything the driver loads but the C library itself, which the GPU machine has (newer).
+  ldd "$build/bin/pbf_pipeline" | awk '$3 ~ /^\// { print $3 }' | while read -r library; do
+    case "$(basename "$library")" in
+      libc.so*|libm.so*|libdl.so*|libpthread.so*|librt.so*|ld-linux*) ;;
+      *) cp -L "$library" "$carry/lib/" ;;
+    esac
+  done
+  git -C "$root" rev-parse HEAD > "$carry/COMMIT"
+  git -C "$root" status --porcelain -- Filters Solver Testing/Pipeline > "$carry/DIRTY" || true
+  # Run it here once (no GPU: the CPU backend) so that a broken carry shows before the device.
+  LD_LIBRARY_PATH=$carry/lib OMP_WAIT_POLICY=PASSIVE "$carry/bin/pbf_pipeline" --backend openmp \
+    --particles 3000 --frames 3 --warmup 1 --work /tmp > /dev/null
+  du -sh "$carry"
+  ;;
+run)
+  out=${OUT:-$root/output/pipeline}
+  mkdir -p "$out"
+  exec > >(tee "$out/pipeline.log") 2>&1
+  [[ -x $carry/bin/pbf_pipeline ]] || { echo "pipeline-gpu-run: no $carry (run prepare here first)"; exit 1; }
+  export LD_LIBRARY_PATH=$carry/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+  echo "commit $(cat "$carry/COMMIT") $( [[ -s $carry/DIRTY ]] && echo '(with local changes)')"
+  nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm --format=csv || true
+  echo "cores: $(nproc); $(uname -sr)"
+  ldd "$carry/bin/pbf_pipeline" | grep -E "not found" && exit 1
+  work=$(mktemp -d)
+  driver() {
+    echo; echo "== pbf_pipeline $*"
+    timeout 120 "$carry/bin/pbf_pipeline" --work "$work" "$@" || echo "!! exit $?"
+  }
+  driver --particles 1e6 --frames 40 --warmup 5 --compare-pageable 15
+  driver --particles 1e6 --frames 25 --warmup 5 --checkpoint-interval 0
+  driver --particles 1e6 --frames 15 --warmup 3 --precision double
+  driver --particles 4e6 --frames 15 --warmup 3
+  ;;
+*)
+  sed -n '2,17p' "$0"
+  exit 2
+  ;;
+esac
