@@ -1,6 +1,7 @@
 // CudaStepper<Real>: the state lives on the GPU from construction to destruction; a step is one
 // CUDA graph launch (StepSchedule.h captured once per particle count) and returns at once;
-// read() and statistics() are the only copies back.
+// read(), statistics(), diagnostics() and, in adaptive mode, lastStep() are the only copies back,
+// and only when called.
 #pragma once
 
 #include "CudaBackend.h"
