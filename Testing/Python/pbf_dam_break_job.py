@@ -1,5 +1,6 @@
 """The main job (Utilities/dam_break.py) in a short run: it writes a .pvd time series with one .vtp
-per frame holding every particle, and one PNG per frame in which the particles are visible.
+per frame holding every particle, the diagnostics as CSV (a row per frame), and one PNG per frame
+in which the particles are visible.
 
 Runs with the system python3 (matplotlib reads the PNGs), pvbatch under a private Xvfb:
     python3 pbf_dam_break_job.py --pvbatch P --script dam_break.py --plugin SO --output DIR"""
@@ -66,6 +67,15 @@ for k, dataset in enumerate(datasets):
     for array in ("density", "lambda", "velocity", "id", "ParticleMass", "SmoothingLength"):
         if 'Name="%s"' % array not in header:
             fail("%s has no %s array" % (path, array))
+
+# The diagnostics: a row per frame written, in order.
+diagnostics = os.path.join(args.output, "dam_break_diagnostics.csv")
+if not os.path.isfile(diagnostics):
+    fail("no %s" % diagnostics)
+with open(diagnostics) as f:
+    rows = f.read().splitlines()
+if len(rows) != FRAMES + 2 or "AverageDensityError" not in rows[0]:
+    fail("%s holds %d lines, expected a header and %d rows" % (diagnostics, len(rows), FRAMES + 1))
 
 # The pictures: one per frame, particles over the background (the most common color).
 for k in range(FRAMES + 1):
