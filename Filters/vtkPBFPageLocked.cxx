@@ -19,7 +19,7 @@ constexpr std::size_t PoolLimit = std::size_t(512) << 20;
 struct Pool
 {
   std::mutex Mutex;
-  std::multimap<std::size_t, void*> Free;    // by size
+  std::multimap<std::size_t, void*> Free;      // by size
   std::unordered_map<void*, std::size_t> Used; // handed out
   std::size_t UsedBytes = 0;
   std::size_t FreeBytes = 0;

@@ -32,6 +32,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <initializer_list>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -81,9 +82,9 @@ bool SameParameters(const pbf::Parameters& a, const pbf::Parameters& b)
     a.densityErrorTolerance == b.densityErrorTolerance && a.relaxation == b.relaxation &&
     a.sCorrK == b.sCorrK && a.sCorrN == b.sCorrN && a.sCorrDeltaQ == b.sCorrDeltaQ &&
     a.xsphC == b.xsphC && a.vorticityEpsilon == b.vorticityEpsilon &&
-    a.unilateral == b.unilateral && a.mirrorWalls == b.mirrorWalls &&
-    a.gravity.x == b.gravity.x && a.gravity.y == b.gravity.y && a.gravity.z == b.gravity.z &&
-    a.timeStep == b.timeStep && SameBox(a.domain, b.domain);
+    a.unilateral == b.unilateral && a.mirrorWalls == b.mirrorWalls && a.gravity.x == b.gravity.x &&
+    a.gravity.y == b.gravity.y && a.gravity.z == b.gravity.z && a.timeStep == b.timeStep &&
+    SameBox(a.domain, b.domain);
 }
 
 bool operator==(const Configuration& a, const Configuration& b)
@@ -191,7 +192,8 @@ vtkSmartPointer<vtkCellArray> VertexCells(vtkIdType n)
 // An output array of the given size, in page-locked memory when asked and available (the GPU
 // then copies into it at the full bus speed); the array gives the memory back to the pool.
 template <class Array>
-vtkSmartPointer<Array> NewOutputArray(const char* name, int components, vtkIdType tuples, bool pinned)
+vtkSmartPointer<Array> NewOutputArray(
+  const char* name, int components, vtkIdType tuples, bool pinned)
 {
   using Value = typename Array::ValueType;
   const auto values = static_cast<std::size_t>(tuples) * static_cast<std::size_t>(components);
@@ -216,8 +218,8 @@ vtkSmartPointer<Array> NewOutputArray(const char* name, int components, vtkIdTyp
 // arrays' memory: pbf::Vec3 is three packed reals, as VTK's interleaved arrays are, and the ids
 // are 64-bit like vtkIdType. No per-point call, no copy in between.
 template <class Real>
-void FillParticles(
-  const pbf::Stepper& stepper, bool pinned, vtkSmartPointer<vtkCellArray>& vertices, vtkPolyData* output)
+void FillParticles(const pbf::Stepper& stepper, bool pinned,
+  vtkSmartPointer<vtkCellArray>& vertices, vtkPolyData* output)
 {
   static_assert(sizeof(pbf::Vec3<Real>) == 3 * sizeof(Real), "pbf::Vec3 must be 3 packed reals");
   static_assert(sizeof(vtkIdType) == sizeof(std::int64_t), "particle ids are 64-bit vtkIdTypes");
@@ -384,8 +386,6 @@ public:
   std::size_t CheckpointBytes = 0;
   int RequestedInterval = 0;
   int Stride = 0;
-  // The backend cannot load a checkpoint: none is kept, and earlier frames start over.
-  bool RestoreUnsupported = false;
 
   // Diagnostics by frame, and the table last put on port 1.
   std::map<int, FrameRow> Rows;
@@ -436,7 +436,6 @@ public:
     this->Checkpoints.clear();
     this->CheckpointBytes = 0;
     this->Stride = this->RequestedInterval;
-    this->RestoreUnsupported = false;
     this->Rows.clear();
     this->TableStale = true;
     this->LastFrame = -1;
@@ -459,7 +458,7 @@ public:
       this->RequestedInterval = interval;
       this->Stride = interval;
     }
-    if (interval <= 0 || this->RestoreUnsupported)
+    if (interval <= 0)
     {
       this->Checkpoints.clear();
       this->CheckpointBytes = 0;
@@ -493,8 +492,7 @@ public:
 
   void TakeCheckpoint(int frame, std::size_t budget)
   {
-    if (this->Stride <= 0 || this->RestoreUnsupported || frame % this->Stride != 0 ||
-      this->Checkpoints.count(frame))
+    if (this->Stride <= 0 || frame % this->Stride != 0 || this->Checkpoints.count(frame))
     {
       return;
     }
@@ -577,9 +575,9 @@ public:
       ++r;
     }
     this->Table = vtkSmartPointer<vtkTable>::New();
-    for (vtkAbstractArray* column : std::initializer_list<vtkAbstractArray*>{ time, frame,
-           averageError, maxError, neighbors, iterations, milliseconds, maxSpeed, kinetic,
-           particles, backend })
+    for (vtkAbstractArray* column :
+      std::initializer_list<vtkAbstractArray*>{ time, frame, averageError, maxError, neighbors,
+        iterations, milliseconds, maxSpeed, kinetic, particles, backend })
     {
       this->Table->AddColumn(column);
     }
@@ -807,7 +805,8 @@ int vtkPBFSimulation::RequestData(
   }
 
   // Hands out the last good output (with its own time) and the diagnostics known so far.
-  auto deliverPrevious = [&]() {
+  auto deliverPrevious = [&]()
+  {
     output->ShallowCopy(internals.LastOutput);
     table->ShallowCopy(internals.DiagnosticsTable());
     vtkInformation* last = internals.LastOutput->GetInformation();
@@ -924,7 +923,8 @@ int vtkPBFSimulation::RequestData(
       static_cast<std::uint64_t>(frame) * static_cast<std::uint64_t>(substeps);
 
     // Builds the live simulation at step 0 (the scene and the input are read only then).
-    auto build = [&]() {
+    auto build = [&]()
+    {
       internals.Live.reset();
       internals.ResetPending();
       const pbf::Scene scene =
@@ -937,7 +937,8 @@ int vtkPBFSimulation::RequestData(
       }
       else
       {
-        internals.Live = std::make_unique<pbf::Simulation>(scene, c.Parameters, c.Backend, c.Precision);
+        internals.Live =
+          std::make_unique<pbf::Simulation>(scene, c.Parameters, c.Backend, c.Precision);
       }
       internals.RecordFrame(0);
       internals.TakeCheckpoint(0, budget);
@@ -961,25 +962,9 @@ int vtkPBFSimulation::RequestData(
         {
           build();
         }
-        try
-        {
-          internals.Live->restore(*checkpoint);
-          internals.ResetPending();
-          resumedFrom = "checkpoint";
-        }
-        catch (const std::exception& error)
-        {
-          // This backend cannot load a state yet: keep no checkpoints, start over from step 0.
-          internals.RestoreUnsupported = true;
-          internals.Checkpoints.clear();
-          internals.CheckpointBytes = 0;
-          std::ostringstream text;
-          text << this->GetClassName() << " (" << this << "): checkpoints disabled: "
-               << error.what() << "; an earlier frame starts over from the initial state.\n";
-          vtkOutputWindowDisplayText(text.str().c_str());
-          build();
-          resumedFrom = "initial";
-        }
+        internals.Live->restore(*checkpoint);
+        internals.ResetPending();
+        resumedFrom = "checkpoint";
       }
       else
       {

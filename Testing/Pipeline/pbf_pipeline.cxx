@@ -71,7 +71,8 @@ Options Parse(int argc, char* argv[])
   for (int i = 1; i < argc; ++i)
   {
     const std::string a = argv[i];
-    auto value = [&]() -> std::string {
+    auto value = [&]() -> std::string
+    {
       if (i + 1 >= argc)
       {
         Usage(("missing value after " + a).c_str());
@@ -177,8 +178,9 @@ bool Sane(vtkPolyData* data, std::string& why)
       return false;
     }
   }
-  for (vtkDataArray* array : { data->GetPoints()->GetData(), data->GetPointData()->GetArray("velocity"),
-         data->GetPointData()->GetArray("density"), data->GetPointData()->GetArray("lambda") })
+  for (vtkDataArray* array :
+    { data->GetPoints()->GetData(), data->GetPointData()->GetArray("velocity"),
+      data->GetPointData()->GetArray("density"), data->GetPointData()->GetArray("lambda") })
   {
     const vtkIdType values = array->GetNumberOfValues();
     for (vtkIdType k = 0; k < values; ++k)
@@ -186,7 +188,8 @@ bool Sane(vtkPolyData* data, std::string& why)
       if (!std::isfinite(array->GetComponent(k / array->GetNumberOfComponents(),
             static_cast<int>(k % array->GetNumberOfComponents()))))
       {
-        why = std::string("non-finite value in ") + (array->GetName() ? array->GetName() : "points");
+        why =
+          std::string("non-finite value in ") + (array->GetName() ? array->GetName() : "points");
         return false;
       }
     }
@@ -203,8 +206,7 @@ bool Sane(vtkPolyData* data, std::string& why)
 
 void Report(const char* title, const std::vector<Sample>& samples, int warmup, int substeps)
 {
-  std::vector<double> simulation, rest, diagnostics, checkpoint, delivery, restRatio,
-    deliveryRatio;
+  std::vector<double> simulation, rest, diagnostics, checkpoint, delivery, restRatio, deliveryRatio;
   for (const Sample& s : samples)
   {
     if (s.frame <= warmup)
@@ -231,7 +233,8 @@ void Report(const char* title, const std::vector<Sample>& samples, int warmup, i
     Median(delivery), 100 * Median(deliveryRatio));
   std::printf("  diagnostics  %8.3f ms/frame\n", Median(diagnostics));
   std::printf("  checkpoints  %8.3f ms/frame on average\n", checkpointMean);
-  std::printf("  rest of the request (wall - simulation) %8.3f ms/frame = %5.1f%% of the simulation\n",
+  std::printf(
+    "  rest of the request (wall - simulation) %8.3f ms/frame = %5.1f%% of the simulation\n",
     Median(rest), 100 * Median(restRatio));
   std::fflush(stdout);
 }
@@ -265,7 +268,8 @@ int main(int argc, char* argv[])
   simulation->UpdateInformation();
 
   const double interval = simulation->GetFrameInterval();
-  auto request = [&](int frame) {
+  auto request = [&](int frame)
+  {
     const auto start = std::chrono::steady_clock::now();
     if (!simulation->UpdateTimeStep(frame * interval))
     {
@@ -276,23 +280,27 @@ int main(int argc, char* argv[])
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return Sample{ frame, wall, simulation->GetLastSimulationMilliseconds(),
       simulation->GetLastDiagnosticsMilliseconds(), simulation->GetLastCheckpointMilliseconds(),
-      simulation->GetLastDeliveryMilliseconds(), static_cast<long>(simulation->GetLastRequestSteps()) };
+      simulation->GetLastDeliveryMilliseconds(),
+      static_cast<long>(simulation->GetLastRequestSteps()) };
   };
   auto output = [&]() { return vtkPolyData::SafeDownCast(simulation->GetOutputDataObject(0)); };
 
   const Sample first = request(0);
   vtkFieldData* fields = output()->GetFieldData();
-  std::printf("pbf_pipeline: %lld particles, backend %s, %s precision, spacing %g m, %d substeps per "
-              "frame of %g s, checkpoints every %d frames, %s output memory\n",
+  std::printf(
+    "pbf_pipeline: %lld particles, backend %s, %s precision, spacing %g m, %d substeps per "
+    "frame of %g s, checkpoints every %d frames, %s output memory\n",
     static_cast<long long>(output()->GetNumberOfPoints()),
     fields->GetAbstractArray("Backend")->GetVariantValue(0).ToString().c_str(),
     fields->GetAbstractArray("Precision")->GetVariantValue(0).ToString().c_str(), o.spacing,
-    o.substeps, interval, o.checkpointInterval, o.pageable ? "pageable" : "page-locked (with CUDA)");
+    o.substeps, interval, o.checkpointInterval,
+    o.pageable ? "pageable" : "page-locked (with CUDA)");
   std::printf("  frame 0 (scene, setup, first delivery): %.1f ms\n", first.wall);
   std::printf("  %5s %10s %10s %10s %10s %10s %8s\n", "frame", "wall ms", "sim ms", "deliver ms",
     "diag ms", "ckpt ms", "deliv %");
 
-  auto run = [&](int from, int to, std::vector<Sample>& samples) {
+  auto run = [&](int from, int to, std::vector<Sample>& samples)
+  {
     for (int frame = from; frame <= to; ++frame)
     {
       const Sample s = request(frame);
@@ -337,12 +345,22 @@ int main(int argc, char* argv[])
   const Sample scrub = request(back);
   std::printf("scrub back to frame %d: %.1f ms wall, %ld steps (from %s)\n", back, scrub.wall,
     scrub.steps,
-    output()->GetFieldData()->GetAbstractArray("ResumedFrom")->GetVariantValue(0).ToString().c_str());
+    output()
+      ->GetFieldData()
+      ->GetAbstractArray("ResumedFrom")
+      ->GetVariantValue(0)
+      .ToString()
+      .c_str());
   simulation->SetNumberOfFrames(last + 10); // re-executes the algorithm, changes no frame
   const Sample again = request(back);
   std::printf("same frame after a NumberOfFrames change: %.3f ms wall, %ld steps (from %s)\n",
     again.wall, again.steps,
-    output()->GetFieldData()->GetAbstractArray("ResumedFrom")->GetVariantValue(0).ToString().c_str());
+    output()
+      ->GetFieldData()
+      ->GetAbstractArray("ResumedFrom")
+      ->GetVariantValue(0)
+      .ToString()
+      .c_str());
   auto* table = vtkTable::SafeDownCast(simulation->GetOutputDataObject(1));
   std::printf("diagnostics: %lld rows\n", static_cast<long long>(table->GetNumberOfRows()));
   return 0;
