@@ -1,8 +1,9 @@
 """ParaView's GUI (run by smTestDriver under Xvfb, the plugin loaded with --plugins) creates the
 source with its defaults, shows it as the proxy's hints say, plays the animation to the last frame
 and saves a screenshot in which the particles must be visible and colored by |velocity|. Going
-back in time resumes from a checkpoint; the Diagnostics output, shown in a Line Chart View,
-holds a row per frame and plots the density errors as lines.
+back in time resumes from a checkpoint, display changes re-execute nothing, a preset and its
+scene file give the same fluid, and the Diagnostics output, shown in a Line Chart View, holds a
+row per frame and plots the density errors as lines.
 
 PBF_GUI_FRAMES, when set, shortens the animation (NumberOfFrames); everything else is default."""
 import os
@@ -102,6 +103,34 @@ stepped = int(data.GetFieldData().GetArray("RequestSteps").GetTuple1(0))
 expect(int(data.GetFieldData().GetArray("Frame").GetTuple1(0)) == 13 and resumed == "checkpoint"
        and stepped == 3 * source.SubstepsPerFrame,
        "going back to frame 13 resumed from %s with %d steps" % (resumed, stepped))
+
+# Display-only changes do not re-execute the simulation.
+executions = []
+observer = source.GetClientSideObject().AddObserver("EndEvent", lambda *args: executions.append(1))
+display.Opacity = 0.5
+display.GaussianRadius = 0.4 * source.ParticleSpacing
+simple.Render(view)
+display.Opacity = 1.0
+display.GaussianRadius = 0.5 * source.ParticleSpacing
+simple.Render(view)
+source.GetClientSideObject().RemoveObserver(observer)
+expect(not executions, "changing the display re-executed the simulation %d times" % len(executions))
+
+# Scenes: a preset, and the same scene through SceneFile (the property the file dialog sets).
+data_dir = os.environ.get("PBF_DATA_DIR")
+expect(data_dir, "PBF_DATA_DIR is not set")
+by_preset = simple.PositionBasedFluids(Preset="blob")
+by_file = simple.PositionBasedFluids(SceneFile=os.path.join(data_dir, "blob.json"))
+counts = []
+for scene_source in (by_preset, by_file):
+    scene_source.UpdatePipeline(0.0)
+    scene_data = scene_source.GetClientSideObject().GetOutputDataObject(0)
+    name = scene_data.GetFieldData().GetAbstractArray("Scene").GetValue(0)
+    expect(name == "blob", "the scene ran is %r, not blob" % name)
+    counts.append(scene_data.GetNumberOfPoints())
+    simple.Delete(scene_source)
+expect(counts[0] == counts[1] and counts[0] > 1000,
+       "the blob preset has %d particles, its file %d" % tuple(counts))
 
 # The diagnostics in a Line Chart View: a row per frame played, the density errors against Time.
 table = source.GetClientSideObject().GetOutputDataObject(1)
