@@ -54,6 +54,8 @@ public:
   void restore(const SimulationCheckpoint& checkpoint);
 
   std::uint64_t stepCount() const { return steps_; }
+  // Ids run 0..idCount()-1: the initial particles and every one an emitter has released.
+  std::int64_t idCount() const { return nextId_; }
   double time() const { return static_cast<double>(steps_) * parameters_.timeStep; }
   const Parameters& parameters() const { return parameters_; }
   const Scene& scene() const { return scene_; }

@@ -66,6 +66,13 @@ bench() {
     record "bench $name: FAILED or cut (exit $?)"
 }
 
+# PBF_GPU_QUICK=1: a verification run after a change (tests, sanitizers, soak, 1M timings); the
+# full sweeps and ncu are for when the speed itself is the question.
+quick=${PBF_GPU_QUICK:-0}
+if ((quick)); then
+  bench cuda_single 60 --backend cuda --sweep 64000,1000000 --warmup 20 --steps 100
+  bench cuda_double 40 --backend cuda --precision double --particles 1000000 --warmup 20 --steps 100
+else
 bench cuda_single 120 --backend cuda --sweep default --warmup 20 --steps 100
 bench cuda_10M 40 --backend cuda --particles 10000000 --warmup 10 --steps 50
 bench cuda_100M 90 --backend cuda --particles 100000000 --warmup 3 --steps 10
@@ -82,6 +89,7 @@ bench cuda_nographs 30 --backend cuda --graphs 0 --sweep 16000,64000,1000000 --w
 bench serial 90 --backend serial --sweep 16000,64000,256000 --warmup 1 --steps 3
 bench serial_1M 40 --backend serial --particles 1000000 --warmup 0 --steps 1
 bench openmp 40 --backend openmp --sweep 64000,256000,1000000 --warmup 1 --steps 3
+fi
 
 phase "ctest (gpu, solver)"
 (cd "$build" && timeout "$(limit 240)" ctest -L 'gpu|solver' -j "$(nproc)" --timeout 300 \
@@ -114,7 +122,23 @@ sanitize "memcheck --leak-check full" "$bench" "${small[@]}"
 sanitize memcheck "$bench" "${small[@]}" --precision double --neighbors walk --graphs 0
 sanitize memcheck "$run" --backend cuda --scene stream --spacing 0.01 --steps 20 --report 10
 sanitize racecheck "$bench" "${small[@]}"
+# Every shipped scene at small size under memcheck, racecheck and initcheck (issue 6).
+for scene in dam_break double_dam_break blob stream; do
+  for tool in memcheck racecheck initcheck; do
+    sanitize "$tool" "$run" --backend cuda --scene "$scene" --spacing 0.05 --steps 6 --report 3
+  done
+done
 
+phase "soak: 10,000 steps at 1M particles on the GPU"
+timeout "$(limit 150)" "$build/Solver/Tools/pbf_soak" --backend cuda --particles 1000000 \
+  --steps 10000 --check 1000 >"$work/soak.log" 2>&1
+soak_status=$?
+cat "$work/soak.log"
+record "soak 1M x 10000 steps: $(tail -n 1 "$work/soak.log") (exit $soak_status)"
+
+if ((quick)); then
+  phase "ncu: skipped (quick run)"
+else
 phase "ncu"
 # One step at 1M in the flow that the benchmark times: construction (evaluateAtRest: 13 kernels)
 # and 60 warm-up steps (22 kernels each) are skipped.
@@ -132,6 +156,7 @@ timeout "$(limit 100)" ncu --clock-control none --kernel-name-base demangled \
   record "ncu sections: FAILED or cut"
 grep -E "Stage|Duration|Throughput|Achieved Occupancy|Issue Slots Busy|thread_inst_executed_per|Registers" \
   "$out/ncu_sections.txt" | head -80
+fi
 
 phase "summary"
 python3 - "$work" "$out/bench.json" <<'PY'

@@ -5,6 +5,7 @@
 // steps are excluded; GPU steps are timed with CUDA events on the stepper's stream, CPU steps with
 // the host's steady clock. Prints a table and, with --json, writes every run as JSON.
 #include "Scene.h"
+#include "ScaledScenes.h"
 #include "Stepper.h"
 #include "ToolOptions.h"
 
@@ -45,30 +46,6 @@ struct Result
   double setupSeconds = 0;
   bool finite = true;
 };
-
-// The dam_break preset (a 0.4 x 0.6 x 0.6 m column against the -x wall of a 1.6 x 0.8 x 0.6 m tank)
-// widened in x and z until the column holds about `particles` lattice sites. The height stays the
-// preset's: with a fixed number of Jacobi iterations the compression grows with the layers the
-// solver must hold up, and a column scaled along all three axes (290 layers at 16M particles)
-// compressed by 8% on average and blew up, which measures nothing useful. x and z are centred on
-// the origin so that float positions round as little as possible in the wide tanks.
-Scene scaledDamBreak(double particles, double spacing)
-{
-  const double layers = std::max(1.0, std::round(0.6 / spacing));
-  const double cx = std::max(1.0, std::round(std::sqrt(particles / (1.5 * layers))));
-  const double cz = std::max(1.0, std::round(particles / (layers * cx)));
-  Scene scene;
-  scene.name = "dam_break_wide";
-  scene.description = "dam_break preset widened in x and z to the particle count";
-  const double halfX = 2 * cx * spacing, halfZ = 0.5 * cz * spacing;
-  FluidBox column;
-  column.min = { -halfX, 0, -halfZ };
-  column.max = { -halfX + cx * spacing, layers * spacing, halfZ };
-  scene.boxes.push_back(column);
-  scene.domain.min = { -halfX, 0, -halfZ };
-  scene.domain.max = { halfX, 4.0 / 3.0 * layers * spacing, halfZ };
-  return scene;
-}
 
 double percentile(std::vector<double> v, double q)
 {

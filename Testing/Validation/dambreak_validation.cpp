@@ -4,7 +4,7 @@
 // Testing/Validation/validate.py.
 #include "MartinMoyce.h"
 
-#include "../../Solver/Tools/ToolOptions.h"
+#include "ToolOptions.h"
 
 #include <cstdio>
 #include <iostream>
