@@ -43,7 +43,10 @@ std::map<std::string, std::pair<std::string, Setter>> parameterSetters()
         [](ToolOptions& o, const std::string& v) {
           o.parameters.solverIterations = static_cast<int>(toNumber("iterations", v));
         } } },
-    { "epsilon", { "relaxation epsilon [1/h^2]", real(&Parameters::relaxation) } },
+    { "epsilon", { "relaxation epsilon (bulk denominator units)", real(&Parameters::relaxation) } },
+    { "tolerance",
+      { "adaptive iterations: mean compression target [%] (0: fixed count)",
+        real(&Parameters::densityErrorTolerance) } },
     { "scorr-k", { "s_corr k", real(&Parameters::sCorrK) } },
     { "scorr-n", { "s_corr n", real(&Parameters::sCorrN) } },
     { "scorr-dq", { "s_corr delta_q / h", real(&Parameters::sCorrDeltaQ) } },
