@@ -310,6 +310,38 @@ Statistics CpuStepper<Real>::statistics() const
   return s;
 }
 
+template <class Real>
+Health CpuStepper<Real>::health() const
+{
+  Health h;
+  const Box& d = parameters_.domain;
+  const double slack = parameters_.particleSpacing; // as checkBatch allows
+  double maxDensity = 0.0;
+  for (std::size_t i = 0; i < x_.size(); ++i)
+  {
+    const Vec3d x = Vec3d::from(x_[i]);
+    const Vec3d v = Vec3d::from(v_[i]);
+    if (!(std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z) && std::isfinite(v.x) &&
+          std::isfinite(v.y) && std::isfinite(v.z)))
+    {
+      h.firstBadId = h.firstBadId < 0 ? id_[i] : h.firstBadId;
+      ++h.nonFinite;
+      continue;
+    }
+    if (x.x < d.min.x - slack || x.y < d.min.y - slack || x.z < d.min.z - slack ||
+      x.x > d.max.x + slack || x.y > d.max.y + slack || x.z > d.max.z + slack)
+    {
+      h.firstBadId = h.firstBadId < 0 ? id_[i] : h.firstBadId;
+      ++h.outside;
+    }
+    h.maxSpeed = std::max(h.maxSpeed, length(v));
+    // NaN densities compare false and are left out; they make non-finite positions next step.
+    maxDensity = std::max(maxDensity, static_cast<double>(density_[i]));
+  }
+  h.maxDensityError = std::max(maxDensity / parameters_.restDensity - 1.0, 0.0);
+  return h;
+}
+
 template class CpuStepper<float>;
 template class CpuStepper<double>;
 

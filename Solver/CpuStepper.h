@@ -29,6 +29,7 @@ public:
   void read(Snapshot<double>& out) const override { copyOut(out); }
 
   Statistics statistics() const override;
+  Health health() const override;
   StepReport lastStep() const override { return report_; }
   void load(const Snapshot<float>& state) override { loadState(state); }
   void load(const Snapshot<double>& state) override { loadState(state); }

@@ -33,8 +33,10 @@ struct Coefficients
   bool unilateral;
   bool mirrorWalls;
 
+  // Throws InvalidInput when a constant does not fit Real (validatePrecision).
   static Coefficients make(const Parameters& p)
   {
+    validatePrecision<Real>(p);
     const double h = p.smoothingLength();
     const LatticeCalibration lattice = calibrateLattice(p);
     const double m = lattice.mass;

@@ -28,13 +28,13 @@ struct GridGeometry
   PBF_HD PBF_INLINE int clampedCell(Real coordinate, Real originAxis, int n) const
   {
     const Real f = (coordinate - originAxis) * inverseCellSize;
-    int c = f >= Real(0) ? static_cast<int>(f) : -1;
-    // NaN and huge values compare false against everything: route them to cell n - 1 too.
+    // NaN and huge values compare false against everything: route them to cell n - 1 too,
+    // before the conversion (converting them to int is undefined).
     if (!(f < static_cast<Real>(n)))
     {
-      c = n - 1;
+      return n - 1;
     }
-    return c < 0 ? 0 : c;
+    return f >= Real(0) ? static_cast<int>(f) : 0;
   }
 
   PBF_HD PBF_INLINE CellKey keyOf(const Vec3<Real>& p) const

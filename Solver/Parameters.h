@@ -60,6 +60,13 @@ struct Parameters
   void validate() const;
 };
 
+// Throws InvalidInput, naming the parameter, when a constant the solver derives from p does not
+// fit Real (Coefficients<Real>::make calls it): it overflows, or underflows below the smallest
+// normal number (a relaxation that rounds to 0 turns an isolated particle's lambda into 0 / 0),
+// or the spacing is too fine for Real to resolve at the domain's coordinates. validate() first.
+template <class Real>
+void validatePrecision(const Parameters& p);
+
 // What a particle inside the initial cubic lattice sees, computed once from the parameters.
 struct LatticeCalibration
 {

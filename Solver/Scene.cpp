@@ -4,7 +4,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -16,9 +18,24 @@ namespace
 
 using nlohmann::json;
 
+// Deeper than any scene needs; bounds the recursion of dump() and of the checks.
+constexpr int kMaxDepth = 16;
+
+// The value as the message quotes it: long values are cut, a message stays readable.
+std::string quote(const json& value)
+{
+  constexpr std::size_t limit = 120;
+  std::string text = value.dump(-1, ' ', false, json::error_handler_t::replace);
+  if (text.size() > limit)
+  {
+    text = text.substr(0, limit) + "... (" + std::to_string(text.size()) + " characters)";
+  }
+  return text;
+}
+
 [[noreturn]] void reject(const std::string& path, const json& value, const std::string& rule)
 {
-  throw InvalidInput("scene " + path + " = " + value.dump() + ": " + rule);
+  throw InvalidInput("scene " + path + " = " + quote(value) + ": " + rule);
 }
 
 void requireKeys(const json& object, const std::string& path, const std::set<std::string>& allowed,
@@ -201,12 +218,16 @@ Scene parse(const json& root)
       Emitter emitter;
       emitter.center = vector3(item, path, "center");
       emitter.direction = vector3(item, path, "direction");
-      const double norm = length(emitter.direction);
-      if (norm <= 0)
+      // Scaled by the largest component first: |d| of [1e200, 0, 0] overflows and that of
+      // [1e-200, 0, 0] underflows, yet both are the x axis.
+      const Vec3d& d = emitter.direction;
+      const double largest = std::max({ std::abs(d.x), std::abs(d.y), std::abs(d.z) });
+      if (largest <= 0)
       {
         reject(path + ".direction", item["direction"], "must not be zero");
       }
-      emitter.direction *= 1.0 / norm;
+      emitter.direction = { d.x / largest, d.y / largest, d.z / largest }; // not * (1 / x): 1 / 5e-324 overflows
+      emitter.direction *= 1.0 / length(emitter.direction);
       emitter.radius = positive(item, path, "radius");
       emitter.speed = positive(item, path, "speed");
       emitter.start = item.contains("start") ? number(item, path, "start") : 0.0;
@@ -284,10 +305,19 @@ Scene parseScene(const std::string& text)
   json root;
   try
   {
-    root = json::parse(text);
+    // The parser is iterative; deep nesting is refused while parsing, before anything recurses.
+    root = json::parse(text, [](int depth, json::parse_event_t, json&) {
+      if (depth > kMaxDepth)
+      {
+        throw InvalidInput("scene is nested deeper than " + std::to_string(kMaxDepth) +
+          " levels: not a scene");
+      }
+      return true;
+    });
   }
-  catch (const json::parse_error& error)
+  catch (const json::exception& error)
   {
+    // parse_error for bad syntax, out_of_range for a number beyond double (1e400).
     throw InvalidInput(std::string("scene is not valid JSON: ") + error.what());
   }
   return parse(root);
@@ -295,6 +325,11 @@ Scene parseScene(const std::string& text)
 
 Scene loadSceneFile(const std::string& path)
 {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error))
+  {
+    throw InvalidInput("scene file = \"" + path + "\": is a folder, not a file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in)
   {
@@ -302,6 +337,10 @@ Scene loadSceneFile(const std::string& path)
   }
   std::ostringstream text;
   text << in.rdbuf();
+  if (in.bad())
+  {
+    throw InvalidInput("scene file = \"" + path + "\": cannot be read");
+  }
   if (text.str().empty())
   {
     throw InvalidInput("scene file = \"" + path + "\": is empty");
@@ -363,6 +402,7 @@ double estimateParticleCount(const Scene& scene, const Parameters& parameters)
 
 ParticleBatch fillScene(const Scene& scene, const Parameters& parameters)
 {
+  parameters.validate(); // the spacing sizes every loop below
   const double estimate = estimateParticleCount(scene, parameters);
   if (!(estimate <= static_cast<double>(kMaxParticles)))
   {

@@ -1,10 +1,39 @@
 #include "Simulation.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <sstream>
 
 namespace pbf
 {
+namespace
+{
+
+std::string number(double value)
+{
+  std::ostringstream out;
+  out.precision(3);
+  out << value;
+  return out.str();
+}
+
+bool inside(const Vec3d& lo, const Vec3d& hi, const Box& box, double slack)
+{
+  // Written so that NaN fails.
+  return lo.x >= box.min.x - slack && lo.y >= box.min.y - slack && lo.z >= box.min.z - slack &&
+    hi.x <= box.max.x + slack && hi.y <= box.max.y + slack && hi.z <= box.max.z + slack;
+}
+
+// The extent of the box along the unit vector u.
+double extentAlong(const Box& box, const Vec3d& u)
+{
+  return std::abs(u.x) * (box.max.x - box.min.x) + std::abs(u.y) * (box.max.y - box.min.y) +
+    std::abs(u.z) * (box.max.z - box.min.z);
+}
+
+} // namespace
 
 Simulation::Simulation(
   const Scene& scene, const Parameters& parameters, Backend backend, Precision precision)
@@ -22,11 +51,180 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   parameters_.validate();
   if (initial.position.empty() && scene_.emitters.empty())
   {
+    if (!scene_.boxes.empty() || !scene_.spheres.empty())
+    {
+      throw InvalidInput("particleSpacing = " + number(parameters_.particleSpacing) +
+        ": the scene's fluid regions hold no lattice site at this spacing (a box needs sides of at "
+        "least one spacing); lower particleSpacing");
+    }
     throw InvalidInput("particle count = 0: the fluid is empty");
   }
+  checkEmitters(initial.position.size());
   stepper_ = makeStepper(backend, precision, parameters_, initial);
   nextId_ = static_cast<std::int64_t>(initial.position.size());
+
+  // The divergence limits, from the initial state and the scene.
+  checkInterval_ = backend == Backend::CUDA ? 0 : 1;
+  const Health start = stepper_->health();
+  double v0 = start.maxSpeed;
+  for (const Emitter& e : scene_.emitters)
+  {
+    v0 = std::max(v0, e.speed);
+  }
+  const double g = length(parameters_.gravity);
+  const double fall = g > 0 ? extentAlong(scene_.domain, parameters_.gravity * (1.0 / g)) : 0.0;
+  limits_.sceneSpeed = std::sqrt(v0 * v0 + 2.0 * g * fall);
+  limits_.maxSpeed = std::max(
+    20.0 * limits_.sceneSpeed, 2.0 * parameters_.smoothingLength() / parameters_.timeStep);
+  limits_.maxDensityError = 3.0 * std::max(1.0, 1.0 + start.maxDensityError) - 1.0;
+  lastGoodSpeed_ = start.maxSpeed;
   emit();
+}
+
+// Emitted layers must land inside the domain and their number must fit, whatever the initial
+// particles: advance() never fails on input.
+void Simulation::checkEmitters(std::size_t initialParticles) const
+{
+  const double dt = parameters_.timeStep;
+  for (std::size_t e = 0; e < scene_.emitters.size(); ++e)
+  {
+    // A layer is released within the last step and moved on by the time since its release, at
+    // most speed x dt; checkBatch allows one spacing of slack, as here.
+    const Emitter& emitter = scene_.emitters[e];
+    const double travel = emitter.speed * dt;
+    const Vec3d moved = emitter.center + emitter.direction * travel;
+    const Vec3d r{ emitter.radius, emitter.radius, emitter.radius };
+    if (!inside(moved - r, moved + r, scene_.domain, parameters_.particleSpacing))
+    {
+      throw InvalidInput("scene .emitters[" + std::to_string(e) + "].speed = " +
+        number(emitter.speed) + ": a layer travels speed x timeStep = " + number(travel) +
+        " m in one step (timeStep = " + number(dt) +
+        " s) and would leave the domain; lower the speed or timeStep");
+    }
+  }
+  if (!scene_.emitters.empty())
+  {
+    Scene emittersOnly;
+    emittersOnly.domain = scene_.domain;
+    emittersOnly.emitters = scene_.emitters;
+    const double emitted = estimateParticleCount(emittersOnly, parameters_);
+    if (!(static_cast<double>(initialParticles) + emitted <= static_cast<double>(kMaxParticles)))
+    {
+      throw InvalidInput("particleSpacing = " + number(parameters_.particleSpacing) +
+        ": the emitters would add about " + number(emitted) + " particles to " +
+        std::to_string(initialParticles) + ", more than the " + std::to_string(kMaxParticles) +
+        " supported");
+    }
+  }
+}
+
+void Simulation::checkDivergence()
+{
+  const Health health = stepper_->health();
+  std::vector<std::string> found;
+  const auto which = [&](std::size_t count, const std::string& what) {
+    std::string text = std::to_string(count) + (count == 1 ? " particle " : " particles ") + what;
+    if (health.firstBadId >= 0)
+    {
+      text += " (particle id " + std::to_string(health.firstBadId) + " among them)";
+    }
+    found.push_back(text);
+  };
+  if (health.nonFinite > 0)
+  {
+    which(health.nonFinite, "with a non-finite position or velocity");
+  }
+  if (health.outside > 0)
+  {
+    which(health.outside, "farther than one spacing outside the domain");
+  }
+  if (health.maxSpeed > limits_.maxSpeed)
+  {
+    found.push_back("the fastest particle moves at " + number(health.maxSpeed) +
+      " m/s, beyond the limit of " + number(limits_.maxSpeed) +
+      " m/s (20 x the scene's speed sqrt(v0^2 + 2 |g| L) = " + number(limits_.sceneSpeed) +
+      " m/s, or 2 h / dt)");
+  }
+  if (health.maxDensityError > limits_.maxDensityError)
+  {
+    found.push_back("the densest particle reads " +
+      number((1.0 + health.maxDensityError) * parameters_.restDensity) + " kg/m^3, " +
+      number(1.0 + health.maxDensityError) + " x restDensity (the limit is " +
+      number(1.0 + limits_.maxDensityError) + " x): particles are piling up");
+  }
+  if (found.empty())
+  {
+    lastGoodStep_ = steps_;
+    lastGoodSpeed_ = health.maxSpeed;
+    return;
+  }
+  std::string text;
+  for (const std::string& f : found)
+  {
+    text += (text.empty() ? "" : "; ") + f;
+  }
+  const std::string cause = likelyCause();
+  throw SimulationDiverged("simulation diverged at step " + std::to_string(steps_) + " (t = " +
+      number(time()) + " s; last good check at step " + std::to_string(lastGoodStep_) + "): " +
+      text + ". Likely cause: " + cause,
+    steps_, time(), lastGoodStep_, cause);
+}
+
+// Rules of thumb, from runs that blew up (dam break at s = 0.05 m): dt = 0.05 s (12 x the
+// default); gravity 1e4 m/s^2; one iteration at dt = 1/60 s; Unilateral off. A tiny relaxation
+// alone did not blow up, but it removes the damping the others need.
+std::string Simulation::likelyCause() const
+{
+  const Parameters& p = parameters_;
+  const double h = p.smoothingLength();
+  const double cfl = lastGoodSpeed_ * p.timeStep / h;
+  const double fall = length(p.gravity) * p.timeStep * p.timeStep / p.particleSpacing;
+  std::vector<std::string> causes;
+  if (!p.unilateral)
+  {
+    causes.push_back("Unilateral is off: C_i < 0 at the free surface pulls particles together; "
+                     "turn it on");
+  }
+  if (cfl > 1.0 || fall > 0.1)
+  {
+    std::string why;
+    if (cfl > 1.0)
+    {
+      why = "at the last good check (step " + std::to_string(lastGoodStep_) +
+        ") the fastest particle moved " + number(cfl) +
+        " smoothing lengths in a step (CFL dt v_max / h; PBF needs well under 1)";
+    }
+    if (fall > 0.1)
+    {
+      why += (why.empty() ? "" : ", and ") + std::string("gravity alone moves a particle ") +
+        number(fall) + " spacings per step (|g| dt^2 / s)";
+    }
+    causes.push_back("the time step dt = " + number(p.timeStep) + " s is too large: " + why +
+      "; lower timeStep (more substeps per frame)");
+  }
+  if (p.solverIterations < 3)
+  {
+    causes.push_back("too few solver iterations (solverIterations = " +
+      std::to_string(p.solverIterations) +
+      "): the density constraint is not enforced; raise it (paper: 2-4, default 4)");
+  }
+  if (p.relaxation < 1e-3)
+  {
+    causes.push_back("the relaxation epsilon = " + number(p.relaxation) +
+      " is too small: lambda is left undamped where neighbours are few; raise relaxation "
+      "(default 0.01)");
+  }
+  if (causes.empty())
+  {
+    causes.push_back("no parameter stands out: lower timeStep first, then check the initial "
+                     "velocities, gravity and emitters against the spacing");
+  }
+  std::string text;
+  for (const std::string& c : causes)
+  {
+    text += (text.empty() ? "" : "; ") + c;
+  }
+  return text;
 }
 
 AdvanceReport Simulation::advance(std::uint64_t steps)
@@ -37,6 +235,10 @@ AdvanceReport Simulation::advance(std::uint64_t steps)
   {
     stepper_->step();
     ++steps_;
+    if (checkInterval_ > 0 && steps_ % checkInterval_ == 0)
+    {
+      checkDivergence();
+    }
     emit();
     const StepReport step = stepper_->lastStep();
     report.iterations += step.iterations;
@@ -92,6 +294,9 @@ void Simulation::restore(const SimulationCheckpoint& c)
   steps_ = c.steps;
   nextId_ = c.nextId;
   layersEmitted_ = c.layersEmitted;
+  lastGoodStep_ = steps_;
+  lastGoodSpeed_ = checkInterval_ > 0 ? stepper_->health().maxSpeed
+                                      : std::numeric_limits<double>::quiet_NaN();
 }
 
 // Each emitter releases one disk of lattice sites every s / speed seconds. A layer released

@@ -60,6 +60,16 @@ void Stepper::readInto(const SnapshotView<double>& out) const
   readThroughSnapshot(*this, out);
 }
 
+Health Stepper::health() const
+{
+  const Statistics s = statistics();
+  Health h;
+  h.nonFinite = s.finite ? 0 : 1;
+  h.maxSpeed = s.maxSpeed;
+  h.maxDensityError = s.maxDensityError;
+  return h;
+}
+
 #ifdef PBF_WITH_CUDA
 // Defined in CudaStepper.cu; declared here so that no CUDA header reaches the CPU build.
 std::unique_ptr<Stepper> makeCudaStepper(

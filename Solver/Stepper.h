@@ -74,6 +74,16 @@ struct Statistics
   bool finite = true;        // no NaN or infinity in positions or velocities
 };
 
+// A cheap scan of the state for Simulation's divergence check: no neighbour search, nothing summed.
+struct Health
+{
+  std::size_t nonFinite = 0;   // particles with a NaN or infinite position or velocity
+  std::size_t outside = 0;     // particles farther than one spacing outside the domain
+  double maxSpeed = 0;         // over the particles with finite velocities [m/s]
+  double maxDensityError = 0;  // max of rho_i / rho_0 - 1 at the last constraint evaluation
+  std::int64_t firstBadId = -1; // the id of a particle counted above; -1: none, or not known
+};
+
 // What the last step() did.
 struct StepReport
 {
@@ -106,6 +116,11 @@ public:
   virtual void readInto(const SnapshotView<double>& out) const;
 
   virtual Statistics statistics() const = 0;
+
+  // The default derives it from statistics() (on CUDA a reduction on the device and a small copy
+  // back): nonFinite is then 0 or 1 and outside 0 (the collision step keeps finite positions in
+  // the box). The CPU stepper scans its arrays directly, well under 1% of a step.
+  virtual Health health() const;
 
   virtual StepReport lastStep() const = 0;
 
