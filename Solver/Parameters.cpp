@@ -99,6 +99,12 @@ void Parameters::validate() const
   requirePositive("relaxation", relaxation);
   requireNonNegative("sCorrK", sCorrK);
   requirePositive("sCorrN", sCorrN);
+  if (sCorrN > 16.0)
+  {
+    // Beyond that, float rounding of W / W(delta_q) near 1 is raised to inf (and 0 x inf = NaN
+    // for coincident particles).
+    reject("sCorrN", sCorrN, "must lie in (0, 16] (paper: 4)");
+  }
   requireFinite("sCorrDeltaQ", sCorrDeltaQ);
   if (sCorrDeltaQ <= 0.0 || sCorrDeltaQ >= 1.0)
   {
@@ -158,6 +164,7 @@ void validatePrecision(const Parameters& p)
   // s_corr is largest for coincident particles: k (W(0) / W(delta_q))^n.
   requireFits<Real>("sCorrN", p.sCorrN, "the largest s_corr, k (W(0) / W(delta_q))^n",
     p.sCorrK / lattice.gradientSum * std::pow(kernels.poly6(0.0) / wDeltaQ, p.sCorrN), true);
+  requireFits<Real>("xsphC", p.xsphC, "xsphC", p.xsphC, true);
   requireFits<Real>("vorticityEpsilon", p.vorticityEpsilon, "vorticityEpsilon",
     p.vorticityEpsilon, true);
   requireFits<Real>("timeStep", p.timeStep, "timeStep", p.timeStep);

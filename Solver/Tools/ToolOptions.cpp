@@ -1,5 +1,6 @@
 #include "ToolOptions.h"
 
+#include <cmath>
 #include <functional>
 #include <sstream>
 
@@ -8,7 +9,8 @@ namespace pbf
 namespace
 {
 
-double toNumber(const std::string& key, const std::string& text)
+// Callers name the option: the message says only what is wrong with the text.
+double toNumber(const std::string& text)
 {
   std::size_t used = 0;
   double value = 0;
@@ -22,7 +24,7 @@ double toNumber(const std::string& key, const std::string& text)
   }
   if (used != text.size() || text.empty())
   {
-    throw InvalidInput("--" + key + " = \"" + text + "\": not a number");
+    throw InvalidInput("not a number");
   }
   return value;
 }
@@ -32,7 +34,7 @@ using Setter = std::function<void(ToolOptions&, const std::string&)>;
 std::map<std::string, std::pair<std::string, Setter>> parameterSetters()
 {
   auto real = [](double Parameters::*field) {
-    return [field](ToolOptions& o, const std::string& v) { o.parameters.*field = toNumber("", v); };
+    return [field](ToolOptions& o, const std::string& v) { o.parameters.*field = toNumber(v); };
   };
   return {
     { "rest-density", { "rho_0 [kg/m^3]", real(&Parameters::restDensity) } },
@@ -41,7 +43,12 @@ std::map<std::string, std::pair<std::string, Setter>> parameterSetters()
     { "iterations",
       { "solver iterations",
         [](ToolOptions& o, const std::string& v) {
-          o.parameters.solverIterations = static_cast<int>(toNumber("iterations", v));
+          const double n = toNumber(v);
+          if (n != std::floor(n) || std::abs(n) > 1e9) // converting beyond int is undefined
+          {
+            throw InvalidInput("not a whole number in [1, 1000]");
+          }
+          o.parameters.solverIterations = static_cast<int>(n);
         } } },
     { "epsilon", { "relaxation epsilon (bulk denominator units)", real(&Parameters::relaxation) } },
     { "tolerance",
@@ -56,12 +63,12 @@ std::map<std::string, std::pair<std::string, Setter>> parameterSetters()
     { "unilateral",
       { "0 or 1: clamp C_i at 0",
         [](ToolOptions& o, const std::string& v) {
-          o.parameters.unilateral = toNumber("unilateral", v) != 0.0;
+          o.parameters.unilateral = toNumber(v) != 0.0;
         } } },
     { "walls",
       { "0 or 1: walls mirror the fluid",
         [](ToolOptions& o, const std::string& v) {
-          o.parameters.mirrorWalls = toNumber("walls", v) != 0.0;
+          o.parameters.mirrorWalls = toNumber(v) != 0.0;
         } } },
     { "scene",
       { "preset name or .json path",
@@ -135,6 +142,30 @@ ToolOptions parseToolOptions(
     }
   }
   return options;
+}
+
+long toolInteger(const ToolOptions& options, const std::string& key, long fallback, long minimum)
+{
+  const auto it = options.extra.find(key);
+  if (it == options.extra.end())
+  {
+    return fallback;
+  }
+  double n = 0;
+  try
+  {
+    n = toNumber(it->second);
+  }
+  catch (const InvalidInput&)
+  {
+    n = std::nan("");
+  }
+  if (!(n == std::floor(n) && n >= static_cast<double>(minimum) && n <= 1e15))
+  {
+    throw InvalidInput("--" + key + " = \"" + it->second + "\": must be a whole number >= " +
+      std::to_string(minimum));
+  }
+  return static_cast<long>(n);
 }
 
 std::string toolUsage(const std::map<std::string, std::string>& toolKeys)

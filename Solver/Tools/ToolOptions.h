@@ -25,6 +25,10 @@ ToolOptions parseToolOptions(int argc, char** argv, const std::map<std::string, 
 
 std::string toolUsage(const std::map<std::string, std::string>& toolKeys);
 
+// The whole number given for a tool key, or `fallback` when absent. Throws InvalidInput naming
+// the key unless it is a whole number of at least `minimum` (a count of 0 would loop forever).
+long toolInteger(const ToolOptions& options, const std::string& key, long fallback, long minimum);
+
 Backend parseBackend(const std::string& name);
 
 } // namespace pbf

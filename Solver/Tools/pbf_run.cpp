@@ -22,8 +22,8 @@ int main(int argc, char** argv)
     const Scene scene = options.scene.find(".json") != std::string::npos
       ? loadSceneFile(options.scene)
       : presetScene(options.scene);
-    const long steps = options.extra.count("steps") ? std::stol(options.extra["steps"]) : 200;
-    const long report = options.extra.count("report") ? std::stol(options.extra["report"]) : 50;
+    const long steps = toolInteger(options, "steps", 200, 0);
+    const long report = toolInteger(options, "report", 50, 1);
     Simulation simulation(scene, options.parameters, options.backend, options.precision);
     std::printf("scene %s, %zu particles, %s, %s precision\n%s\n", scene.name.c_str(),
       simulation.stepper().size(), simulation.stepper().description().c_str(),

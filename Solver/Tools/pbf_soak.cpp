@@ -89,8 +89,8 @@ int main(int argc, char** argv)
   try
   {
     ToolOptions options = parseToolOptions(argc, argv, keys);
-    const long steps = options.extra.count("steps") ? std::stol(options.extra["steps"]) : 10000;
-    const long check = options.extra.count("check") ? std::stol(options.extra["check"]) : 500;
+    const long steps = toolInteger(options, "steps", 10000, 0);
+    const long check = toolInteger(options, "check", 500, 1);
     const Scene scene = options.extra.count("particles")
       ? scaledDamBreak(std::stod(options.extra["particles"]), options.parameters.particleSpacing)
       : options.scene.find(".json") != std::string::npos ? loadSceneFile(options.scene)

@@ -152,6 +152,7 @@ TEST(InvalidInput, NegativeAndZeroCountsAndSizesAreRefused)
     { [](Parameters& p) { p.relaxation = -0.01; }, "relaxation = -0.01" },
     { [](Parameters& p) { p.sCorrK = -0.1; }, "sCorrK = -0.1" },
     { [](Parameters& p) { p.sCorrN = 0; }, "sCorrN = 0" },
+    { [](Parameters& p) { p.sCorrN = 2e174; }, "sCorrN = 2e+174" }, // found by the fuzzer
     { [](Parameters& p) { p.densityErrorTolerance = -1; }, "densityErrorTolerance = -1" },
     { [](Parameters& p) { p.vorticityEpsilon = -1; }, "vorticityEpsilon = -1" },
     { [](Parameters& p) { p.domain.max.y = -1; }, "domain.max.y = -1" }, // max below min
@@ -249,10 +250,13 @@ TEST(InvalidInput, ConstantsBeyondSinglePrecisionNameTheParameter)
   EXPECT_MENTIONS(kernel, "poly6");
   EXPECT_EQ(messageOf([&] { start(tiny, p, Precision::Double); }), "");
 
-  // s_corr's power overflows double too: (W(0) / W(delta_q))^n with n = 1e4.
+  // s_corr's largest term, k (W(0) / W(delta_q))^n in units of lambda: at delta_q = 0.99 h
+  // and n = 16, 1e76, beyond float.
   p = coarse();
-  p.sCorrN = 1e4;
-  EXPECT_MENTIONS(messageOf([&] { start(scene, p, Precision::Double); }), "sCorrN = 10000");
+  p.sCorrDeltaQ = 0.99;
+  p.sCorrN = 16;
+  EXPECT_MENTIONS(messageOf([&] { start(scene, p); }), "sCorrN = 16");
+  EXPECT_EQ(messageOf([&] { start(scene, p, Precision::Double); }), "");
 }
 
 TEST(InvalidInput, DomainFarFromTheOriginNeedsDoublePrecision)
@@ -286,8 +290,9 @@ TEST(InvalidInput, SceneFileProblemsNameTheFileAndTheProblem)
           "min": [0,0,0], "max": [0.5,0.5,0.5], "velocity": [0,null,0]}]})"),
       { "pbf_bad_value.json", ".fluid[0].velocity = [0,null,0]", "3 finite numbers" } },
   };
-  for (const auto& [path, needles] : cases)
+  for (const auto& [file, needles] : cases)
   {
+    const std::string path = file; // a lambda may not capture a structured binding in C++17
     const std::string message = messageOf([&] { loadSceneFile(path); });
     for (const std::string& needle : needles)
     {
