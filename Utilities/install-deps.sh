@@ -6,6 +6,9 @@ set -euo pipefail
 packages=(
   # compilers and test tools
   build-essential cmake libgtest-dev nlohmann-json3-dev
+  # the sanitizer and fuzzing builds (Utilities/sanitize.sh, fuzz.sh): clang, its runtimes
+  # (ASan, UBSan, libFuzzer) and its OpenMP
+  clang libclang-rt-14-dev libomp-dev
   # ParaView 5.11 and what find_package(ParaView) needs beside paraview-dev
   # (see shared notes: paraview-dev does not pull these)
   paraview paraview-dev python3-paraview

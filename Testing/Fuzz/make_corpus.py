@@ -1,0 +1,52 @@
+#!/usr/bin/env python3
+"""Writes the seed corpus of pbf_fuzz_scene into corpus/: the shipped scenes as they are (parsed
+and validated at the default spacing, too many particles to step), the same at a coarse spacing
+with a parameter tail (stepped), and broken ones. Input format: see FuzzScene.cpp."""
+import json
+import math
+import os
+import shutil
+import struct
+
+here = os.path.dirname(os.path.abspath(__file__))
+corpus = os.path.join(here, "corpus")
+data = os.path.join(here, "..", "..", "Data")
+
+# Parameters in FuzzScene.cpp's kFields order, then gravity: the defaults of Parameters.h.
+DEFAULTS = dict(particleSpacing=0.02, timeStep=1 / 240, relaxation=0.01, smoothingRatio=2.0,
+                restDensity=1000.0, sCorrK=0.1, sCorrN=4.0, sCorrDeltaQ=0.2, xsphC=0.01,
+                vorticityEpsilon=0.01, densityErrorTolerance=0.0, gx=0.0, gy=-9.81, gz=0.0)
+
+
+def tail(iterations=4, flags=0, **changes):
+    values = dict(DEFAULTS, **changes)
+    return b"\0" + struct.pack("<14d", *values.values()) + struct.pack("<bB", iterations, flags)
+
+
+def scene(name):
+    with open(os.path.join(data, name + ".json"), "rb") as f:
+        return f.read()
+
+
+def write(name, content):
+    with open(os.path.join(corpus, name), "wb") as f:
+        f.write(content)
+
+
+shutil.rmtree(corpus, ignore_errors=True)
+os.makedirs(corpus)
+for name in ("dam_break", "double_dam_break", "blob", "stream"):
+    write(name + ".json", scene(name))
+write("dam_break_coarse", scene("dam_break") + tail(particleSpacing=0.2))
+write("stream_coarse_double", scene("stream") + tail(particleSpacing=0.1, flags=1))
+write("blob_given_points_adaptive",
+      scene("blob") + tail(particleSpacing=0.2, densityErrorTolerance=0.5, iterations=20, flags=8))
+write("dam_break_blows_up", scene("dam_break") + tail(particleSpacing=0.2, timeStep=0.05, gy=-1e4))
+write("nan_spacing", scene("dam_break") + tail(particleSpacing=math.nan))
+# Found by fuzzing: NaN from (W / W(delta_q))^n with n = 2e174 (sCorrN is now at most 16).
+write("huge_scorr_n", scene("dam_break") + tail(particleSpacing=0.2, timeStep=0.05, gy=-1e4,
+                                               sCorrN=2.2e174, sCorrDeltaQ=6e-154))
+write("not_json", b"domain: [0, 1]\n")
+write("number_beyond_double", b'{"domain": {"min": [0,0,0], "max": [1e400,1,1]}, "fluid": []}')
+write("unknown_key", json.dumps({"domain": {"min": [0, 0, 0], "max": [1, 1, 1]}, "fluid": [],
+                                  "colour": "blue"}).encode())
