@@ -180,13 +180,14 @@ void soak(const std::string& name, std::uint64_t steps, Figures& f)
   }
   f.endParticles = simulation.stepper().size();
   f.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
-  std::printf("soak %s: %llu steps, %zu -> %zu particles, %.1f s, RSS %.1f MB at the start, "
-              "%.1f MB baseline, %.1f MB at the end (max %.1f); max speed %.2f m/s (limit %.1f), "
-              "max compression %.1f%% (limit %.0f%%)\n",
+  std::printf("soak %s: %llu steps, %zu -> %zu particles, %.1f s, RSS %.0f kB at the start, "
+              "%.0f kB baseline, %.0f kB at the end (max %.0f); sampled every %d steps: max "
+              "speed %.2f m/s (limit %.1f), max compression %.2f%% (limit %.0f%%)\n",
     name.c_str(), static_cast<unsigned long long>(steps), f.startParticles, f.endParticles,
-    f.seconds, f.startRss / 1048576, f.baselineRss / 1048576, f.endRss / 1048576,
-    std::max(f.maxRss, f.baselineRss) / 1048576, f.maxSpeed, simulation.divergenceLimits().maxSpeed,
-    100 * f.maxDensityError, 100 * simulation.divergenceLimits().maxDensityError);
+    f.seconds, f.startRss / 1024, f.baselineRss / 1024, f.endRss / 1024,
+    std::max(f.maxRss, f.baselineRss) / 1024, static_cast<int>(kSampleEvery), f.maxSpeed,
+    simulation.divergenceLimits().maxSpeed, 100 * f.maxDensityError,
+    100 * simulation.divergenceLimits().maxDensityError);
   EXPECT_GT(f.baselineRss, 0.0) << "the run never reached the memory baseline";
 }
 
