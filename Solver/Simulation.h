@@ -91,8 +91,9 @@ public:
   Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
     Precision precision, const ParticleBatch& initial);
 
-  // Throws SimulationDiverged from the divergence check; InvalidInput never (the input was
-  // checked on construction).
+  // Throws SimulationDiverged from the divergence check; InvalidInput when emitted particles no
+  // longer fit in the device's memory (the stepper keeps the particles it had); DeviceFault for a
+  // GPU that fails. After any of them, restore a checkpoint (or start again) before stepping on.
   AdvanceReport advance(std::uint64_t steps);
 
   // The divergence check runs after every `steps`-th step, counted from step 0, so it falls on

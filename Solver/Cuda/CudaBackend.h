@@ -44,6 +44,11 @@ struct Options
   bool graphs = true;
   // Threads per block of the neighbour passes: a multiple of 32 up to 128.
   int block = 128;
+  // Test hook, 0 = off: step number N (1-based) also launches a kernel that traps. CUDA reports
+  // that as cudaErrorLaunchFailure at the next synchronisation and loses the context for the
+  // rest of the process, as on a lost device: the fault tests drive the recovery path with it.
+  // Without Options (makeStepper), the environment variable PBF_CUDA_FAULT_AT_STEP sets it.
+  std::uint64_t faultAtStep = 0;
 };
 
 struct Diagnostics

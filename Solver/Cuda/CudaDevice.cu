@@ -4,6 +4,7 @@
 
 #include <cuda_runtime.h>
 
+#include <cstdlib>
 #include <memory>
 #include <string>
 
@@ -106,6 +107,11 @@ bool cudaDevicePresent(std::string* why)
     }
     return false;
   };
+  if (!cuda::contextLostReason().empty())
+  {
+    return fail("an earlier " + cuda::contextLostReason() +
+      " lost the CUDA context of this process; restart the application to use the GPU again");
+  }
   int count = 0;
   cudaError_t error = cudaGetDeviceCount(&count);
   if (error != cudaSuccess)
@@ -138,7 +144,14 @@ bool cudaDevicePresent(std::string* why)
 std::unique_ptr<Stepper> makeCudaStepper(
   Precision precision, const Parameters& parameters, const ParticleBatch& initial)
 {
-  return cuda::makeCudaStepper(precision, parameters, initial, cuda::Options{});
+  cuda::Options options;
+  // The fault tests' hook (Options::faultAtStep) for callers that cannot pass Options, such as
+  // the VTK filter in the pipeline fault test.
+  if (const char* at = std::getenv("PBF_CUDA_FAULT_AT_STEP"))
+  {
+    options.faultAtStep = std::strtoull(at, nullptr, 10);
+  }
+  return cuda::makeCudaStepper(precision, parameters, initial, options);
 }
 
 } // namespace pbf

@@ -1,6 +1,7 @@
 // CUDA error handling and the kernel executor that runs StepSchedule.h on a stream.
 #pragma once
 
+#include "DeviceFault.h"
 #include "StepSchedule.h"
 
 #include <cub/device/device_radix_sort.cuh>
@@ -18,15 +19,36 @@ namespace pbf
 namespace cuda
 {
 
-// CUDA errors become exceptions naming the call; the process is never aborted.
+// The reason the CUDA context of this process was lost, empty while it is usable. The context is
+// process-wide state in CUDA itself; this mirrors it so that later requests fail fast and clearly.
+inline std::string& contextLostReason()
+{
+  static std::string reason;
+  return reason;
+}
+
+// CUDA errors become DeviceFault exceptions naming the call; the process is never aborted.
 inline void check(cudaError_t error, const char* what)
 {
   if (error != cudaSuccess)
   {
-    // Clear a non-sticky error so that the next call does not report it again.
+    // Clear a non-sticky error so that the next call does not report it again. A sticky one (a
+    // kernel faulted or trapped, the device fell off the bus) comes back from every later call:
+    // the synchronisation below tells the two apart.
     cudaGetLastError();
-    throw std::runtime_error(std::string("CUDA error in ") + what + ": " + cudaGetErrorName(error) +
-      " (" + cudaGetErrorString(error) + ")");
+    const bool lost = cudaDeviceSynchronize() != cudaSuccess;
+    std::string text = std::string("CUDA error in ") + what + ": " + cudaGetErrorName(error) +
+      " (" + cudaGetErrorString(error) + ")";
+    if (lost)
+    {
+      if (contextLostReason().empty())
+      {
+        contextLostReason() = text;
+      }
+      text += "; the CUDA context of this process is lost: the GPU cannot be used again until "
+              "the application restarts";
+    }
+    throw DeviceFault(text, lost);
   }
 }
 

@@ -118,6 +118,13 @@ __global__ void __launch_bounds__(kStatisticsThreads) statisticsKernel(const Vec
   reduceBlock(shared, acc, partials + static_cast<std::size_t>(blockIdx.x) * kStatisticsValues);
 }
 
+// Options::faultAtStep's kernel: a trap, which CUDA treats as a fatal device fault.
+template <class Real>
+__global__ void injectedFault()
+{
+  __trap();
+}
+
 // A template only so that each precision's translation unit has its own instance.
 template <class Real>
 __global__ void __launch_bounds__(kStatisticsThreads) statisticsFinalKernel(
@@ -522,6 +529,10 @@ void CudaStepper<Real>::step()
   }
   ++steps_;
   stepped_ = true;
+  if (options_.faultAtStep != 0 && steps_ == options_.faultAtStep)
+  {
+    injectedFault<Real><<<1, 1, 0, stream_>>>();
+  }
 }
 
 template <class Real>
