@@ -21,6 +21,7 @@
 #include "vtkStringArray.h"
 #include "vtkTable.h"
 
+#include "DeviceFault.h"
 #include "Parameters.h"
 #include "Scene.h"
 #include "Simulation.h"
@@ -413,6 +414,11 @@ public:
   std::string CudaAbsence;
   bool FallbackReported = false;
 
+  // Key's run met a device fault and went on (or may go on) on the CPU; the warning said so and
+  // the frames computed since carry it in their field data ("DeviceFault").
+  bool DeviceFaulted = false;
+  std::string DeviceFaultText;
+
   bool HasCuda()
   {
     if (!this->CudaProbed)
@@ -430,6 +436,20 @@ public:
     {
       return;
     }
+    // After a device fault, moving the same run off the GPU keeps its checkpoints and rows: they
+    // are host copies, and losing them would lose the user's frames.
+    if (this->HasKey && this->DeviceFaulted && this->Key.Backend == pbf::Backend::CUDA)
+    {
+      Configuration moved = this->Key;
+      moved.Backend = configuration.Backend;
+      if (moved == configuration)
+      {
+        this->Live.reset();
+        this->ResetPending();
+        this->Key = moved;
+        return;
+      }
+    }
     // Free the old state first: two large simulations need not fit at once.
     this->Live.reset();
     this->ResetPending();
@@ -439,6 +459,8 @@ public:
     this->Rows.clear();
     this->TableStale = true;
     this->LastFrame = -1;
+    this->DeviceFaulted = false;
+    this->DeviceFaultText.clear();
     this->Key = configuration;
     this->HasKey = true;
   }
@@ -944,111 +966,165 @@ int vtkPBFSimulation::RequestData(
       internals.TakeCheckpoint(0, budget);
     };
 
-    // Where to start: the live simulation when it is not past the frame, unless a checkpoint is
-    // nearer; otherwise the latest checkpoint at or before the frame; otherwise step 0.
-    std::string resumedFrom = "live";
-    const pbf::SimulationCheckpoint* checkpoint = nullptr;
-    auto after = internals.Checkpoints.upper_bound(frame);
-    if (after != internals.Checkpoints.begin())
+    // The GPU failed (a lost device, a kernel that faulted): its copy of the state is gone, while
+    // the checkpoints and the diagnostics rows are host copies of whole frames and stay. CUDA is
+    // not tried again (a lost context stays lost until the process ends). Backend Auto goes on
+    // on the CPU; Backend CUDA stops with an error that says how to go on.
+    auto handleDeviceFault = [&](const pbf::DeviceFault& fault)
     {
-      checkpoint = &std::prev(after)->second;
-    }
-    const bool liveUsable = internals.Live && internals.Live->stepCount() <= targetStep;
-    if (!(liveUsable && (!checkpoint || checkpoint->steps <= internals.Live->stepCount())))
-    {
-      if (checkpoint)
-      {
-        if (!internals.Live)
-        {
-          build();
-        }
-        internals.Live->restore(*checkpoint);
-        internals.ResetPending();
-        resumedFrom = "checkpoint";
-      }
-      else
-      {
-        build();
-        resumedFrom = "initial";
-      }
-    }
-    pbf::Simulation& simulation = *internals.Live;
-    const std::uint64_t resumedFromStep = simulation.stepCount();
-
-    // Step to the frame, one solver step at a time: progress and abort are checked after each.
-    const double total = static_cast<double>(targetStep - resumedFromStep);
-    bool aborted = false;
-    while (simulation.stepCount() < targetStep)
-    {
-      const pbf::AdvanceReport report = simulation.advance(1);
-      internals.PendingIterations += report.iterations;
-      internals.PendingMilliseconds += report.milliseconds;
-      internals.PendingSteps += static_cast<int>(report.steps);
-      internals.SimulationMilliseconds += report.milliseconds;
-      internals.RequestSteps += static_cast<vtkIdType>(report.steps);
-      if (simulation.stepCount() % static_cast<std::uint64_t>(substeps) == 0)
-      {
-        const int reached = static_cast<int>(simulation.stepCount() / substeps);
-        internals.RecordFrame(reached);
-        internals.TakeCheckpoint(reached, budget);
-      }
-      this->UpdateProgress(static_cast<double>(simulation.stepCount() - resumedFromStep) / total);
-      // AbortExecute stays set, as VTK has it: whoever set it clears it (SetAbortExecute(0) also
-      // marks this algorithm modified, so that the same time asked again re-executes).
-      if (this->GetAbortExecute() && simulation.stepCount() < targetStep)
-      {
-        aborted = true;
-        break;
-      }
-    }
-    if (aborted)
-    {
+      const std::uint64_t failedAt = internals.Live ? internals.Live->stepCount() : 0;
+      internals.Live.reset();
+      internals.ResetPending();
+      internals.CudaProbed = true;
+      internals.CudaPresent = false;
+      internals.CudaAbsence = std::string("the GPU failed earlier: ") + fault.what();
+      internals.DeviceFaulted = true;
+      internals.FallbackReported = true; // this message says it; the Auto notice need not
+      auto kept = internals.Checkpoints.upper_bound(frame);
+      const std::string resumable = kept == internals.Checkpoints.begin()
+        ? std::string("the initial state")
+        : "frame " + std::to_string(std::prev(kept)->first) + " (a checkpoint)";
       std::ostringstream text;
-      text << this->GetClassName() << " (" << this << "): aborted at step "
-           << simulation.stepCount() << " on the way to frame " << frame << " (step " << targetStep
-           << "); the previous output stays.\n";
-      vtkOutputWindowDisplayText(text.str().c_str());
-      deliverPrevious();
-      return 1;
-    }
+      text << "CUDA device fault near step " << failedAt << ", on the way to frame " << frame
+           << ": " << fault.what() << ". ";
+      if (this->Backend != BACKEND_AUTO || configuration.Backend != pbf::Backend::CUDA)
+      {
+        text << "The previous output stays and so do the checkpoints: choose Backend Auto or CPU "
+                "(OpenMP) to go on from "
+             << resumable << " on the CPU.";
+        throw std::runtime_error(text.str());
+      }
+      text << "Backend Auto: falling back to CPU (OpenMP) from " << resumable
+           << "; the frames from there on are computed on the CPU (they agree with the GPU's to "
+              "rounding, not bit for bit).";
+      configuration.Backend = pbf::Backend::OpenMP;
+      internals.Key.Backend = pbf::Backend::OpenMP;
+      internals.DeviceFaultText = text.str();
+      vtkWarningMacro(<< internals.DeviceFaultText);
+    };
 
-    const auto deliveryStart = std::chrono::steady_clock::now();
-    vtkNew<vtkPolyData> result;
-    const bool pinned =
-      this->PageLockedOutput && simulation.stepper().backend() == pbf::Backend::CUDA;
-    if (simulation.stepper().precision() == pbf::Precision::Double)
+    // A device fault with Backend Auto moves the run to the CPU; the loop then goes round once
+    // more, from the checkpoints.
+    for (;;)
     {
-      FillParticles<double>(simulation.stepper(), pinned, internals.Vertices, result);
+      try
+      {
+        // Where to start: the live simulation when it is not past the frame, unless a checkpoint is
+        // nearer; otherwise the latest checkpoint at or before the frame; otherwise step 0.
+        std::string resumedFrom = "live";
+        const pbf::SimulationCheckpoint* checkpoint = nullptr;
+        auto after = internals.Checkpoints.upper_bound(frame);
+        if (after != internals.Checkpoints.begin())
+        {
+          checkpoint = &std::prev(after)->second;
+        }
+        const bool liveUsable = internals.Live && internals.Live->stepCount() <= targetStep;
+        if (!(liveUsable && (!checkpoint || checkpoint->steps <= internals.Live->stepCount())))
+        {
+          if (checkpoint)
+          {
+            if (!internals.Live)
+            {
+              build();
+            }
+            internals.Live->restore(*checkpoint);
+            internals.ResetPending();
+            resumedFrom = "checkpoint";
+          }
+          else
+          {
+            build();
+            resumedFrom = "initial";
+          }
+        }
+        pbf::Simulation& simulation = *internals.Live;
+        const std::uint64_t resumedFromStep = simulation.stepCount();
+
+        // Step to the frame, one solver step at a time: progress and abort are checked after each.
+        const double total = static_cast<double>(targetStep - resumedFromStep);
+        bool aborted = false;
+        while (simulation.stepCount() < targetStep)
+        {
+          const pbf::AdvanceReport report = simulation.advance(1);
+          internals.PendingIterations += report.iterations;
+          internals.PendingMilliseconds += report.milliseconds;
+          internals.PendingSteps += static_cast<int>(report.steps);
+          internals.SimulationMilliseconds += report.milliseconds;
+          internals.RequestSteps += static_cast<vtkIdType>(report.steps);
+          if (simulation.stepCount() % static_cast<std::uint64_t>(substeps) == 0)
+          {
+            const int reached = static_cast<int>(simulation.stepCount() / substeps);
+            internals.RecordFrame(reached);
+            internals.TakeCheckpoint(reached, budget);
+          }
+          this->UpdateProgress(
+            static_cast<double>(simulation.stepCount() - resumedFromStep) / total);
+          // AbortExecute stays set, as VTK has it: whoever set it clears it (SetAbortExecute(0)
+          // also marks this algorithm modified, so that the same time asked again re-executes).
+          if (this->GetAbortExecute() && simulation.stepCount() < targetStep)
+          {
+            aborted = true;
+            break;
+          }
+        }
+        if (aborted)
+        {
+          std::ostringstream text;
+          text << this->GetClassName() << " (" << this << "): aborted at step "
+               << simulation.stepCount() << " on the way to frame " << frame << " (step "
+               << targetStep << "); the previous output stays.\n";
+          vtkOutputWindowDisplayText(text.str().c_str());
+          deliverPrevious();
+          return 1;
+        }
+
+        const auto deliveryStart = std::chrono::steady_clock::now();
+        vtkNew<vtkPolyData> result;
+        const bool pinned =
+          this->PageLockedOutput && simulation.stepper().backend() == pbf::Backend::CUDA;
+        if (simulation.stepper().precision() == pbf::Precision::Double)
+        {
+          FillParticles<double>(simulation.stepper(), pinned, internals.Vertices, result);
+        }
+        else
+        {
+          FillParticles<float>(simulation.stepper(), pinned, internals.Vertices, result);
+        }
+        vtkSmartPointer<vtkFieldData> fieldData =
+          FrameFieldData(simulation, frame, this->FrameInterval, substeps);
+        AddInteger(fieldData, "RequestSteps", internals.RequestSteps);
+        AddText(fieldData, "ResumedFrom", resumedFrom);
+        if (!internals.DeviceFaultText.empty())
+        {
+          AddText(fieldData, "DeviceFault", internals.DeviceFaultText);
+        }
+        AddInteger(fieldData, "ResumedFromStep", static_cast<vtkIdType>(resumedFromStep));
+        vtkNew<vtkIdTypeArray> held;
+        held->SetName("CheckpointFrames");
+        held->SetNumberOfTuples(static_cast<vtkIdType>(internals.Checkpoints.size()));
+        vtkIdType k = 0;
+        for (const auto& entry : internals.Checkpoints)
+        {
+          held->SetValue(k++, entry.first);
+        }
+        fieldData->AddArray(held);
+        AddValue(fieldData, "CheckpointMemoryMB", internals.CheckpointBytes / 1048576.0);
+        result->SetFieldData(fieldData);
+        result->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
+        internals.LastOutput = result;
+        internals.LastFrame = frame;
+        output->ShallowCopy(result);
+        output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
+        table->ShallowCopy(internals.DiagnosticsTable());
+        table->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
+        internals.DeliveryMilliseconds = Milliseconds(deliveryStart);
+        return 1;
+      }
+      catch (const pbf::DeviceFault& fault)
+      {
+        handleDeviceFault(fault);
+      }
     }
-    else
-    {
-      FillParticles<float>(simulation.stepper(), pinned, internals.Vertices, result);
-    }
-    vtkSmartPointer<vtkFieldData> fieldData =
-      FrameFieldData(simulation, frame, this->FrameInterval, substeps);
-    AddInteger(fieldData, "RequestSteps", internals.RequestSteps);
-    AddText(fieldData, "ResumedFrom", resumedFrom);
-    AddInteger(fieldData, "ResumedFromStep", static_cast<vtkIdType>(resumedFromStep));
-    vtkNew<vtkIdTypeArray> held;
-    held->SetName("CheckpointFrames");
-    held->SetNumberOfTuples(static_cast<vtkIdType>(internals.Checkpoints.size()));
-    vtkIdType k = 0;
-    for (const auto& entry : internals.Checkpoints)
-    {
-      held->SetValue(k++, entry.first);
-    }
-    fieldData->AddArray(held);
-    AddValue(fieldData, "CheckpointMemoryMB", internals.CheckpointBytes / 1048576.0);
-    result->SetFieldData(fieldData);
-    result->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
-    internals.LastOutput = result;
-    internals.LastFrame = frame;
-    output->ShallowCopy(result);
-    output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
-    table->ShallowCopy(internals.DiagnosticsTable());
-    table->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
-    internals.DeliveryMilliseconds = Milliseconds(deliveryStart);
-    return 1;
   }
   catch (const pbf::InvalidInput& error)
   {

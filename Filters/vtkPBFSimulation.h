@@ -211,7 +211,11 @@ public:
   /**
    * Where the solver runs: BACKEND_AUTO (the default) takes CUDA when pbf::cudaAvailable() and
    * OpenMP otherwise, saying so once; BACKEND_CUDA without a device is an error naming the
-   * reason. Precision is that of the solver's state and of the output arrays.
+   * reason. Precision is that of the solver's state and of the output arrays. A GPU that fails
+   * mid-run (a lost device, a kernel that faults) ends CUDA for this filter: with BACKEND_AUTO
+   * the request goes on on the CPU from the latest checkpoint, with a warning that the frames
+   * from then on also carry as field data "DeviceFault"; with BACKEND_CUDA the request fails
+   * with an error saying how to go on, and the previous output and the checkpoints stay.
    */
   vtkSetClampMacro(Backend, int, BACKEND_AUTO, BACKEND_SERIAL);
   vtkGetMacro(Backend, int);

@@ -9,6 +9,9 @@
 #                                                   # kissfft; not glibc), into .pipeline/ (ignored)
 #   Utilities/pipeline-gpu-run.sh run               # there (device tool, carry [".pipeline"]):
 #                                                   # runs it with LD_LIBRARY_PATH=.pipeline/lib
+#   Utilities/pipeline-gpu-run.sh fault             # there: only the device-fault checks (issue 6):
+#                                                   # pbf_cuda_fault_tests, one test per process,
+#                                                   # and pbf_device_fault auto and cuda
 #
 # The run times 1M particles at 4 substeps per frame (the target: delivery <= 10% of the frame's
 # simulation), page-locked then pageable output memory, without checkpoints, in double
@@ -26,12 +29,14 @@ prepare)
   fi
   compgen -G "$build/CMakeFiles/*/CMakeCUDACompiler.cmake" > /dev/null ||
     { echo "pipeline-gpu-run: $build has no CUDA compiler: the driver would have no CUDA backend" >&2; exit 1; }
-  cmake --build "$build" --target pbf_pipeline -j "$(nproc)"
+  cmake --build "$build" --target pbf_pipeline pbf_device_fault pbf_cuda_fault_tests -j "$(nproc)"
   rm -rf "$carry"
   mkdir -p "$carry/bin" "$carry/lib"
-  cp "$build/bin/pbf_pipeline" "$carry/bin/"
-  # Everything the driver loads but the C library itself, which the GPU machine has (newer).
-  ldd "$build/bin/pbf_pipeline" | awk '$3 ~ /^\// { print $3 }' | while read -r library; do
+  programs=("$build/bin/pbf_pipeline" "$build/bin/pbf_device_fault"
+    "$(find "$build" -name pbf_cuda_fault_tests -type f -perm -u+x | head -1)")
+  cp "${programs[@]}" "$carry/bin/"
+  # Everything the drivers load but the C library itself, which the GPU machine has (newer).
+  ldd "${programs[@]}" | awk '$3 ~ /^\// { print $3 }' | sort -u | while read -r library; do
     case "$(basename "$library")" in
       libc.so*|libm.so*|libdl.so*|libpthread.so*|librt.so*|ld-linux*) ;;
       *) cp -L "$library" "$carry/lib/" ;;
@@ -43,6 +48,38 @@ prepare)
   LD_LIBRARY_PATH=$carry/lib OMP_WAIT_POLICY=PASSIVE "$carry/bin/pbf_pipeline" --backend openmp \
     --particles 3000 --frames 3 --warmup 1 --work /tmp > /dev/null
   du -sh "$carry"
+  ;;
+fault)
+  out=${OUT:-$root/output/pipeline}
+  mkdir -p "$out"
+  exec > >(tee "$out/fault.log") 2>&1
+  [[ -x $carry/bin/pbf_device_fault ]] || { echo "pipeline-gpu-run: no $carry (run prepare here first)"; exit 1; }
+  export LD_LIBRARY_PATH=$carry/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+  echo "commit $(cat "$carry/COMMIT") $( [[ -s $carry/DIRTY ]] && echo '(with local changes)')"
+  nvidia-smi --query-gpu=name,driver_version --format=csv,noheader || true
+  summary=()
+  # One gtest per process: a trapped kernel loses the CUDA context for the rest of the process.
+  for test in $("$carry/bin/pbf_cuda_fault_tests" --gtest_list_tests | awk '/^[^ ]/ { suite = $1 } /^  / { print suite $1 }'); do
+    echo; echo "== pbf_cuda_fault_tests $test"
+    if timeout 120 "$carry/bin/pbf_cuda_fault_tests" --gtest_filter="$test" > "$out/$test.log" 2>&1; then
+      grep -q "SKIPPED \]" "$out/$test.log" && status=SKIPPED || status=passed
+    else
+      status="FAILED (exit $?)"
+    fi
+    tail -n 25 "$out/$test.log"
+    summary+=("$test: $status")
+  done
+  for mode in auto cuda; do
+    echo; echo "== pbf_device_fault $mode"
+    if timeout 120 "$carry/bin/pbf_device_fault" "$mode"; then
+      summary+=("pbf_device_fault $mode: passed")
+    else
+      summary+=("pbf_device_fault $mode: FAILED (exit $?)")
+    fi
+  done
+  echo; echo "== summary"
+  printf '  %s\n' "${summary[@]}"
+  ! printf '%s\n' "${summary[@]}" | grep -q FAILED
   ;;
 run)
   out=${OUT:-$root/output/pipeline}
