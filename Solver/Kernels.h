@@ -60,9 +60,19 @@ struct Kernels
     {
       return { Real(0), Real(0), Real(0) };
     }
+#if defined(__CUDA_ARCH__) && !defined(PBF_CUDA_IEEE_GRADIENT)
+    // On the GPU: 1/r from one reciprocal square root (CUDA's rsqrtf: 2 ulp, rsqrt: 1 ulp)
+    // instead of a correctly rounded square root and division, which the neighbour passes pay for
+    // every pair. The CPU backends do not compile this; the GPU already rounds differently from
+    // them (FMA), and this adds a few ulps to the gradient (Testing/Benchmarks/README.md).
+    const Real inverse = reciprocalSquareRoot(r2);
+    const Real d = h - r2 * inverse;
+    return r * (spikyGradScale * d * d * inverse);
+#else
     const Real rl = squareRoot(r2);
     const Real d = h - rl;
     return r * (spikyGradScale * d * d / rl);
+#endif
   }
 };
 

@@ -18,6 +18,17 @@ PBF_HD PBF_INLINE double squareRoot(double a)
 {
   return sqrt(a);
 }
+#if defined(__CUDA_ARCH__)
+// Device only (the spiky gradient's fast path in Kernels.h): CUDA's reciprocal square roots.
+__device__ __forceinline__ float reciprocalSquareRoot(float a)
+{
+  return rsqrtf(a);
+}
+__device__ __forceinline__ double reciprocalSquareRoot(double a)
+{
+  return rsqrt(a);
+}
+#endif
 // s_corr (eq. 13) raises to n = 4 for every neighbour pair in every solver iteration. On a GPU the
 // general pow costs ~60 instructions there, most of the pass; a small integer exponent by
 // repeated squaring is as accurate (a few ulps, the bound CUDA's own powf has) and deterministic.
