@@ -1,0 +1,49 @@
+// How the ranks of a domain-decomposed run talk (issue 7). The solver needs only this interface;
+// an implementation over MPI (ParaView's vtkMultiProcessController, or MPI itself in a
+// solver-only driver) and one over threads (ThreadCluster.h, for tests on one machine) plug in.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+namespace pbf::distributed
+{
+
+using Bytes = std::vector<unsigned char>;
+
+class Communicator
+{
+public:
+  virtual ~Communicator() = default;
+  virtual int rank() const = 0;
+  virtual int size() const = 0;
+  // Collective: sends outgoing[r] to rank r (empty for most ranks) and returns, for each rank r,
+  // what r sent to this one.
+  virtual std::vector<Bytes> exchange(const std::vector<Bytes>& outgoing) = 0;
+};
+
+// Collective: every rank's values, in rank order. Reductions sum them in that order, so every
+// rank gets the same bits whatever the timing.
+std::vector<std::vector<double>> allGather(Communicator& communicator, const std::vector<double>& mine);
+
+// Appends and reads plain values (particle fields) in a byte buffer.
+template <class T>
+void put(Bytes& buffer, const T& value)
+{
+  const auto* bytes = reinterpret_cast<const unsigned char*>(&value);
+  buffer.insert(buffer.end(), bytes, bytes + sizeof(T));
+}
+
+template <class T>
+T take(const Bytes& buffer, std::size_t& offset)
+{
+  T value;
+  std::copy(buffer.begin() + static_cast<std::ptrdiff_t>(offset),
+    buffer.begin() + static_cast<std::ptrdiff_t>(offset + sizeof(T)),
+    reinterpret_cast<unsigned char*>(&value));
+  offset += sizeof(T);
+  return value;
+}
+
+} // namespace pbf::distributed

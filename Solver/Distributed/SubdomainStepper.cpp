@@ -1,0 +1,530 @@
+#include "SubdomainStepper.h"
+
+#include "CellSort.h"
+#include "ParticleChecks.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <initializer_list>
+#include <limits>
+#include <type_traits>
+
+namespace pbf::distributed
+{
+
+namespace
+{
+
+double millisecondsSince(std::chrono::steady_clock::time_point start)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+    .count();
+}
+
+template <class Real>
+void putVec(Bytes& b, const Vec3<Real>& v)
+{
+  put(b, v.x);
+  put(b, v.y);
+  put(b, v.z);
+}
+
+template <class Real>
+Vec3<Real> takeVec(const Bytes& b, std::size_t& offset)
+{
+  Vec3<Real> v;
+  v.x = take<Real>(b, offset);
+  v.y = take<Real>(b, offset);
+  v.z = take<Real>(b, offset);
+  return v;
+}
+
+} // namespace
+
+template <class Real>
+SubdomainStepper<Real>::SubdomainStepper(Communicator& communicator, bool parallel,
+  const Parameters& parameters, const ParticleBatch& everything, double rebalanceThreshold)
+  : communicator_(communicator)
+  , parallel_(parallel)
+  , parameters_(parameters)
+  , rebalanceThreshold_(rebalanceThreshold)
+{
+  parameters_.validate();
+  checkBatch(parameters_, everything);
+  coefficients_ = Coefficients<Real>::make(parameters_);
+  geometry_ = makeGridGeometry<Real>(parameters_.domain, parameters_.smoothingLength());
+  cellOffsets_.assign(std::size_t(geometry_.cellCount()) + 1, 0);
+  const auto ranks = static_cast<std::size_t>(communicator_.size());
+  sendIndex_.resize(ranks);
+  ghostIndex_.resize(ranks);
+
+  // Every rank sees the whole fluid here, so the first cut needs no communication.
+  std::vector<std::uint64_t> perColumn(static_cast<std::size_t>(geometry_.nx), 0);
+  for (const Vec3d& q : everything.position)
+  {
+    ++perColumn[static_cast<std::size_t>(column(Vec3<Real>::from(q)))];
+  }
+  slabs_ = Slabs::balanced(perColumn, communicator_.size());
+  for (std::size_t i = 0; i < everything.position.size(); ++i)
+  {
+    const Vec3<Real> q = Vec3<Real>::from(everything.position[i]);
+    if (slabs_.owner(column(q)) == communicator_.rank())
+    {
+      x_.push_back(q);
+      v_.push_back(Vec3<Real>::from(everything.velocity[i]));
+      id_.push_back(everything.id[i]);
+    }
+  }
+  // Density and lambda at rest, as CpuStepper reports them before the first step.
+  p_ = x_;
+  receiveGhosts();
+  sortByCell();
+  const FluidView<Real> f = view();
+  forOwned([&](std::uint32_t i) { densityAndLambda(i, f); });
+  dropGhosts();
+}
+
+template <class Real>
+int SubdomainStepper<Real>::column(const Vec3<Real>& q) const
+{
+  return geometry_.clampedCell(q.x, geometry_.origin.x, geometry_.nx);
+}
+
+template <class Real>
+template <class Stage>
+void SubdomainStepper<Real>::forOwned(Stage&& stage)
+{
+  const auto n = static_cast<std::int64_t>(owned_.size());
+#pragma omp parallel for schedule(static) if (parallel_)
+  for (std::int64_t k = 0; k < n; ++k)
+  {
+    stage(owned_[static_cast<std::size_t>(k)]);
+  }
+}
+
+template <class Real>
+FluidView<Real> SubdomainStepper<Real>::view()
+{
+  FluidView<Real> f;
+  f.x = x_.data();
+  f.p = p_.data();
+  f.v = v_.data();
+  f.density = density_.data();
+  f.lambda = lambda_.data();
+  f.scratch = scratch_.data();
+  f.omega = omega_.data();
+  f.grid = GridView<Real>{ geometry_, cellOffsets_.data(), keys_.data() };
+  f.c = coefficients_;
+  return f;
+}
+
+template <class Real>
+void SubdomainStepper<Real>::migrate(bool byPrediction)
+{
+  const auto start = std::chrono::steady_clock::now();
+  const int me = communicator_.rank();
+  std::vector<Bytes> out(static_cast<std::size_t>(communicator_.size()));
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < x_.size(); ++i)
+  {
+    const int owner = slabs_.owner(column(byPrediction ? p_[i] : x_[i]));
+    if (owner == me)
+    {
+      x_[kept] = x_[i];
+      p_[kept] = p_[i];
+      v_[kept] = v_[i];
+      id_[kept] = id_[i];
+      density_[kept] = density_[i];
+      lambda_[kept] = lambda_[i];
+      ++kept;
+      continue;
+    }
+    Bytes& b = out[static_cast<std::size_t>(owner)];
+    putVec(b, x_[i]);
+    putVec(b, p_[i]);
+    putVec(b, v_[i]);
+    put(b, id_[i]);
+    put(b, density_[i]);
+    put(b, lambda_[i]);
+  }
+  x_.resize(kept);
+  p_.resize(kept);
+  v_.resize(kept);
+  id_.resize(kept);
+  density_.resize(kept);
+  lambda_.resize(kept);
+  const std::vector<Bytes> in = communicator_.exchange(out);
+  for (const Bytes& b : in)
+  {
+    for (std::size_t offset = 0; offset < b.size();)
+    {
+      x_.push_back(takeVec<Real>(b, offset));
+      p_.push_back(takeVec<Real>(b, offset));
+      v_.push_back(takeVec<Real>(b, offset));
+      id_.push_back(take<std::int64_t>(b, offset));
+      density_.push_back(take<Real>(b, offset));
+      lambda_.push_back(take<Real>(b, offset));
+      ++exchange_.migrated;
+    }
+  }
+  exchange_.migrationMilliseconds += millisecondsSince(start);
+}
+
+template <class Real>
+void SubdomainStepper<Real>::receiveGhosts()
+{
+  const auto start = std::chrono::steady_clock::now();
+  const int me = communicator_.rank();
+  const auto ranks = static_cast<std::size_t>(communicator_.size());
+  const std::size_t owned = x_.size();
+  // Which owned particles each rank mirrors, by index before the sort (mapped after it).
+  std::vector<std::vector<std::uint32_t>> sendOriginal(ranks);
+  std::vector<Bytes> out(ranks);
+  for (std::size_t i = 0; i < owned; ++i)
+  {
+    const int c = column(p_[i]);
+    const int left = c > 0 ? slabs_.owner(c - 1) : me;
+    const int right = c + 1 < slabs_.columns() ? slabs_.owner(c + 1) : me;
+    for (int to : { left, right })
+    {
+      if (to == me || (to == right && right == left))
+      {
+        continue;
+      }
+      sendOriginal[static_cast<std::size_t>(to)].push_back(static_cast<std::uint32_t>(i));
+      Bytes& b = out[static_cast<std::size_t>(to)];
+      putVec(b, p_[i]);
+      put(b, id_[i]);
+    }
+  }
+  const std::vector<Bytes> in = communicator_.exchange(out);
+  ghost_.assign(owned, 0);
+  std::vector<std::uint32_t> ghostCount(ranks, 0);
+  std::vector<std::int32_t> from(owned, -1);
+  for (std::size_t r = 0; r < ranks; ++r)
+  {
+    for (std::size_t offset = 0; offset < in[r].size();)
+    {
+      const Vec3<Real> q = takeVec<Real>(in[r], offset);
+      x_.push_back(q);
+      p_.push_back(q);
+      v_.push_back(Vec3<Real>{ Real(0), Real(0), Real(0) });
+      id_.push_back(take<std::int64_t>(in[r], offset));
+      ghost_.push_back(1);
+      from.push_back(static_cast<std::int32_t>(r));
+      ++ghostCount[r];
+    }
+  }
+  const std::size_t n = x_.size();
+  exchange_.ghosts = n - owned;
+  density_.resize(n);
+  lambda_.resize(n);
+  scratch_.resize(n);
+  omega_.resize(n);
+  keys_.resize(n);
+  tag_.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    tag_[i] = static_cast<std::uint32_t>(i);
+  }
+  // Kept for sortByCell, which maps both lists to sorted indices.
+  for (std::size_t r = 0; r < ranks; ++r)
+  {
+    sendIndex_[r] = std::move(sendOriginal[r]);
+    ghostIndex_[r].clear();
+  }
+  ghostFrom_ = std::move(from);
+  exchange_.ghostMilliseconds += millisecondsSince(start);
+}
+
+template <class Real>
+void SubdomainStepper<Real>::sortByCell()
+{
+  const std::size_t n = x_.size();
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    keys_[i] = geometry_.keyOf(p_[i]);
+  }
+  countingSortByCell(keys_, cellOffsets_, order_, cursor_);
+  auto gather = [&](auto& array) {
+    auto sorted = array;
+    for (std::size_t k = 0; k < n; ++k)
+    {
+      sorted[k] = array[order_[k]];
+    }
+    array.swap(sorted);
+  };
+  gather(x_);
+  gather(p_);
+  gather(v_);
+  gather(id_);
+  gather(keys_);
+  gather(ghost_);
+  gather(tag_);
+  gather(ghostFrom_);
+  // Sorted index of each pre-sort index; ghosts keep their arrival order per rank, which is the
+  // order in which their owner packs their fields.
+  std::vector<std::uint32_t> sortedOf(n);
+  owned_.clear();
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    sortedOf[tag_[k]] = static_cast<std::uint32_t>(k);
+  }
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const std::uint32_t k = sortedOf[i];
+    if (ghostFrom_[k] >= 0)
+    {
+      ghostIndex_[static_cast<std::size_t>(ghostFrom_[k])].push_back(k);
+    }
+  }
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    if (!ghost_[k])
+    {
+      owned_.push_back(static_cast<std::uint32_t>(k));
+    }
+  }
+  for (auto& list : sendIndex_)
+  {
+    for (std::uint32_t& i : list)
+    {
+      i = sortedOf[i];
+    }
+  }
+}
+
+template <class Real>
+template <class Field>
+void SubdomainStepper<Real>::refreshGhosts(Field field)
+{
+  const auto start = std::chrono::steady_clock::now();
+  const auto ranks = static_cast<std::size_t>(communicator_.size());
+  std::vector<Bytes> out(ranks);
+  for (std::size_t r = 0; r < ranks; ++r)
+  {
+    for (std::uint32_t i : sendIndex_[r])
+    {
+      put(out[r], field(i));
+    }
+  }
+  const std::vector<Bytes> in = communicator_.exchange(out);
+  for (std::size_t r = 0; r < ranks; ++r)
+  {
+    std::size_t offset = 0;
+    for (std::uint32_t i : ghostIndex_[r])
+    {
+      field(i) = take<std::remove_reference_t<decltype(field(i))>>(in[r], offset);
+    }
+  }
+  exchange_.ghostMilliseconds += millisecondsSince(start);
+}
+
+template <class Real>
+void SubdomainStepper<Real>::dropGhosts()
+{
+  const std::size_t owned = owned_.size();
+  auto keep = [&](auto& array) {
+    for (std::size_t k = 0; k < owned; ++k)
+    {
+      array[k] = array[owned_[k]]; // owned_ is increasing: never overwrites one still to read
+    }
+    array.resize(owned);
+  };
+  keep(x_);
+  keep(p_);
+  keep(v_);
+  keep(id_);
+  keep(density_);
+  keep(lambda_);
+  ghost_.assign(owned, 0);
+  ghostFrom_.assign(owned, -1);
+}
+
+template <class Real>
+double SubdomainStepper<Real>::meanDensityError()
+{
+  // In fixed blocks per rank, then the ranks in order: deterministic, though summed in another
+  // order than the serial backend's blocks.
+  double sum = 0.0;
+  const double inverseRho0 = 1.0 / parameters_.restDensity;
+  for (std::uint32_t i : owned_)
+  {
+    sum += std::max(double(density_[i]) * inverseRho0 - 1.0, 0.0);
+  }
+  double total = 0.0, count = 0.0;
+  for (const std::vector<double>& r : allGather(communicator_, { sum, double(owned_.size()) }))
+  {
+    total += r[0];
+    count += r[1];
+  }
+  return count > 0 ? total / count : 0.0;
+}
+
+template <class Real>
+void SubdomainStepper<Real>::step()
+{
+  exchange_ = ExchangeReport{};
+  report_ = StepReport{};
+  {
+    owned_.resize(x_.size());
+    for (std::size_t i = 0; i < owned_.size(); ++i)
+    {
+      owned_[i] = static_cast<std::uint32_t>(i);
+    }
+    p_.resize(x_.size());
+    scratch_.resize(x_.size());
+    omega_.resize(x_.size());
+    keys_.resize(x_.size());
+    const FluidView<Real> f = view();
+    forOwned([&](std::uint32_t i) { predictPosition(i, f); });
+  }
+  migrate(true);
+  receiveGhosts();
+  // Neighbours are found once per step, on the predicted positions (Algorithm 1, line 7).
+  sortByCell();
+  const FluidView<Real> f = view();
+  const double tolerance = parameters_.densityErrorTolerance / 100.0;
+  for (int iteration = 0; iteration < parameters_.solverIterations; ++iteration)
+  {
+    forOwned([&](std::uint32_t i) { densityAndLambda(i, f); });
+    refreshGhosts([&](std::uint32_t i) -> Real& { return density_[i]; });
+    refreshGhosts([&](std::uint32_t i) -> Real& { return lambda_[i]; });
+    if (tolerance > 0)
+    {
+      report_.densityError = meanDensityError();
+      if (report_.densityError <= tolerance)
+      {
+        break;
+      }
+    }
+    forOwned([&](std::uint32_t i) { positionCorrection(i, f); });
+    forOwned([&](std::uint32_t i) { applyCorrection(i, f); });
+    refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return p_[i]; });
+    ++report_.iterations;
+  }
+  if (tolerance <= 0)
+  {
+    report_.densityError = std::numeric_limits<double>::quiet_NaN();
+  }
+  forOwned([&](std::uint32_t i) { updateVelocity(i, f); });
+  refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return v_[i]; });
+  forOwned([&](std::uint32_t i) { vorticityAndXsph(i, f); });
+  refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return omega_[i]; });
+  forOwned([&](std::uint32_t i) { vorticityConfinement(i, f); });
+  forOwned([&](std::uint32_t i) { commitPosition(i, f, x_.data()); });
+  dropGhosts();
+  rebalanceIfNeeded();
+}
+
+template <class Real>
+std::vector<std::uint64_t> SubdomainStepper<Real>::particlesPerRank()
+{
+  std::vector<std::uint64_t> counts;
+  for (const std::vector<double>& r : allGather(communicator_, { double(x_.size()) }))
+  {
+    counts.push_back(static_cast<std::uint64_t>(r[0]));
+  }
+  return counts;
+}
+
+template <class Real>
+void SubdomainStepper<Real>::rebalanceIfNeeded()
+{
+  const std::vector<std::uint64_t> counts = particlesPerRank();
+  std::uint64_t total = 0, largest = 0;
+  for (std::uint64_t c : counts)
+  {
+    total += c;
+    largest = std::max(largest, c);
+  }
+  const double mean = static_cast<double>(total) / static_cast<double>(counts.size());
+  if (!(mean > 0 && static_cast<double>(largest) > (1.0 + rebalanceThreshold_) * mean))
+  {
+    return;
+  }
+  std::vector<double> mine(static_cast<std::size_t>(geometry_.nx), 0.0);
+  for (const Vec3<Real>& q : x_)
+  {
+    mine[static_cast<std::size_t>(column(q))] += 1.0;
+  }
+  std::vector<std::uint64_t> perColumn(mine.size(), 0);
+  for (const std::vector<double>& r : allGather(communicator_, mine))
+  {
+    for (std::size_t c = 0; c < r.size(); ++c)
+    {
+      perColumn[c] += static_cast<std::uint64_t>(r[c]);
+    }
+  }
+  slabs_ = Slabs::balanced(perColumn, communicator_.size());
+  p_.resize(x_.size());
+  migrate(false);
+  ++rebalances_;
+  exchange_.rebalanced = true;
+}
+
+template <class Real>
+void SubdomainStepper<Real>::read(Snapshot<double>& out) const
+{
+  const std::size_t n = x_.size();
+  out.position.resize(n);
+  out.velocity.resize(n);
+  out.density.resize(n);
+  out.lambda.resize(n);
+  out.id = id_;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    out.position[i] = Vec3d::from(x_[i]);
+    out.velocity[i] = Vec3d::from(v_[i]);
+    out.density[i] = density_[i];
+    out.lambda[i] = lambda_[i];
+  }
+}
+
+template <class Real>
+Statistics SubdomainStepper<Real>::statistics()
+{
+  const double mass = calibratedParticleMass(parameters_);
+  double errorSum = 0, errorMax = 0, speedMax = 0, kinetic = 0, finite = 1;
+  Vec3d momentum{ 0, 0, 0 };
+  for (std::size_t i = 0; i < x_.size(); ++i)
+  {
+    const double error = std::max(double(density_[i]) / parameters_.restDensity - 1.0, 0.0);
+    errorSum += error;
+    errorMax = std::max(errorMax, error);
+    const Vec3d xi = Vec3d::from(x_[i]);
+    const Vec3d vi = Vec3d::from(v_[i]);
+    const double speed2 = dot(vi, vi);
+    speedMax = std::max(speedMax, std::sqrt(speed2));
+    kinetic += 0.5 * mass * speed2;
+    momentum += vi * mass;
+    if (!std::isfinite(xi.x + xi.y + xi.z + vi.x + vi.y + vi.z))
+    {
+      finite = 0;
+    }
+  }
+  Statistics s;
+  s.averageNeighbors = std::numeric_limits<double>::quiet_NaN();
+  double count = 0;
+  for (const std::vector<double>& r : allGather(communicator_,
+         { double(x_.size()), errorSum, errorMax, speedMax, kinetic, momentum.x, momentum.y,
+           momentum.z, finite }))
+  {
+    count += r[0];
+    s.averageDensityError += r[1];
+    s.maxDensityError = std::max(s.maxDensityError, r[2]);
+    s.maxSpeed = std::max(s.maxSpeed, r[3]);
+    s.kineticEnergy += r[4];
+    s.momentum += Vec3d{ r[5], r[6], r[7] };
+    s.finite = s.finite && r[8] != 0;
+  }
+  s.particles = static_cast<std::size_t>(count);
+  s.averageDensityError = count > 0 ? s.averageDensityError / count : 0.0;
+  return s;
+}
+
+template class SubdomainStepper<float>;
+template class SubdomainStepper<double>;
+
+} // namespace pbf::distributed

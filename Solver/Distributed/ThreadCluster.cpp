@@ -1,0 +1,181 @@
+#include "ThreadCluster.h"
+
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+namespace pbf::distributed
+{
+
+std::vector<std::vector<double>> allGather(Communicator& communicator, const std::vector<double>& mine)
+{
+  Bytes packed;
+  for (double value : mine)
+  {
+    put(packed, value);
+  }
+  const std::vector<Bytes> received =
+    communicator.exchange(std::vector<Bytes>(static_cast<std::size_t>(communicator.size()), packed));
+  std::vector<std::vector<double>> all;
+  for (const Bytes& bytes : received)
+  {
+    std::vector<double> values;
+    for (std::size_t offset = 0; offset < bytes.size();)
+    {
+      values.push_back(take<double>(bytes, offset));
+    }
+    all.push_back(std::move(values));
+  }
+  return all;
+}
+
+namespace
+{
+
+// Shared by the threads: mailbox[from][to], and a reusable barrier that an exception breaks.
+struct Shared
+{
+  explicit Shared(int n)
+    : ranks(n)
+    , mailbox(static_cast<std::size_t>(n), std::vector<Bytes>(static_cast<std::size_t>(n)))
+  {
+  }
+  int ranks;
+  std::vector<std::vector<Bytes>> mailbox;
+  std::mutex mutex;
+  std::condition_variable changed;
+  int arrived = 0;
+  long generation = 0;
+  bool broken = false;
+
+  void wait()
+  {
+    std::unique_lock<std::mutex> lock(mutex);
+    if (broken)
+    {
+      throw std::runtime_error("thread cluster: another rank failed");
+    }
+    const long mine = generation;
+    if (++arrived == ranks)
+    {
+      arrived = 0;
+      ++generation;
+      changed.notify_all();
+      return;
+    }
+    changed.wait(lock, [&] { return generation != mine || broken; });
+    if (broken)
+    {
+      throw std::runtime_error("thread cluster: another rank failed");
+    }
+  }
+
+  void breakBarrier()
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    broken = true;
+    changed.notify_all();
+  }
+};
+
+class ThreadCommunicator final : public Communicator
+{
+public:
+  ThreadCommunicator(Shared& shared, int rank)
+    : shared_(shared)
+    , rank_(rank)
+  {
+  }
+  int rank() const override { return rank_; }
+  int size() const override { return shared_.ranks; }
+
+  std::vector<Bytes> exchange(const std::vector<Bytes>& outgoing) override
+  {
+    if (outgoing.size() != static_cast<std::size_t>(shared_.ranks))
+    {
+      throw std::invalid_argument("exchange: one buffer per rank expected");
+    }
+    for (int to = 0; to < shared_.ranks; ++to)
+    {
+      shared_.mailbox[static_cast<std::size_t>(rank_)][static_cast<std::size_t>(to)] =
+        outgoing[static_cast<std::size_t>(to)];
+    }
+    shared_.wait(); // everything posted
+    std::vector<Bytes> incoming(static_cast<std::size_t>(shared_.ranks));
+    for (int from = 0; from < shared_.ranks; ++from)
+    {
+      incoming[static_cast<std::size_t>(from)] =
+        shared_.mailbox[static_cast<std::size_t>(from)][static_cast<std::size_t>(rank_)];
+    }
+    shared_.wait(); // everything read: the mailboxes may be reused
+    return incoming;
+  }
+
+private:
+  Shared& shared_;
+  int rank_;
+};
+
+} // namespace
+
+void runThreadCluster(int ranks, const std::function<void(Communicator&)>& body)
+{
+  if (ranks < 1)
+  {
+    throw std::invalid_argument("thread cluster: ranks = " + std::to_string(ranks) +
+      ": must be at least 1");
+  }
+  Shared shared(ranks);
+  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(ranks));
+  std::vector<std::thread> threads;
+  for (int r = 0; r < ranks; ++r)
+  {
+    threads.emplace_back([&, r]() {
+      try
+      {
+        ThreadCommunicator communicator(shared, r);
+        body(communicator);
+      }
+      catch (...)
+      {
+        errors[static_cast<std::size_t>(r)] = std::current_exception();
+        shared.breakBarrier();
+      }
+    });
+  }
+  for (std::thread& t : threads)
+  {
+    t.join();
+  }
+  // The first failure that is not merely the echo of another rank's.
+  std::exception_ptr echo;
+  for (const std::exception_ptr& error : errors)
+  {
+    if (!error)
+    {
+      continue;
+    }
+    try
+    {
+      std::rethrow_exception(error);
+    }
+    catch (const std::runtime_error& e)
+    {
+      if (std::string(e.what()) == "thread cluster: another rank failed")
+      {
+        echo = error;
+        continue;
+      }
+      throw;
+    }
+  }
+  if (echo)
+  {
+    std::rethrow_exception(echo);
+  }
+}
+
+} // namespace pbf::distributed

@@ -1,0 +1,233 @@
+// Domain decomposition (issue 7) with the ranks as threads (Distributed/ThreadCluster.h): N ranks
+// against one rank and against the serial backend, matched by particle id.
+#include "Distributed/Slabs.h"
+#include "Distributed/SubdomainStepper.h"
+#include "Distributed/ThreadCluster.h"
+#include "Scene.h"
+#include "Stepper.h"
+#include "TestScenes.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <set>
+#include <vector>
+
+using namespace pbf;
+using namespace pbf::distributed;
+
+namespace
+{
+
+struct DecomposedScene
+{
+  Parameters parameters;
+  ParticleBatch fluid;
+};
+
+DecomposedScene damBreak(double spacing)
+{
+  const Scene scene = presetScene("dam_break");
+  DecomposedScene s;
+  s.parameters.particleSpacing = spacing;
+  s.parameters = withSceneDomain(s.parameters, scene);
+  s.fluid = fillScene(scene, s.parameters);
+  return s;
+}
+
+struct Outcome
+{
+  Snapshot<double> state;           // every rank's particles, rank after rank
+  std::vector<Statistics> history;  // after each step (rank 0's copy; all ranks agree)
+  std::vector<std::vector<std::uint64_t>> counts; // particles per rank after each step
+  std::vector<ExchangeReport> exchanges;          // rank 0's, after each step
+  int rebalances = 0;
+};
+
+template <class Real>
+Outcome runRanks(int ranks, const DecomposedScene& setup, int steps, bool history = false)
+{
+  std::vector<Snapshot<double>> parts(static_cast<std::size_t>(ranks));
+  Outcome outcome;
+  runThreadCluster(ranks, [&](Communicator& communicator) {
+    SubdomainStepper<Real> stepper(communicator, false, setup.parameters, setup.fluid);
+    for (int s = 0; s < steps; ++s)
+    {
+      stepper.step();
+      if (history)
+      {
+        const Statistics statistics = stepper.statistics();
+        const std::vector<std::uint64_t> counts = stepper.particlesPerRank();
+        if (communicator.rank() == 0)
+        {
+          outcome.history.push_back(statistics);
+          outcome.counts.push_back(counts);
+          outcome.exchanges.push_back(stepper.lastExchange());
+        }
+      }
+    }
+    stepper.read(parts[static_cast<std::size_t>(communicator.rank())]);
+    if (communicator.rank() == 0)
+    {
+      outcome.rebalances = stepper.rebalances();
+    }
+  });
+  for (const Snapshot<double>& part : parts)
+  {
+    Snapshot<double>& all = outcome.state;
+    all.position.insert(all.position.end(), part.position.begin(), part.position.end());
+    all.velocity.insert(all.velocity.end(), part.velocity.begin(), part.velocity.end());
+    all.density.insert(all.density.end(), part.density.begin(), part.density.end());
+    all.lambda.insert(all.lambda.end(), part.lambda.begin(), part.lambda.end());
+    all.id.insert(all.id.end(), part.id.begin(), part.id.end());
+  }
+  return outcome;
+}
+
+// Largest |x_a - x_b| / |x_b| over particles matched by id; every id must be in both, once.
+double maxRelativePositionError(const Snapshot<double>& a, const Snapshot<double>& b)
+{
+  EXPECT_EQ(a.id.size(), b.id.size());
+  EXPECT_EQ(std::set<std::int64_t>(a.id.begin(), a.id.end()).size(), a.id.size())
+    << "an id is on two ranks";
+  const auto index = test::indexById(b);
+  double worst = 0;
+  for (std::size_t i = 0; i < a.id.size(); ++i)
+  {
+    const auto it = index.find(a.id[i]);
+    if (it == index.end())
+    {
+      ADD_FAILURE() << "particle id " << a.id[i] << " missing";
+      return INFINITY;
+    }
+    const Vec3d& xb = b.position[it->second];
+    const double error = length(a.position[i] - xb) / length(xb);
+    worst = std::isnan(error) ? INFINITY : std::max(worst, error);
+  }
+  return worst;
+}
+
+double surgeFront(const Snapshot<double>& s)
+{
+  double front = -INFINITY;
+  for (const Vec3d& x : s.position)
+  {
+    front = std::max(front, x.x);
+  }
+  return front;
+}
+
+} // namespace
+
+TEST(Slabs, BalancedCutsGiveEachRankItsShareAndAtLeastAColumn)
+{
+  const std::vector<std::uint64_t> perColumn{ 10, 10, 10, 10, 0, 0, 0, 40 };
+  const Slabs two = Slabs::balanced(perColumn, 2);
+  ASSERT_EQ(two.first, (std::vector<int>{ 0, 4, 8 })); // 40 | 40
+  const Slabs eight = Slabs::balanced(perColumn, 8);
+  for (int r = 0; r < 8; ++r)
+  {
+    EXPECT_EQ(eight.first[static_cast<std::size_t>(r) + 1] - eight.first[static_cast<std::size_t>(r)], 1);
+  }
+  EXPECT_EQ(two.owner(3), 0);
+  EXPECT_EQ(two.owner(4), 1);
+  EXPECT_THROW(Slabs::balanced(perColumn, 9), std::invalid_argument);
+}
+
+TEST(Distributed, OneRankIsBitIdenticalToTheSerialBackend)
+{
+  // One rank has no ghosts and migrates nothing: the same stages on the same particles in the
+  // same order as CpuStepper, so not one bit may differ.
+  const DecomposedScene setup = damBreak(0.04);
+  auto serial = makeStepper(Backend::Serial, Precision::Double, setup.parameters, setup.fluid);
+  for (int s = 0; s < 20; ++s)
+  {
+    serial->step();
+  }
+  Snapshot<double> reference;
+  serial->read(reference);
+  const Outcome one = runRanks<double>(1, setup, 20);
+  ASSERT_EQ(one.state.id, reference.id);
+  const std::size_t n = reference.id.size();
+  EXPECT_EQ(std::memcmp(one.state.position.data(), reference.position.data(), n * sizeof(Vec3d)), 0);
+  EXPECT_EQ(std::memcmp(one.state.velocity.data(), reference.velocity.data(), n * sizeof(Vec3d)), 0);
+  EXPECT_EQ(std::memcmp(one.state.density.data(), reference.density.data(), n * sizeof(double)), 0);
+  EXPECT_EQ(std::memcmp(one.state.lambda.data(), reference.lambda.data(), n * sizeof(double)), 0);
+}
+
+TEST(Distributed, TwoAndThreeRanksMatchOneRankAfterTenStepsInDouble)
+{
+  // Ranks sum a particle's neighbours in another order (its ghosts come after the owned particles
+  // of a cell), so results differ from one rank by rounding: ~1e-16 per sum, grown over ten calm
+  // steps to well under the issue's 1e-9, while a neighbour missed or counted twice moves a
+  // particle by ~1e-3 of its coordinate.
+  const DecomposedScene setup = damBreak(0.04);
+  const Outcome one = runRanks<double>(1, setup, 10);
+  for (int ranks : { 2, 3 })
+  {
+    const Outcome many = runRanks<double>(ranks, setup, 10, true);
+    EXPECT_LE(maxRelativePositionError(many.state, one.state), 1e-9) << ranks << " ranks";
+    EXPECT_GT(many.exchanges.back().ghosts, 0u) << "rank 0 had no ghosts";
+    for (const std::vector<std::uint64_t>& counts : many.counts)
+    {
+      for (std::uint64_t c : counts)
+      {
+        EXPECT_GT(c, 0u);
+      }
+    }
+  }
+}
+
+TEST(Distributed, FiveHundredStepsOfADamBreakAgreeWithOneRank)
+{
+  // The issue's figures for 500 steps: average density error, kinetic energy and surge front
+  // within 1% of one rank. The collapse is chaotic at the particle level and by step 500 the
+  // fluid is nearly at rest (average compression ~4e-5, where rounding alone moves it by
+  // several percent), so the error and the energy are compared as means over the run, which the
+  // flow decides, and the front, a maximum over particles, at the end.
+  const DecomposedScene setup = damBreak(0.04);
+  const int steps = 500;
+  const Outcome one = runRanks<double>(1, setup, steps, true);
+  auto meanOver = [](const std::vector<Statistics>& history, auto field) {
+    double sum = 0;
+    for (const Statistics& s : history)
+    {
+      sum += field(s);
+    }
+    return sum / static_cast<double>(history.size());
+  };
+  auto error = [](const Statistics& s) { return s.averageDensityError; };
+  auto kinetic = [](const Statistics& s) { return s.kineticEnergy; };
+  for (int ranks : { 2, 3 })
+  {
+    const Outcome many = runRanks<double>(ranks, setup, steps, true);
+    ASSERT_EQ(many.state.id.size(), one.state.id.size());
+    const double e1 = meanOver(one.history, error), eN = meanOver(many.history, error);
+    const double k1 = meanOver(one.history, kinetic), kN = meanOver(many.history, kinetic);
+    const double f1 = surgeFront(one.state), fN = surgeFront(many.state);
+    std::printf("%d ranks: density error %.4g%% vs %.4g%%, kinetic %.6g vs %.6g J, front %.5g vs "
+                "%.5g m, %d rebalances\n",
+      ranks, 100 * eN, 100 * e1, kN, k1, fN, f1, many.rebalances);
+    EXPECT_NEAR(eN, e1, 0.01 * e1) << ranks << " ranks";
+    EXPECT_NEAR(kN, k1, 0.01 * k1) << ranks << " ranks";
+    EXPECT_NEAR(fN, f1, 0.01 * f1) << ranks << " ranks";
+    // Load balance, restored whenever it drifts past 20%: with two ranks a cut can always bring it
+    // back under (a column holds a few percent of the particles). With three, whole columns of this
+    // small scene are too coarse for that, and the test only reports it.
+    double worst = 0;
+    for (const std::vector<std::uint64_t>& counts : many.counts)
+    {
+      const double mean = static_cast<double>(one.state.id.size()) / ranks;
+      const double largest = static_cast<double>(*std::max_element(counts.begin(), counts.end()));
+      worst = std::max(worst, largest / mean - 1.0);
+    }
+    std::printf("%d ranks: worst imbalance after a step %.1f%%\n", ranks, 100 * worst);
+    if (ranks == 2)
+    {
+      EXPECT_LE(worst, 0.2);
+      EXPECT_GT(many.rebalances, 0) << "the dam break moves the fluid: the cut must follow";
+    }
+  }
+}
