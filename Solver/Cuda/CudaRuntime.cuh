@@ -81,6 +81,7 @@ struct Launch<ConfinementStage>
   static constexpr bool neighborPass = true;
 };
 constexpr int kMaxBlock = 128;
+static_assert(kMaxBlock <= kMaskBlock, "forEachNeighbor's shared rows hold kMaskBlock threads");
 
 template <class Stage, class F>
 __global__ void __launch_bounds__(kMaxBlock) stageKernel(Stage, std::uint32_t n, F f)

@@ -27,6 +27,7 @@ namespace pbf
 
 constexpr int kNeighborRows = 9;  // (z, y) rows of 3 cells along x
 constexpr int kMaskWidth = 32;    // candidates per row covered by a mask
+constexpr int kMaskBlock = 128;   // most threads per block of a pass that walks the masks (GPU)
 
 template <class Real>
 struct MaskedNeighbors
@@ -122,6 +123,12 @@ PBF_HD PBF_INLINE void buildNeighborMasks(std::uint32_t i, const GridView<Real>&
 // ascending sorted index: forEachNeighbor's order without the skipped ones. One loop over all
 // rows, so a lane that runs out of candidates in a row moves on instead of idling while the rest
 // of its warp finishes that row, and the visit body is inlined once.
+//
+// On the GPU the rows are first staged in shared memory, all lanes together: the row ranges and
+// masks of particle i, the rows with nothing to visit left out. Fetching the next row inside the
+// loop then costs three shared loads. Fetched from the grid there instead (as on the host), the
+// fetch ran at different iterations in different lanes, 3 lanes active on average, and took 27% of
+// the density pass's instructions and 38% of the correction pass's (ncu, 1M particles).
 template <class Real, class Visit>
 PBF_HD PBF_INLINE void forEachNeighbor(
   const MaskedNeighbors<Real>& neighbors, std::uint32_t i, Visit&& visit)
@@ -131,6 +138,62 @@ PBF_HD PBF_INLINE void forEachNeighbor(
     forEachNeighbor(neighbors.cells, i, visit);
     return;
   }
+#if defined(__CUDA_ARCH__)
+  // Each thread uses its own column only: no barrier, no sharing between threads.
+  __shared__ std::uint32_t rowBegin[kNeighborRows][kMaskBlock];
+  __shared__ std::uint32_t rowMask[kNeighborRows][kMaskBlock];
+  __shared__ std::uint32_t rowEnd[kNeighborRows][kMaskBlock];
+  const unsigned t = threadIdx.x;
+  int rows = 0;
+  {
+    const detail::RowFrame frame = detail::rowFrame(neighbors.cells, i);
+#pragma unroll
+    for (int r = 0; r < kNeighborRows; ++r)
+    {
+      std::uint32_t begin = 0, end = 0;
+      if (detail::rowRange(neighbors.cells, frame, r, begin, end))
+      {
+        const std::uint32_t mask =
+          neighbors.masks[static_cast<std::size_t>(r) * neighbors.stride + i];
+        if (mask != 0 || end - begin > kMaskWidth)
+        {
+          rowBegin[rows][t] = begin;
+          rowMask[rows][t] = mask;
+          rowEnd[rows][t] = end;
+          ++rows;
+        }
+      }
+    }
+  }
+  int nextRow = 0;
+  std::uint32_t mask = 0, base = 0, tail = 0, tailEnd = 0;
+  for (;;)
+  {
+    if (mask == 0 && tail == tailEnd)
+    {
+      if (nextRow == rows)
+      {
+        break;
+      }
+      base = rowBegin[nextRow][t];
+      mask = rowMask[nextRow][t];
+      tailEnd = rowEnd[nextRow][t];
+      tail = tailEnd - base > kMaskWidth ? base + kMaskWidth : tailEnd;
+      ++nextRow;
+    }
+    std::uint32_t j;
+    if (mask != 0)
+    {
+      j = base + static_cast<std::uint32_t>(detail::lowestSetBit(mask));
+      mask &= mask - 1;
+    }
+    else
+    {
+      j = tail++;
+    }
+    visit(j);
+  }
+#else
   const detail::RowFrame frame = detail::rowFrame(neighbors.cells, i);
   int nextRow = 0;
   std::uint32_t mask = 0, base = 0, tail = 0, tailEnd = 0;
@@ -164,6 +227,7 @@ PBF_HD PBF_INLINE void forEachNeighbor(
     }
     visit(j);
   }
+#endif
 }
 
 // When masks are rebuilt. Every correction moves a particle by |delta p_i| at most, plus rounding;
