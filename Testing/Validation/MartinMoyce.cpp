@@ -1,5 +1,6 @@
 #include "MartinMoyce.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -32,16 +33,19 @@ MartinMoyceSetup martinMoyce(int particlesAcross, const Parameters& base)
   return setup;
 }
 
-double surgeFront(const Simulation& simulation)
+double surgeFront(const Simulation& simulation, double maxHeight)
 {
   Snapshot<double> snapshot;
   simulation.stepper().read(snapshot);
+  const Parameters& p = simulation.parameters();
   double front = -std::numeric_limits<double>::infinity();
   for (const Vec3d& x : snapshot.position)
   {
-    front = std::max(front, x.x);
+    if (x.y - p.domain.min.y <= maxHeight)
+    {
+      front = std::max(front, x.x);
+    }
   }
-  const Parameters& p = simulation.parameters();
   return (front - p.domain.min.x + 0.5 * p.particleSpacing) / kColumnWidth;
 }
 
@@ -73,10 +77,11 @@ std::vector<FrontSample> readExperiment(const std::string& csvPath)
   return samples;
 }
 
-FrontComparison compareFront(
-  const std::vector<FrontSample>& simulated, const std::vector<FrontSample>& experiment)
+FrontComparison compareFront(const std::vector<FrontSample>& simulated,
+  const std::vector<FrontSample>& experiment, double shift)
 {
   FrontComparison result;
+  result.shift = shift;
   double sum = 0;
   for (const FrontSample& e : experiment)
   {
@@ -86,7 +91,7 @@ FrontComparison compareFront(
       if (simulated[k].Z >= e.Z && simulated[k - 1].Z < e.Z)
       {
         const double f = (e.Z - simulated[k - 1].Z) / (simulated[k].Z - simulated[k - 1].Z);
-        t = simulated[k - 1].T + f * (simulated[k].T - simulated[k - 1].T);
+        t = simulated[k - 1].T + f * (simulated[k].T - simulated[k - 1].T) + shift;
         break;
       }
     }
@@ -99,13 +104,28 @@ FrontComparison compareFront(
   return result;
 }
 
-std::vector<FrontSample> runFront(Simulation& simulation, double timeScale, double zEnd, double tEnd)
+double fitTimeShift(const FrontComparison& unshifted, const std::vector<FrontSample>& experiment)
+{
+  double sum = 0;
+  for (std::size_t k = 0; k < experiment.size(); ++k)
+  {
+    sum += experiment[k].T - (unshifted.simulatedT[k] - unshifted.shift);
+  }
+  return sum / double(experiment.size()); // NaN when a point was never reached
+}
+
+std::vector<FrontSample> runFront(Simulation& simulation, double timeScale, double zEnd,
+  double tEnd, const std::function<void(const AdvanceReport&)>& afterStep)
 {
   std::vector<FrontSample> samples;
   samples.push_back({ 0.0, surgeFront(simulation) });
   while (samples.back().Z < zEnd && samples.back().T < tEnd)
   {
-    simulation.advance(1);
+    const AdvanceReport report = simulation.advance(1);
+    if (afterStep)
+    {
+      afterStep(report);
+    }
     samples.push_back({ simulation.time() * timeScale, surgeFront(simulation) });
     if (!simulation.stepper().statistics().finite)
     {

@@ -7,6 +7,8 @@
 #include "Scene.h"
 #include "Simulation.h"
 
+#include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -33,23 +35,35 @@ struct MartinMoyceSetup
 MartinMoyceSetup martinMoyce(int particlesAcross, const Parameters& base = Parameters());
 
 // Z of the farthest particle from the back wall: its centre plus s/2, the half spacing the
-// lattice leaves between the centres and the fluid's edge (so Z = 1 at T = 0).
-double surgeFront(const Simulation& simulation);
+// lattice leaves between the centres and the fluid's edge (so Z = 1 at T = 0). With maxHeight,
+// only particles whose centre is at most that high above the floor count (a check that the
+// front is the tongue along the floor, not a splash above it).
+double surgeFront(const Simulation& simulation,
+  double maxHeight = std::numeric_limits<double>::infinity());
 
 std::vector<FrontSample> readExperiment(const std::string& csvPath);
 
 // The simulated time at which the front first reaches each tabulated Z (linear interpolation
-// between samples), and the RMS of (T_sim - T_exp) / T_exp over the tabulated points. Points the
-// simulation never reached count as missing: returns infinity if any is missing.
+// between samples), plus `shift`, and the RMS of (T_sim + shift - T_exp) / T_exp over the
+// tabulated points. shift = 0 is the data's own convention (T = 0 at release); a shift moves the
+// simulation's time origin (the supplementary view: the experiment's column took a while to be
+// released). Points the simulation never reached count as missing: the RMS is then infinity.
 struct FrontComparison
 {
-  std::vector<double> simulatedT; // per experimental point, NaN when never reached
+  std::vector<double> simulatedT; // per experimental point, shift included; NaN when never reached
+  double shift = 0;
   double rmsRelativeError = 0;
 };
-FrontComparison compareFront(
-  const std::vector<FrontSample>& simulated, const std::vector<FrontSample>& experiment);
+FrontComparison compareFront(const std::vector<FrontSample>& simulated,
+  const std::vector<FrontSample>& experiment, double shift = 0);
 
-// Runs until the front passes the last tabulated Z (or T = tEnd), sampling every step.
-std::vector<FrontSample> runFront(Simulation& simulation, double timeScale, double zEnd, double tEnd);
+// The time-origin shift that fits the simulated arrival times to the experiment's in least
+// squares on T: mean(T_exp - T_sim) over the tabulated points (from an unshifted comparison).
+double fitTimeShift(const FrontComparison& unshifted, const std::vector<FrontSample>& experiment);
+
+// Runs until the front passes zEnd (or T = tEnd), sampling the front every step; afterStep, when
+// given, is called after every step with the step's report.
+std::vector<FrontSample> runFront(Simulation& simulation, double timeScale, double zEnd,
+  double tEnd, const std::function<void(const AdvanceReport&)>& afterStep = {});
 
 } // namespace pbf::validation
