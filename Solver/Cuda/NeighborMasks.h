@@ -139,12 +139,15 @@ PBF_HD PBF_INLINE void forEachNeighbor(
     return;
   }
 #if defined(__CUDA_ARCH__)
-  // Each thread uses its own column only: no barrier, no sharing between threads.
+  // Each thread uses its own column only: no barrier, no sharing between threads. Shared memory
+  // holds each row's begin and mask (72 bytes a thread: more cost the passes L1 hits); one
+  // register says which rows have something to visit (bits 0-8) and which of those have
+  // candidates past the 32nd (bits 16-24). Such a tail (rare: a row of 3 cells holds ~24
+  // particles) finds its end in the grid again when reached.
   __shared__ std::uint32_t rowBegin[kNeighborRows][kMaskBlock];
   __shared__ std::uint32_t rowMask[kNeighborRows][kMaskBlock];
-  __shared__ std::uint32_t rowEnd[kNeighborRows][kMaskBlock];
   const unsigned t = threadIdx.x;
-  int rows = 0;
+  std::uint32_t rows = 0;
   {
     const detail::RowFrame frame = detail::rowFrame(neighbors.cells, i);
 #pragma unroll
@@ -155,31 +158,34 @@ PBF_HD PBF_INLINE void forEachNeighbor(
       {
         const std::uint32_t mask =
           neighbors.masks[static_cast<std::size_t>(r) * neighbors.stride + i];
-        if (mask != 0 || end - begin > kMaskWidth)
-        {
-          rowBegin[rows][t] = begin;
-          rowMask[rows][t] = mask;
-          rowEnd[rows][t] = end;
-          ++rows;
-        }
+        rowBegin[r][t] = begin;
+        rowMask[r][t] = mask;
+        const bool tail = end - begin > kMaskWidth;
+        rows |= (mask != 0 || tail ? std::uint32_t(1) << r : 0u) |
+          (tail ? std::uint32_t(1) << (16 + r) : 0u);
       }
     }
   }
-  int nextRow = 0;
   std::uint32_t mask = 0, base = 0, tail = 0, tailEnd = 0;
   for (;;)
   {
     if (mask == 0 && tail == tailEnd)
     {
-      if (nextRow == rows)
+      if ((rows & 0xffffu) == 0)
       {
         break;
       }
-      base = rowBegin[nextRow][t];
-      mask = rowMask[nextRow][t];
-      tailEnd = rowEnd[nextRow][t];
-      tail = tailEnd - base > kMaskWidth ? base + kMaskWidth : tailEnd;
-      ++nextRow;
+      const int r = detail::lowestSetBit(rows);
+      rows &= rows - 1;
+      base = rowBegin[r][t];
+      mask = rowMask[r][t];
+      tail = tailEnd = 0;
+      if (rows & (std::uint32_t(1) << (16 + r)))
+      {
+        std::uint32_t begin = 0;
+        detail::rowRange(neighbors.cells, detail::rowFrame(neighbors.cells, i), r, begin, tailEnd);
+        tail = begin + kMaskWidth;
+      }
     }
     std::uint32_t j;
     if (mask != 0)
