@@ -152,13 +152,19 @@ TEST(MartinMoyce, WithoutTensileTermTheFrontIsConvergedInTheTimeStep)
 
 TEST(Incompressibility, MoreIterationsLeaveLessCompressionInAHydrostaticTank)
 {
+  // 1 iteration is not run: it blows up within 15 steps (the report says so).
   TankFigures f[3];
   const int counts[3] = { 2, 4, 8 };
+  // Measured 0.425 %, 0.205 %, 0.069 %. The average is taken over 6 samples of a fluid that
+  // never quite stops moving: rounding differences move it by a few %; 1.45 x the measured
+  // value catches a projection that got half as effective.
+  const double bounds[3] = { 0.0060, 0.0030, 0.0010 };
   for (int k = 0; k < 3; ++k)
   {
     f[k] = settledTank(withIterations(counts[k]));
     std::printf("tank, %d iterations: average %.4f%%, max %.3f%%\n", counts[k],
       100 * f[k].average, 100 * f[k].max);
+    EXPECT_LT(f[k].average, bounds[k]) << counts[k] << " iterations";
   }
   // Each doubling at least 1.5 x less average compression (measured: see the printout and the
   // report); a regression of the projection shows as a smaller ratio long before a reversal.
@@ -182,11 +188,15 @@ TEST(Incompressibility, MoreIterationsLeaveLessCompressionInTheMovingDamBreak)
 {
   DamBreakRun r[3];
   const int counts[3] = { 2, 4, 8 };
+  // Measured 0.313 %, 0.115 %, 0.031 % (mean over ~30 samples of the run); margins as in the
+  // tank.
+  const double bounds[3] = { 0.0045, 0.0017, 0.00045 };
   for (int k = 0; k < 3; ++k)
   {
     r[k] = damBreak(10, withIterations(counts[k]));
     std::printf("dam break 10 across, %d iterations: average %.4f%%, max %.3f%%\n", counts[k],
       100 * r[k].averageError, 100 * r[k].maxError);
+    EXPECT_LT(r[k].averageError, bounds[k]) << counts[k] << " iterations";
   }
   EXPECT_LT(r[1].averageError * 1.5, r[0].averageError);
   EXPECT_LT(r[2].averageError * 1.5, r[1].averageError);

@@ -7,7 +7,8 @@
 
 Groups: mm (Martin & Moyce at 10/20/40/80 across), mmdt (time-step and s_corr check at 20 across),
 mmit (dam-break density error per iteration count at 20 across), tank (hydrostatic tank),
-stability (10,000 steps of every shipped scene, and the dam break with 100 x the confinement).
+stability (10,000 steps of the dam break with 100 x the confinement, and of every shipped scene).
+A run's name (e.g. mm_80) selects that run alone.
 Tools come from --build (default build/): Testing/Validation/pbf_martin_moyce, pbf_validation_run.
 Needs Debian's python3-numpy and python3-matplotlib. The 80-across run takes about half an hour
 on 2 cores; everything else together about as long.
@@ -56,6 +57,8 @@ def runs(build):
     dam("mmdt", "mm_20_dt_half", 20, ["--dt-factor", "0.5"])
     dam("mmdt", "mm_20_k0", 20, ["--scorr-k", "0"])
     dam("mmdt", "mm_20_k0_dt_half", 20, ["--scorr-k", "0", "--dt-factor", "0.5"])
+    dam("mmdt", "mm_10_k0", 10, ["--scorr-k", "0"])
+    dam("mmdt", "mm_40_k0", 40, ["--scorr-k", "0"])
     for it in [1, 2, 8]:
         dam("mmit", "mm_20_it%d" % it, 20, ["--iterations", str(it)])
     dam("mmit", "mm_20_adaptive", 20, ADAPTIVE)
@@ -69,6 +72,7 @@ def runs(build):
     out.append(("stability", "stability_dam_break_vorticity1",
                 [vr, "--scene", "dam_break", "--spacing", "0.05", "--vorticity", "1.0", "--steps",
                  "10000", "--every", "100", "--backend", "openmp"]))
+    # The shipped scenes at the spacing of Testing/Solver's SoakLong (0.05 m).
     for scene in SHIPPED:
         out.append(("stability", "stability_" + scene,
                     [vr, "--scene", scene, "--spacing", "0.05", "--steps", "10000", "--every",
@@ -79,7 +83,7 @@ def runs(build):
 def run(args):
     os.makedirs(RESULTS, exist_ok=True)
     for group, name, argv in runs(os.path.abspath(args.build)):
-        if args.groups and group not in args.groups:
+        if args.groups and group not in args.groups and name not in args.groups:
             continue
         txt = os.path.join(RESULTS, name + ".txt")
         if os.path.exists(txt) and not args.force:
@@ -105,7 +109,7 @@ if __name__ == "__main__":
     parser.add_argument("--build", default=os.path.join(ROOT, "build"))
     parser.add_argument("--force", action="store_true")
     parser.add_argument("command", choices=["run", "plot"])
-    parser.add_argument("groups", nargs="*")
+    parser.add_argument("groups", nargs="*", help="groups or single runs (default: all)")
     args = parser.parse_args()
     if args.command == "run":
         run(args)
