@@ -66,12 +66,13 @@ bench() {
     record "bench $name: FAILED or cut (exit $?)"
 }
 
-# PBF_GPU_QUICK=1: a verification run after a change (tests, sanitizers, soak, 1M timings); the
-# full sweeps and ncu are for when the speed itself is the question.
+# PBF_GPU_QUICK=1: a verification run after a change (tests, sanitizers, soak, 1M and 10M
+# timings); the full sweeps and ncu are for when the speed itself is the question.
 quick=${PBF_GPU_QUICK:-0}
 if ((quick)); then
   bench cuda_single 60 --backend cuda --sweep 64000,1000000 --warmup 20 --steps 100
   bench cuda_double 40 --backend cuda --precision double --particles 1000000 --warmup 20 --steps 100
+  bench cuda_10M 40 --backend cuda --particles 10000000 --warmup 10 --steps 50
 else
 bench cuda_single 120 --backend cuda --sweep default --warmup 20 --steps 100
 bench cuda_10M 40 --backend cuda --particles 10000000 --warmup 10 --steps 50

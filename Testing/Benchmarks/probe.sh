@@ -1,0 +1,106 @@
+#!/usr/bin/env bash
+# One speed experiment on the GPU machine, in one call of the device tool (carry .deps):
+#   bash Testing/Benchmarks/probe.sh
+# builds the tree (A), times 1M particles in single and double precision, runs the fast GPU tests
+# and profiles the density and correction passes with ncu, source-level counters included
+# ($OUT/probe.tgz: .ncu-rep, details, per-SASS-instruction CSV). Options, by environment:
+#   PBF_PROBE_IEEE=1        also build B: PBF_PROBE_B_FLAGS (CMake flags; default
+#                           -DPBF_CUDA_IEEE_GRADIENT=ON) and/or PBF_PROBE_B_MASKS (a file that
+#                           replaces Solver/Cuda/NeighborMasks.h), timed in the same session
+#   PBF_PROBE_SKINS="..."   mask skins for A (default 0.02); PBF_PROBE_A_ARGS: one more A run
+#   PBF_PROBE_10M=1         10M particles too; PBF_PROBE_REPEAT=1: the 1M runs again
+#   PBF_PROBE_TESTS=filter  gtest filter of pbf_cuda_tests, or none; PBF_PROBE_NCU=0: no ncu,
+#   PBF_PROBE_NCU_ALL=1     the vorticity and confinement passes profiled too
+set -uo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+out=${OUT:-$root/output/probe}
+mkdir -p "$out"
+exec > >(tee "$out/probe.log") 2>&1
+t0=$SECONDS
+configure() { # DIR EXTRA...
+  local dir=$1
+  shift
+  cmake -S "$root" -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DPBF_SOLVER_ONLY=ON \
+    -DCMAKE_CUDA_ARCHITECTURES=90 -DPBF_JSON_INCLUDE_DIR="$root/.deps/json" \
+    -DPBF_GTEST_SOURCE_DIR="$root/.deps/googletest" "$@" >"$dir.configure.log" 2>&1
+}
+A=/tmp/probe-a
+configure $A && cmake --build $A -j 16 --target pbf_bench pbf_cuda_tests >$A.build.log 2>&1 &
+pa=$!
+if [[ ${PBF_PROBE_IEEE:-0} == 1 ]]; then
+  B=/tmp/probe-b
+  srcB=$root
+  if [[ -n ${PBF_PROBE_B_MASKS:-} ]]; then # B: the tree with another NeighborMasks.h
+    srcB=/tmp/probe-src-b
+    rm -rf $srcB && cp -r "$root" $srcB && cp "$root/$PBF_PROBE_B_MASKS" $srcB/Solver/Cuda/NeighborMasks.h
+  fi
+  cmake -S "$srcB" -B "$B" -G Ninja -DCMAKE_BUILD_TYPE=Release -DPBF_SOLVER_ONLY=ON \
+    -DCMAKE_CUDA_ARCHITECTURES=90 -DPBF_JSON_INCLUDE_DIR="$root/.deps/json" \
+    -DPBF_GTEST_SOURCE_DIR="$root/.deps/googletest" ${PBF_PROBE_B_FLAGS:-} >"$B.configure.log" 2>&1 &&
+    cmake --build $B -j 16 --target pbf_bench >$B.build.log 2>&1 &
+  pb=$!
+  wait $pb || { tail -30 $B.build.log; }
+fi
+wait $pa || { tail -40 $A.build.log; exit 1; }
+grep -i "spill" $A.build.log | sed 's/_ZN3pbf4cuda[^ ]*\(Stage\)[^ ]*/<\1>/' | head
+echo "[$((SECONDS - t0)) s] built"
+bench() { # BUILD LABEL ARGS...
+  local b=$1 label=$2
+  shift 2
+  echo "== $label: $*"
+  timeout 60 "$b/Solver/Tools/pbf_bench" --backend cuda "$@" 2>&1 | tail -n 2
+}
+for skin in ${PBF_PROBE_SKINS:-0.02}; do
+  bench $A "A f32 skin $skin" --particles 1000000 --warmup 20 --steps 100 --skin "$skin"
+done
+bench $A "A f64" --precision double --particles 1000000 --warmup 20 --steps 100
+[[ -n ${B:-} ]] && bench $B "B f32" --particles 1000000 --warmup 20 --steps 100
+[[ -n ${B:-} && ${PBF_PROBE_B_F64:-1} == 1 ]] && bench $B "B f64" --precision double --particles 1000000 --warmup 20 --steps 100
+[[ -n ${PBF_PROBE_A_ARGS:-} ]] && bench $A "A f32 $PBF_PROBE_A_ARGS" --particles 1000000 --warmup 20 --steps 100 $PBF_PROBE_A_ARGS
+[[ ${PBF_PROBE_10M:-0} == 1 ]] && bench $A "A f32 10M" --particles 10000000 --warmup 10 --steps 50
+[[ ${PBF_PROBE_10M:-0} == 1 && -n ${B:-} ]] && bench $B "B f32 10M" --particles 10000000 --warmup 10 --steps 50
+[[ ${PBF_PROBE_REPEAT:-0} == 1 ]] && bench $A "A f32 again" --particles 1000000 --warmup 20 --steps 100
+[[ ${PBF_PROBE_REPEAT:-0} == 1 && -n ${B:-} ]] && bench $B "B f32 again" --particles 1000000 --warmup 20 --steps 100
+echo "[$((SECONDS - t0)) s] benched"
+[[ ${PBF_PROBE_TESTS:-} != none ]] && timeout 150 $A/Testing/Cuda/pbf_cuda_tests --gtest_filter="${PBF_PROBE_TESTS:-*OneStep*:*TwoRuns*:*NeighborMasks*:*Statistics*}" 2>&1 |
+  grep -E "^\[ +(OK|FAILED|PASSED|SKIPPED) |Failure|Expected|Which is|actual|error" | head -40
+echo "[$((SECONDS - t0)) s] tested"
+if [[ ${PBF_PROBE_NCU:-1} == 1 ]]; then
+  prof() { # NAME REGEX SKIP
+    timeout 90 ncu --clock-control none --kernel-name-base demangled -k "regex:$2" --launch-skip "$3" \
+      --launch-count 1 --section SpeedOfLight --section SchedulerStats --section WarpStateStats \
+      --section Occupancy --section SourceCounters --section InstructionStats \
+      --metrics smsp__thread_inst_executed_per_inst_executed.ratio,smsp__inst_executed.sum \
+      -o "/tmp/$1" -f $A/Solver/Tools/pbf_bench --backend cuda --particles 1000000 --warmup 60 \
+      --steps 1 >/tmp/$1.ncu.log 2>&1
+    ncu -i "/tmp/$1.ncu-rep" --page details >"/tmp/$1.details.txt" 2>&1
+    ncu -i "/tmp/$1.ncu-rep" --page source --csv --print-source sass >"/tmp/$1.sass.csv" 2>&1
+    grep -E "Duration|Issue Slots Busy|Executed Ipc A|Registers Per|Achieved Occupancy|No Eligible|thread_inst_executed_per|inst_executed.sum|Branch Efficiency|Avg. Divergent" "/tmp/$1.details.txt" | head -14
+  }
+  echo "== ncu density (iteration 1)"; prof density DensityStage 242
+  echo "== ncu correction (iteration 1)"; prof correction CorrectionStage 241
+  if [[ ${PBF_PROBE_NCU_ALL:-0} == 1 ]]; then
+    echo "== ncu vorticity"; prof vorticity VorticityStage 60
+    echo "== ncu confinement"; prof confinement ConfinementStage 60
+  fi
+  timeout 60 ncu --clock-control none --metrics gpu__time_duration.sum --csv --page raw \
+    --launch-skip $((13 + 60 * 22)) --launch-count 22 \
+    $A/Solver/Tools/pbf_bench --backend cuda --particles 1000000 --warmup 60 --steps 1 >/tmp/times.csv 2>&1
+  python3 - /tmp/times.csv <<'PY' || true
+import csv, sys, re
+rows = [r for r in csv.reader(open(sys.argv[1])) if len(r) > 5]
+head = rows[0]
+ki, ti = head.index("Kernel Name"), head.index("gpu__time_duration.sum")
+total = 0
+for r in rows[2:]:
+    name = r[ki]
+    m = re.search(r"(\w+Stage)", name)
+    t = float(r[ti]) / 1000.0
+    total += t
+    print("%9.1f us  %s" % (t, m.group(1) if m else name[:60]))
+print("%9.1f us  total" % total)
+PY
+fi
+(cd /tmp && tar czf "$out/probe.tgz" ./*.ncu-rep ./*.details.txt ./*.sass.csv ./*.ncu.log ./times.csv \
+  ./probe-a.build.log 2>/dev/null)
+echo "[$((SECONDS - t0)) s] done"
