@@ -1,5 +1,6 @@
 #include "vtkPBFSimulation.h"
 #include "vtkPBFPageLocked.h"
+#include "vtkPBFRankCommunicator.h"
 
 #include "vtkCellArray.h"
 #include "vtkDataArray.h"
@@ -9,6 +10,7 @@
 #include "vtkIdTypeArray.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
+#include "vtkMultiProcessController.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkOutputWindow.h"
@@ -65,6 +67,7 @@ struct Configuration
   pbf::Precision Precision = pbf::Precision::Single;
   bool HasInput = false;
   vtkMTimeType InputMTime = 0;
+  int Ranks = 1; // > 1: this rank's share of a domain-decomposed run over the controller's ranks
 };
 
 bool SameBox(const pbf::Box& a, const pbf::Box& b)
@@ -92,7 +95,8 @@ bool operator==(const Configuration& a, const Configuration& b)
 {
   return a.SceneKey == b.SceneKey && SameParameters(a.Parameters, b.Parameters) &&
     a.FrameInterval == b.FrameInterval && a.Substeps == b.Substeps && a.Backend == b.Backend &&
-    a.Precision == b.Precision && a.HasInput == b.HasInput && a.InputMTime == b.InputMTime;
+    a.Precision == b.Precision && a.HasInput == b.HasInput && a.InputMTime == b.InputMTime &&
+    a.Ranks == b.Ranks;
 }
 
 bool operator!=(const Configuration& a, const Configuration& b)
@@ -392,6 +396,7 @@ public:
   std::map<int, FrameRow> Rows;
   bool TableStale = true;
   vtkSmartPointer<vtkTable> Table = vtkSmartPointer<vtkTable>::New();
+  vtkSmartPointer<vtkTable> EmptyTable = vtkSmartPointer<vtkTable>::New();
 
   // What the last successful request produced (a failed or aborted request hands it out again)
   // and, when it is a frame of Key, which one (-1 otherwise).
@@ -407,6 +412,10 @@ public:
   double CheckpointMilliseconds = 0;
   double DeliveryMilliseconds = 0;
   vtkIdType RequestSteps = 0;
+
+  // The ranks of a decomposed run (Key.Ranks > 1), over ParaView's global controller.
+  std::unique_ptr<vtkPBFRankCommunicator> Ranks;
+  bool DecomposedReported = false;
 
   // CUDA is probed once: a device does not come and go while ParaView runs.
   bool CudaProbed = false;
@@ -561,6 +570,11 @@ public:
 
   vtkTable* DiagnosticsTable()
   {
+    // A decomposed run's rows are reduced over the ranks and the same on each: rank 0 shows them.
+    if (this->HasKey && this->Key.Ranks > 1 && this->Ranks && this->Ranks->rank() != 0)
+    {
+      return this->EmptyTable;
+    }
     if (!this->TableStale)
     {
       return this->Table;
@@ -645,6 +659,7 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->CheckpointMemoryMB = 1024.0;
   this->PageLockedOutput = true;
   this->Backend = BACKEND_AUTO;
+  this->DecomposeAcrossRanks = true;
   this->Precision = PRECISION_SINGLE;
 
   // Port 0 is optional: without an input the algorithm is a source.
@@ -747,8 +762,8 @@ int vtkPBFSimulation::RequestInformation(
     outInfo->Set(
       vtkStreamingDemandDrivenPipeline::TIME_STEPS(), times.data(), static_cast<int>(times.size()));
     outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_RANGE(), range, 2);
-    // One piece only until the fluid is partitioned: the executive then runs a source on piece 0.
-    outInfo->Remove(vtkAlgorithm::CAN_HANDLE_PIECE_REQUEST());
+    // Each rank of a parallel run owns a slab of the fluid (piece = rank); see RequestData.
+    outInfo->Set(vtkAlgorithm::CAN_HANDLE_PIECE_REQUEST(), 1);
   }
   return 1;
 }
@@ -816,7 +831,17 @@ int vtkPBFSimulation::RequestData(
   const int piece = requestInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
     ? requestInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
     : 0;
-  if (piece > 0)
+  const int pieces =
+    requestInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
+    ? requestInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
+    : 1;
+  // One piece per rank of ParaView's parallel engine: a domain-decomposed run, in which every
+  // rank takes part in every request. Any other split (streaming pieces in one process) gets the
+  // whole fluid on piece 0.
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  const bool decomposed = this->DecomposeAcrossRanks && pieces > 1 && controller &&
+    controller->GetNumberOfProcesses() == pieces && controller->GetLocalProcessId() == piece;
+  if (piece > 0 && !decomposed)
   {
     // Piece 0 holds the whole fluid; see the class documentation.
     output->Initialize();
@@ -915,6 +940,33 @@ int vtkPBFSimulation::RequestData(
         break;
     }
 
+    if (decomposed)
+    {
+      // Every rank gets here for the same request and makes the same choices.
+      if (this->Backend == BACKEND_CUDA)
+      {
+        throw std::runtime_error("Backend = CUDA: a run decomposed over " +
+          std::to_string(pieces) + " ranks has CPU backends only so far; choose Auto or CPU " +
+          "(OpenMP), or turn DecomposeAcrossRanks off to run on one rank");
+      }
+      if (configuration.Backend == pbf::Backend::CUDA)
+      {
+        configuration.Backend = pbf::Backend::OpenMP;
+        if (!internals.DecomposedReported && piece == 0)
+        {
+          internals.DecomposedReported = true;
+          std::ostringstream text;
+          text << this->GetClassName() << " (" << this << "): Backend Auto over " << pieces
+               << " ranks: decomposed runs use the CPU (OpenMP) for now.\n";
+          vtkOutputWindowDisplayText(text.str().c_str());
+        }
+      }
+      configuration.Ranks = pieces;
+      if (!internals.Ranks)
+      {
+        internals.Ranks = std::make_unique<vtkPBFRankCommunicator>(controller);
+      }
+    }
     configuration.HasInput = input != nullptr;
     configuration.InputMTime = input ? input->GetMTime() : 0;
 
@@ -952,15 +1004,18 @@ int vtkPBFSimulation::RequestData(
       const pbf::Scene scene =
         sceneFile.empty() ? pbf::presetScene(this->GetPresetName()) : pbf::loadSceneFile(sceneFile);
       const Configuration& c = configuration;
+      // Decomposed, every rank builds the whole fluid (from the whole input, which
+      // RequestUpdateExtent asks for on every rank) and keeps its slab.
+      pbf::distributed::Communicator* ranks = c.Ranks > 1 ? internals.Ranks.get() : nullptr;
       if (input)
       {
         internals.Live = std::make_unique<pbf::Simulation>(
-          scene, c.Parameters, c.Backend, c.Precision, BatchFromInput(input));
+          scene, c.Parameters, c.Backend, c.Precision, BatchFromInput(input), ranks);
       }
       else
       {
         internals.Live =
-          std::make_unique<pbf::Simulation>(scene, c.Parameters, c.Backend, c.Precision);
+          std::make_unique<pbf::Simulation>(scene, c.Parameters, c.Backend, c.Precision, ranks);
       }
       internals.RecordFrame(0);
       internals.TakeCheckpoint(0, budget);
@@ -1094,6 +1149,20 @@ int vtkPBFSimulation::RequestData(
           FrameFieldData(simulation, frame, this->FrameInterval, substeps);
         AddInteger(fieldData, "RequestSteps", internals.RequestSteps);
         AddText(fieldData, "ResumedFrom", resumedFrom);
+        if (configuration.Ranks > 1)
+        {
+          // Collective, like every step: all ranks deliver the same frame.
+          AddInteger(fieldData, "Rank", piece);
+          AddInteger(fieldData, "Ranks", configuration.Ranks);
+          vtkNew<vtkIdTypeArray> perRank;
+          perRank->SetName("ParticlesPerRank");
+          for (const std::vector<double>& r :
+            pbf::distributed::allGather(*internals.Ranks, { double(simulation.stepper().size()) }))
+          {
+            perRank->InsertNextValue(static_cast<vtkIdType>(r[0]));
+          }
+          fieldData->AddArray(perRank);
+        }
         if (!internals.DeviceFaultText.empty())
         {
           AddText(fieldData, "DeviceFault", internals.DeviceFaultText);
@@ -1176,5 +1245,6 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "CheckpointMemoryMB: " << this->CheckpointMemoryMB << "\n";
   os << indent << "PageLockedOutput: " << (this->PageLockedOutput ? "On" : "Off") << "\n";
   os << indent << "Backend: " << this->Backend << "\n";
+  os << indent << "DecomposeAcrossRanks: " << (this->DecomposeAcrossRanks ? "On" : "Off") << "\n";
   os << indent << "Precision: " << this->Precision << "\n";
 }

@@ -47,9 +47,14 @@
  * [J], Particles and Backend. Frame 0 took no step: its SolverIterations and MillisecondsPerStep
  * are NaN.
  *
- * Parallel runs: the algorithm does not partition the fluid yet. Piece 0 (rank 0) simulates all
- * of it and other pieces output an empty vtkPolyData; as a filter it asks its input for the whole
- * data set in one piece.
+ * Parallel runs (mpiexec pvbatch, pvserver with N ranks): with DecomposeAcrossRanks on (the
+ * default) and one piece per rank of the global vtkMultiProcessController, each rank simulates a
+ * slab of the fluid along x plus ghost particles, exchanged every solver iteration
+ * (Solver/Distributed), on the CPU backends; it outputs its own particles, whose ids stay
+ * globally unique, and field data Rank, Ranks and ParticlesPerRank. Diagnostics are reduced over
+ * the ranks and rank 0 outputs the table. Every rank must take part in every request, as
+ * ParaView's parallel engine does. With it off, piece 0 simulates the whole fluid and other pieces
+ * are empty. As a filter it asks its input for the whole data set on every rank.
  *
  * Errors (a bad scene or parameter, an empty input, a NaN coordinate, an unavailable backend) are
  * reported with vtkErrorMacro naming the field and its value; the request then fails and the
@@ -225,6 +230,15 @@ public:
 
   ///@{
   /**
+   * Split the fluid over the ranks of a parallel run (see the class documentation); default on.
+   */
+  vtkSetMacro(DecomposeAcrossRanks, bool);
+  vtkGetMacro(DecomposeAcrossRanks, bool);
+  vtkBooleanMacro(DecomposeAcrossRanks, bool);
+  ///@}
+
+  ///@{
+  /**
    * With the CUDA backend, put the output arrays in page-locked host memory, which the GPU copies
    * into at the full bus speed (ordinary memory is staged by the driver); default on. Memory
    * released by the arrays is pooled for the next frames, and past 1 GiB in use the arrays fall
@@ -292,6 +306,7 @@ protected:
   int CheckpointInterval;
   double CheckpointMemoryMB;
   bool PageLockedOutput;
+  bool DecomposeAcrossRanks;
 
   int Backend;
   int Precision;

@@ -1,10 +1,13 @@
 #include "Simulation.h"
 
+#include "Distributed/SubdomainStepper.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 namespace pbf
 {
@@ -35,15 +38,15 @@ double extentAlong(const Box& box, const Vec3d& u)
 
 } // namespace
 
-Simulation::Simulation(
-  const Scene& scene, const Parameters& parameters, Backend backend, Precision precision)
+Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
+  Precision precision, distributed::Communicator* communicator)
   : Simulation(scene, parameters, backend, precision,
-      fillScene(scene, withSceneDomain(parameters, scene)))
+      fillScene(scene, withSceneDomain(parameters, scene)), communicator)
 {
 }
 
 Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
-  Precision precision, const ParticleBatch& initial)
+  Precision precision, const ParticleBatch& initial, distributed::Communicator* communicator)
   : scene_(scene)
   , parameters_(withSceneDomain(parameters, scene))
   , layersEmitted_(scene.emitters.size(), 0)
@@ -60,7 +63,29 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
     throw InvalidInput("particle count = 0: the fluid is empty");
   }
   checkEmitters(initial.position.size());
-  stepper_ = makeStepper(backend, precision, parameters_, initial);
+  if (communicator)
+  {
+    if (backend == Backend::CUDA)
+    {
+      throw std::runtime_error("Backend = CUDA: a domain-decomposed run has CPU backends only so "
+                               "far; choose CPU (OpenMP) or Serial");
+    }
+    const bool parallel = backend == Backend::OpenMP;
+    if (precision == Precision::Single)
+    {
+      stepper_ = std::make_unique<distributed::SubdomainStepper<float>>(
+        *communicator, parallel, parameters_, initial);
+    }
+    else
+    {
+      stepper_ = std::make_unique<distributed::SubdomainStepper<double>>(
+        *communicator, parallel, parameters_, initial);
+    }
+  }
+  else
+  {
+    stepper_ = makeStepper(backend, precision, parameters_, initial);
+  }
   nextId_ = static_cast<std::int64_t>(initial.position.size());
 
   // The divergence limits, from the initial state and the scene.

@@ -15,6 +15,10 @@
 
 namespace pbf
 {
+namespace distributed
+{
+class Communicator;
+}
 
 // The simulation blew up: the divergence check found, after step(), a particle that is not finite,
 // has left the domain, or moves or is compressed beyond DivergenceLimits. what() says what, when
@@ -84,12 +88,16 @@ class Simulation
 public:
   // Throws InvalidInput for a bad scene or parameters, std::runtime_error when the backend is
   // unavailable. parameters.domain is replaced by the scene's.
+  // With a communicator the run is one rank's share of a domain-decomposed run
+  // (Distributed/SubdomainStepper.h): every rank constructs and advances its Simulation in step,
+  // and the stepper holds this rank's particles. CPU backends only, for now.
   Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
-    Precision precision);
+    Precision precision, distributed::Communicator* communicator = nullptr);
   // The fluid starts from given particles (the VTK filter's input points) instead of the scene's
   // regions; the scene still gives the domain and emitters.
   Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
-    Precision precision, const ParticleBatch& initial);
+    Precision precision, const ParticleBatch& initial,
+    distributed::Communicator* communicator = nullptr);
 
   // Throws SimulationDiverged from the divergence check; InvalidInput when emitted particles no
   // longer fit in the device's memory (the stepper keeps the particles it had); DeviceFault for a

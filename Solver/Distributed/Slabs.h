@@ -52,12 +52,17 @@ struct Slabs
     int column = 0;
     for (int r = 1; r < ranks; ++r)
     {
-      // The first column at which the running count reaches r/ranks of the total, leaving at
-      // least one column for each rank still to come.
+      // Cut where the running count comes nearest to r/ranks of the total, leaving at least one
+      // column to this rank and to each rank still to come.
       const double target = static_cast<double>(total) * r / ranks;
-      while (column < columns - (ranks - r) &&
-        (column < s.first.back() + 1 || static_cast<double>(cumulative) < target))
+      while (column < columns - (ranks - r))
       {
+        const double before = static_cast<double>(cumulative);
+        const double after = before + static_cast<double>(perColumn[static_cast<std::size_t>(column)]);
+        if (column >= s.first.back() + 1 && (before >= target || target - before <= after - target))
+        {
+          break;
+        }
         cumulative += perColumn[static_cast<std::size_t>(column)];
         ++column;
       }

@@ -10,6 +10,10 @@
 #include <limits>
 #include <type_traits>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace pbf::distributed
 {
 
@@ -44,11 +48,10 @@ Vec3<Real> takeVec(const Bytes& b, std::size_t& offset)
 
 template <class Real>
 SubdomainStepper<Real>::SubdomainStepper(Communicator& communicator, bool parallel,
-  const Parameters& parameters, const ParticleBatch& everything, double rebalanceThreshold)
+  const Parameters& parameters, const ParticleBatch& everything)
   : communicator_(communicator)
   , parallel_(parallel)
   , parameters_(parameters)
-  , rebalanceThreshold_(rebalanceThreshold)
 {
   parameters_.validate();
   checkBatch(parameters_, everything);
@@ -58,25 +61,62 @@ SubdomainStepper<Real>::SubdomainStepper(Communicator& communicator, bool parall
   const auto ranks = static_cast<std::size_t>(communicator_.size());
   sendIndex_.resize(ranks);
   ghostIndex_.resize(ranks);
+  slabs_ = Slabs::balanced(std::vector<std::uint64_t>(static_cast<std::size_t>(geometry_.nx), 1),
+    communicator_.size());
+  append(everything);
+}
 
-  // Every rank sees the whole fluid here, so the first cut needs no communication.
-  std::vector<std::uint64_t> perColumn(static_cast<std::size_t>(geometry_.nx), 0);
-  for (const Vec3d& q : everything.position)
+template <class Real>
+Precision SubdomainStepper<Real>::precision() const
+{
+  return sizeof(Real) == sizeof(float) ? Precision::Single : Precision::Double;
+}
+
+template <class Real>
+std::string SubdomainStepper<Real>::description() const
+{
+  std::string threads = "Serial";
+#ifdef _OPENMP
+  if (parallel_)
   {
-    ++perColumn[static_cast<std::size_t>(column(Vec3<Real>::from(q)))];
+    threads = "OpenMP, " + std::to_string(omp_get_max_threads()) + " threads";
   }
-  slabs_ = Slabs::balanced(perColumn, communicator_.size());
-  for (std::size_t i = 0; i < everything.position.size(); ++i)
+#endif
+  return threads + ", rank " + std::to_string(communicator_.rank()) + " of " +
+    std::to_string(communicator_.size()) + " (grid columns " +
+    std::to_string(slabs_.first[static_cast<std::size_t>(communicator_.rank())]) + "-" +
+    std::to_string(slabs_.first[static_cast<std::size_t>(communicator_.rank()) + 1] - 1) + " of " +
+    std::to_string(slabs_.columns()) + " along x)";
+}
+
+template <class Real>
+void SubdomainStepper<Real>::append(const ParticleBatch& batch)
+{
+  checkBatch(parameters_, batch);
+  // Every rank holds the whole batch: each keeps the particles in its slab, so each particle is
+  // kept once, and the new cut then balances the counts.
+  for (std::size_t i = 0; i < batch.position.size(); ++i)
   {
-    const Vec3<Real> q = Vec3<Real>::from(everything.position[i]);
+    const Vec3<Real> q = Vec3<Real>::from(batch.position[i]);
     if (slabs_.owner(column(q)) == communicator_.rank())
     {
       x_.push_back(q);
-      v_.push_back(Vec3<Real>::from(everything.velocity[i]));
-      id_.push_back(everything.id[i]);
+      v_.push_back(Vec3<Real>::from(batch.velocity[i]));
+      id_.push_back(batch.id[i]);
     }
   }
-  // Density and lambda at rest, as CpuStepper reports them before the first step.
+  density_.resize(x_.size());
+  lambda_.resize(x_.size());
+  p_ = x_;
+  cut();
+  evaluateAtRest();
+}
+
+template <class Real>
+void SubdomainStepper<Real>::evaluateAtRest()
+{
+  // As CpuStepper reports them before a step: no ghosts are refreshed after the density pass,
+  // since nothing reads theirs.
   p_ = x_;
   receiveGhosts();
   sortByCell();
@@ -367,6 +407,7 @@ void SubdomainStepper<Real>::step()
 {
   exchange_ = ExchangeReport{};
   report_ = StepReport{};
+  cut();
   {
     owned_.resize(x_.size());
     for (std::size_t i = 0; i < owned_.size(); ++i)
@@ -415,11 +456,10 @@ void SubdomainStepper<Real>::step()
   forOwned([&](std::uint32_t i) { vorticityConfinement(i, f); });
   forOwned([&](std::uint32_t i) { commitPosition(i, f, x_.data()); });
   dropGhosts();
-  rebalanceIfNeeded();
 }
 
 template <class Real>
-std::vector<std::uint64_t> SubdomainStepper<Real>::particlesPerRank()
+std::vector<std::uint64_t> SubdomainStepper<Real>::particlesPerRank() const
 {
   std::vector<std::uint64_t> counts;
   for (const std::vector<double>& r : allGather(communicator_, { double(x_.size()) }))
@@ -430,20 +470,9 @@ std::vector<std::uint64_t> SubdomainStepper<Real>::particlesPerRank()
 }
 
 template <class Real>
-void SubdomainStepper<Real>::rebalanceIfNeeded()
+void SubdomainStepper<Real>::cut()
 {
-  const std::vector<std::uint64_t> counts = particlesPerRank();
-  std::uint64_t total = 0, largest = 0;
-  for (std::uint64_t c : counts)
-  {
-    total += c;
-    largest = std::max(largest, c);
-  }
-  const double mean = static_cast<double>(total) / static_cast<double>(counts.size());
-  if (!(mean > 0 && static_cast<double>(largest) > (1.0 + rebalanceThreshold_) * mean))
-  {
-    return;
-  }
+  const auto start = std::chrono::steady_clock::now();
   std::vector<double> mine(static_cast<std::size_t>(geometry_.nx), 0.0);
   for (const Vec3<Real>& q : x_)
   {
@@ -457,15 +486,94 @@ void SubdomainStepper<Real>::rebalanceIfNeeded()
       perColumn[c] += static_cast<std::uint64_t>(r[c]);
     }
   }
-  slabs_ = Slabs::balanced(perColumn, communicator_.size());
+  const Slabs balanced = Slabs::balanced(perColumn, communicator_.size());
+  exchange_.cutMoved = balanced.first != slabs_.first;
+  slabs_ = balanced;
+  exchange_.migrationMilliseconds += millisecondsSince(start);
   p_.resize(x_.size());
   migrate(false);
-  ++rebalances_;
-  exchange_.rebalanced = true;
 }
 
 template <class Real>
-void SubdomainStepper<Real>::read(Snapshot<double>& out) const
+Health SubdomainStepper<Real>::health() const
+{
+  Health h;
+  const Box& d = parameters_.domain;
+  const double slack = parameters_.particleSpacing; // as checkBatch allows
+  double maxDensity = 0.0;
+  for (std::size_t i = 0; i < x_.size(); ++i)
+  {
+    const Vec3d x = Vec3d::from(x_[i]);
+    const Vec3d v = Vec3d::from(v_[i]);
+    if (!(std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z) && std::isfinite(v.x) &&
+          std::isfinite(v.y) && std::isfinite(v.z)))
+    {
+      h.firstBadId = h.firstBadId < 0 ? id_[i] : h.firstBadId;
+      ++h.nonFinite;
+      continue;
+    }
+    if (x.x < d.min.x - slack || x.y < d.min.y - slack || x.z < d.min.z - slack ||
+      x.x > d.max.x + slack || x.y > d.max.y + slack || x.z > d.max.z + slack)
+    {
+      h.firstBadId = h.firstBadId < 0 ? id_[i] : h.firstBadId;
+      ++h.outside;
+    }
+    h.maxSpeed = std::max(h.maxSpeed, length(v));
+    maxDensity = std::max(maxDensity, static_cast<double>(density_[i]));
+  }
+  // Every rank must reach the same verdict, or one would stop while the others wait for it.
+  Health all;
+  for (const std::vector<double>& r : allGather(communicator_,
+         { double(h.nonFinite), double(h.outside), h.maxSpeed, maxDensity,
+           double(h.firstBadId) }))
+  {
+    all.nonFinite += static_cast<std::size_t>(r[0]);
+    all.outside += static_cast<std::size_t>(r[1]);
+    all.maxSpeed = std::max(all.maxSpeed, r[2]);
+    all.maxDensityError = std::max(all.maxDensityError, r[3] / parameters_.restDensity - 1.0);
+    if (all.firstBadId < 0 && r[4] >= 0)
+    {
+      all.firstBadId = static_cast<std::int64_t>(r[4]);
+    }
+  }
+  all.maxDensityError = std::max(all.maxDensityError, 0.0);
+  return all;
+}
+
+template <class Real>
+template <class In>
+void SubdomainStepper<Real>::loadState(const Snapshot<In>& state)
+{
+  if (sizeof(In) != sizeof(Real))
+  {
+    throw InvalidInput(std::string("checkpoint precision = ") +
+      (sizeof(In) == sizeof(float) ? "single" : "double") + ": the stepper runs in " +
+      toString(precision()) + " precision");
+  }
+  const std::size_t n = state.id.size();
+  if (state.position.size() != n || state.velocity.size() != n || state.density.size() != n ||
+    state.lambda.size() != n)
+  {
+    throw InvalidInput("checkpoint arrays differ in length (" + std::to_string(n) + " ids)");
+  }
+  x_.resize(n);
+  v_.resize(n);
+  density_.resize(n);
+  lambda_.resize(n);
+  id_ = state.id;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    x_[i] = Vec3<Real>::from(state.position[i]);
+    v_[i] = Vec3<Real>::from(state.velocity[i]);
+    density_[i] = static_cast<Real>(state.density[i]);
+    lambda_[i] = static_cast<Real>(state.lambda[i]);
+  }
+  // The next step cuts the slabs from this state, as the run that took it did.
+}
+
+template <class Real>
+template <class Out>
+void SubdomainStepper<Real>::copyOut(Snapshot<Out>& out) const
 {
   const std::size_t n = x_.size();
   out.position.resize(n);
@@ -475,15 +583,15 @@ void SubdomainStepper<Real>::read(Snapshot<double>& out) const
   out.id = id_;
   for (std::size_t i = 0; i < n; ++i)
   {
-    out.position[i] = Vec3d::from(x_[i]);
-    out.velocity[i] = Vec3d::from(v_[i]);
-    out.density[i] = density_[i];
-    out.lambda[i] = lambda_[i];
+    out.position[i] = Vec3<Out>::from(x_[i]);
+    out.velocity[i] = Vec3<Out>::from(v_[i]);
+    out.density[i] = static_cast<Out>(density_[i]);
+    out.lambda[i] = static_cast<Out>(lambda_[i]);
   }
 }
 
 template <class Real>
-Statistics SubdomainStepper<Real>::statistics()
+Statistics SubdomainStepper<Real>::statistics() const
 {
   const double mass = calibratedParticleMass(parameters_);
   double errorSum = 0, errorMax = 0, speedMax = 0, kinetic = 0, finite = 1;
@@ -522,6 +630,30 @@ Statistics SubdomainStepper<Real>::statistics()
   s.particles = static_cast<std::size_t>(count);
   s.averageDensityError = count > 0 ? s.averageDensityError / count : 0.0;
   return s;
+}
+
+template <class Real>
+void SubdomainStepper<Real>::read(Snapshot<float>& out) const
+{
+  copyOut(out);
+}
+
+template <class Real>
+void SubdomainStepper<Real>::read(Snapshot<double>& out) const
+{
+  copyOut(out);
+}
+
+template <class Real>
+void SubdomainStepper<Real>::load(const Snapshot<float>& state)
+{
+  loadState(state);
+}
+
+template <class Real>
+void SubdomainStepper<Real>::load(const Snapshot<double>& state)
+{
+  loadState(state);
 }
 
 template class SubdomainStepper<float>;

@@ -6,10 +6,16 @@
 // order, so one rank is bit-identical to the serial backend and N ranks differ from it only by the
 // order in which neighbours are summed.
 //
-// Ownership follows the predicted position: after the prediction each particle migrates to the
-// rank that owns its column, so that every owned particle has its whole neighbourhood at hand for
-// the step. When the particle counts drift more than rebalanceThreshold from the mean, the slabs
-// are cut again on the global column counts.
+// The slabs are cut again at the start of every step from the global particle count of each
+// column, so they are a function of the state alone: a checkpoint restored on the same number of
+// ranks continues bit-identically, and the balance never drifts (what it can be is limited only
+// by whole columns). Ownership then follows the predicted position: after the prediction each
+// particle migrates to the rank that owns its column, so that every owned particle has its whole
+// neighbourhood at hand for the step.
+//
+// It is a Stepper, so Simulation (emitters, checkpoints, the divergence check) drives it as any
+// other; statistics(), health(), append(), step() and the constructor are collective: every rank
+// calls them in the same order. size(), read() and load() are of this rank's particles.
 #pragma once
 
 #include "Communicator.h"
@@ -18,6 +24,7 @@
 #include "Stepper.h"
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace pbf::distributed
@@ -27,48 +34,64 @@ namespace pbf::distributed
 struct ExchangeReport
 {
   std::size_t ghosts = 0;      // ghost particles received at the start of the step
-  std::size_t migrated = 0;    // particles received from other ranks (migration and rebalancing)
+  std::size_t migrated = 0;    // particles received from other ranks (new cut and prediction)
   double ghostMilliseconds = 0;
-  double migrationMilliseconds = 0;
-  bool rebalanced = false;
+  double migrationMilliseconds = 0; // the cut included
+  bool cutMoved = false;       // the step began with a new cut
 };
 
 template <class Real>
-class SubdomainStepper
+class SubdomainStepper final : public Stepper
 {
 public:
-  // Collective. Every rank passes the whole initial fluid and keeps the particles of its slab;
-  // the first cut balances the particle counts.
+  // Every rank passes the whole initial fluid and keeps the particles of its slab.
   SubdomainStepper(Communicator& communicator, bool parallel, const Parameters& parameters,
-    const ParticleBatch& everything, double rebalanceThreshold = 0.2);
+    const ParticleBatch& everything);
 
-  void step(); // collective
+  void step() override;
+  // Every rank passes the whole batch (Simulation emits the same on every rank).
+  void append(const ParticleBatch& batch) override;
 
-  std::size_t size() const { return x_.size(); } // owned particles
-  void read(Snapshot<double>& owned) const;
-  // Collective: over every rank's particles, summed in rank order (the same bits on every rank).
+  std::size_t size() const override { return x_.size(); } // this rank's particles
+  Backend backend() const override { return parallel_ ? Backend::OpenMP : Backend::Serial; }
+  Precision precision() const override;
+  std::string description() const override;
+
+  void read(Snapshot<float>& out) const override;
+  void read(Snapshot<double>& out) const override;
+  // Over every rank's particles, summed in rank order (the same bits on every rank).
   // averageNeighbors is not computed across ranks (NaN).
-  Statistics statistics();
-  // Collective: the owned particles of each rank.
-  std::vector<std::uint64_t> particlesPerRank();
+  Statistics statistics() const override;
+  Health health() const override;
+  StepReport lastStep() const override { return report_; }
+  // This rank's particles as read() gave them, at a step where the ranks were as now.
+  void load(const Snapshot<float>& state) override;
+  void load(const Snapshot<double>& state) override;
 
+  // Collective: the particles of each rank.
+  std::vector<std::uint64_t> particlesPerRank() const;
   const Slabs& slabs() const { return slabs_; }
   const ExchangeReport& lastExchange() const { return exchange_; }
-  const StepReport& lastStep() const { return report_; }
-  int rebalances() const { return rebalances_; }
+  int rank() const { return communicator_.rank(); }
+  int ranks() const { return communicator_.size(); }
 
 private:
+  template <class Out>
+  void copyOut(Snapshot<Out>& out) const;
+  template <class In>
+  void loadState(const Snapshot<In>& state);
   template <class Stage>
   void forOwned(Stage&& stage);
   FluidView<Real> view();
   int column(const Vec3<Real>& q) const;
+  void cut();                          // balanced slabs from the global column counts
   void migrate(bool byPrediction);     // to the owners of their columns
   void receiveGhosts();                // border particles of the neighbours, appended
   void sortByCell();                   // owned and ghosts together, as CpuStepper sorts
   template <class Field>
   void refreshGhosts(Field field);     // field(i) of each ghost from its owner
   void dropGhosts();                   // back to owned only, in cell order
-  void rebalanceIfNeeded();
+  void evaluateAtRest();               // density and lambda of the current positions
   double meanDensityError();           // collective
 
   Communicator& communicator_;
@@ -77,8 +100,6 @@ private:
   Coefficients<Real> coefficients_;
   GridGeometry<Real> geometry_;
   Slabs slabs_;
-  double rebalanceThreshold_;
-  int rebalances_ = 0;
 
   // Owned particles first; during a step ghosts are appended, then all are sorted by cell.
   std::vector<Vec3<Real>> x_, p_, v_, scratch_, omega_;
