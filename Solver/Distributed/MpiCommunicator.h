@@ -1,0 +1,27 @@
+// The solver's Communicator over MPI itself, for the solver-only tools that run where ParaView is
+// not (the GPU machines): one MPI_Alltoall of the message lengths and one MPI_Alltoallv of the
+// messages per exchange. Built when CMake finds MPI.
+#pragma once
+
+#include "Communicator.h"
+
+#include <mpi.h>
+
+namespace pbf::distributed
+{
+
+class MpiCommunicator final : public Communicator
+{
+public:
+  explicit MpiCommunicator(MPI_Comm communicator = MPI_COMM_WORLD);
+  int rank() const override { return rank_; }
+  int size() const override { return size_; }
+  std::vector<Bytes> exchange(const std::vector<Bytes>& outgoing) override;
+
+private:
+  MPI_Comm communicator_;
+  int rank_ = 0;
+  int size_ = 1;
+};
+
+} // namespace pbf::distributed

@@ -1,0 +1,150 @@
+// pbf_bench_mpi: scaling of the domain-decomposed solver (issue 7) over MPI ranks. Run it under
+// mpiexec; every rank builds the dam break scaled to the particle count (pbf_bench's scene), keeps
+// its slab (Distributed/SubdomainStepper.h) and steps in lockstep with the others.
+//
+//   mpiexec -n N pbf_bench_mpi [--particles P | --per-rank P] [--steps S] [--warmup W]
+//                              [--backend serial|openmp] [--precision single|double] [--json FILE]
+//
+// A step is timed from a barrier to a barrier, so it is the slowest rank's; ghost exchange and
+// migration (with the cut) are timed inside it on each rank and reported as the largest over the
+// ranks. Medians and p10/p90 over the timed steps, warm-up excluded. CPU backends only: a CUDA
+// sub-domain stepper is not written yet. Rank 0 prints one table row and, with --json, the run.
+#include "Distributed/MpiCommunicator.h"
+#include "Distributed/SubdomainStepper.h"
+#include "ScaledScenes.h"
+#include "Scene.h"
+#include "ToolOptions.h"
+
+#include <mpi.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+using namespace pbf;
+
+namespace
+{
+
+double percentile(std::vector<double> v, double q)
+{
+  std::sort(v.begin(), v.end());
+  const double at = q * static_cast<double>(v.size() - 1);
+  const auto lo = static_cast<std::size_t>(std::floor(at));
+  const std::size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (at - static_cast<double>(lo)) * (v[hi] - v[lo]);
+}
+
+double largestOverRanks(double mine)
+{
+  double largest = 0;
+  MPI_Allreduce(&mine, &largest, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  return largest;
+}
+
+template <class Real>
+int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
+{
+  const int ranks = communicator.size();
+  const long steps = toolInteger(options, "steps", 20, 1);
+  const long warmup = toolInteger(options, "warmup", 3, 0);
+  const double particles = options.extra.count("per-rank")
+    ? static_cast<double>(toolInteger(options, "per-rank", 100000, 1)) * ranks
+    : static_cast<double>(toolInteger(options, "particles", 200000, 1));
+  if (options.backend == Backend::CUDA)
+  {
+    throw InvalidInput("backend = cuda: decomposed runs have CPU backends only so far");
+  }
+  const Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
+  const Parameters parameters = withSceneDomain(options.parameters, scene);
+  const ParticleBatch everything = fillScene(scene, parameters);
+  distributed::SubdomainStepper<Real> stepper(
+    communicator, options.backend == Backend::OpenMP, parameters, everything);
+
+  std::vector<double> ms, ghostMs, migrationMs;
+  for (long s = 0; s < warmup + steps; ++s)
+  {
+    MPI_Barrier(MPI_COMM_WORLD);
+    const auto start = std::chrono::steady_clock::now();
+    stepper.step();
+    MPI_Barrier(MPI_COMM_WORLD);
+    const double elapsed =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const double ghost = largestOverRanks(stepper.lastExchange().ghostMilliseconds);
+    const double migration = largestOverRanks(stepper.lastExchange().migrationMilliseconds);
+    if (s >= warmup)
+    {
+      ms.push_back(elapsed);
+      ghostMs.push_back(ghost);
+      migrationMs.push_back(migration);
+    }
+  }
+  const std::vector<std::uint64_t> perRank = stepper.particlesPerRank();
+  const Statistics statistics = stepper.statistics();
+  const double ghosts = largestOverRanks(static_cast<double>(stepper.lastExchange().ghosts));
+  if (communicator.rank() != 0)
+  {
+    return 0;
+  }
+  const auto [fewest, most] = std::minmax_element(perRank.begin(), perRank.end());
+  const double median = percentile(ms, 0.5);
+  std::printf("| ranks | backend | precision | particles | ms/step median (p10-p90) | steps/s | "
+              "ghost ms | migration ms | particles per rank (min-max) | ghosts (max) | finite |\n");
+  std::printf("| %d | %s | %s | %zu | %.2f (%.2f-%.2f) | %.1f | %.2f | %.2f | %llu-%llu | %.0f | "
+              "%s |\n",
+    ranks, toString(options.backend), toString(options.precision), everything.position.size(),
+    median, percentile(ms, 0.1), percentile(ms, 0.9), 1000.0 / median, percentile(ghostMs, 0.5),
+    percentile(migrationMs, 0.5), static_cast<unsigned long long>(*fewest),
+    static_cast<unsigned long long>(*most), ghosts, statistics.finite ? "yes" : "NO");
+  if (options.extra.count("json"))
+  {
+    std::ofstream out(options.extra.at("json"));
+    out << "{ \"ranks\": " << ranks << ", \"backend\": \"" << toString(options.backend)
+        << "\", \"precision\": \"" << toString(options.precision)
+        << "\", \"particles\": " << everything.position.size() << ", \"steps\": " << steps
+        << ", \"median_ms\": " << median << ", \"p10_ms\": " << percentile(ms, 0.1)
+        << ", \"p90_ms\": " << percentile(ms, 0.9)
+        << ", \"ghost_ms\": " << percentile(ghostMs, 0.5)
+        << ", \"migration_ms\": " << percentile(migrationMs, 0.5) << ", \"particles_per_rank\": [";
+    for (std::size_t r = 0; r < perRank.size(); ++r)
+    {
+      out << (r ? ", " : "") << perRank[r];
+    }
+    out << "] }\n";
+  }
+  return statistics.finite ? 0 : 1;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+  MPI_Init(&argc, &argv);
+  int status = 0;
+  try
+  {
+    const std::map<std::string, std::string> keys = {
+      { "particles", "particles in all (default 200000)" },
+      { "per-rank", "particles per rank instead (weak scaling)" },
+      { "steps", "timed steps (default 20)" },
+      { "warmup", "steps before timing (default 3)" },
+      { "json", "write the run to this file (rank 0)" },
+    };
+    const ToolOptions options = parseToolOptions(argc, argv, keys);
+    distributed::MpiCommunicator communicator;
+    status = options.precision == Precision::Double ? run<double>(options, communicator)
+                                                    : run<float>(options, communicator);
+  }
+  catch (const std::exception& error)
+  {
+    std::fprintf(stderr, "pbf_bench_mpi: %s\n", error.what());
+    MPI_Abort(MPI_COMM_WORLD, 2);
+  }
+  MPI_Finalize();
+  return status;
+}
