@@ -9,7 +9,7 @@
 // 32nd of a row. The candidates keep forEachNeighbor's order and the equations still test r < h
 // themselves, so the sums see the same terms in the same order: results are bit-identical to the
 // walk as long as no skipped candidate can have come within h. That is guaranteed by bounding how
-// far particles moved since the masks were built (rebuildMasks below) and rebuilding when the
+// far particles moved since the masks were built (MaskSchedule below) and rebuilding when the
 // bound could be exceeded. Wall images (Equations.h) lie farther away than the neighbour itself
 // for particles inside the box, so they never need a skipped candidate either.
 #pragma once
