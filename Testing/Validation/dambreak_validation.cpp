@@ -119,7 +119,8 @@ int main(int argc, char** argv)
     }
     const double shift = fitTimeShift(c, experiment);
     std::printf("particles_across,%ld\nparticles,%zu\nsteps,%llu\ndt,%.6g\n"
-                "rms_relative_error,%.4f\nfitted_time_shift,%.4f\nrms_relative_error_shifted,%.4f\n",
+                "rms_relative_error,%.4f\nfitted_time_shift,%.4f\n"
+                "rms_relative_error_shifted,%.4f\n",
       across, simulation.stepper().size(),
       static_cast<unsigned long long>(simulation.stepCount()), setup.parameters.timeStep,
       c.rmsRelativeError, shift, compareFront(front, experiment, shift).rmsRelativeError);
