@@ -1,6 +1,7 @@
 #include "CpuStepper.h"
 
 #include "CellSort.h"
+#include "HostParticles.h"
 #include "ParticleChecks.h"
 
 #include <algorithm>
@@ -206,33 +207,13 @@ template <class Real>
 template <class In>
 void CpuStepper<Real>::loadState(const Snapshot<In>& state)
 {
-  if (sizeof(In) != sizeof(Real))
-  {
-    throw InvalidInput(std::string("checkpoint precision = ") +
-      (sizeof(In) == sizeof(float) ? "single" : "double") + ": the stepper runs in " +
-      toString(precision()) + " precision");
-  }
-  const std::size_t n = state.id.size();
-  if (state.position.size() != n || state.velocity.size() != n || state.density.size() != n ||
-    state.lambda.size() != n)
-  {
-    throw InvalidInput("checkpoint arrays differ in length (" + std::to_string(n) + " ids)");
-  }
-  for (auto* array : { &x_, &p_, &v_, &scratch_, &omega_ })
+  loadFromSnapshot(state, particles());
+  const std::size_t n = x_.size();
+  for (auto* array : { &p_, &scratch_, &omega_ })
   {
     array->resize(n);
   }
-  density_.resize(n);
-  lambda_.resize(n);
   keys_.resize(n);
-  id_ = state.id;
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    x_[i] = Vec3<Real>::from(state.position[i]);
-    v_[i] = Vec3<Real>::from(state.velocity[i]);
-    density_[i] = static_cast<Real>(state.density[i]);
-    lambda_[i] = static_cast<Real>(state.lambda[i]);
-  }
   // Nothing else is state: the next step predicts, re-sorts (stably, from this order) and
   // recomputes every other array.
 }
@@ -241,19 +222,7 @@ template <class Real>
 template <class Out>
 void CpuStepper<Real>::copyOut(Snapshot<Out>& out) const
 {
-  const std::size_t n = x_.size();
-  out.position.resize(n);
-  out.velocity.resize(n);
-  out.density.resize(n);
-  out.lambda.resize(n);
-  out.id = id_;
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    out.position[i] = Vec3<Out>::from(x_[i]);
-    out.velocity[i] = Vec3<Out>::from(v_[i]);
-    out.density[i] = static_cast<Out>(density_[i]);
-    out.lambda[i] = static_cast<Out>(lambda_[i]);
-  }
+  copyToSnapshot(particles(), out);
 }
 
 template <class Real>
@@ -313,33 +282,7 @@ Statistics CpuStepper<Real>::statistics() const
 template <class Real>
 Health CpuStepper<Real>::health() const
 {
-  Health h;
-  const Box& d = parameters_.domain;
-  const double slack = parameters_.particleSpacing; // as checkBatch allows
-  double maxDensity = 0.0;
-  for (std::size_t i = 0; i < x_.size(); ++i)
-  {
-    const Vec3d x = Vec3d::from(x_[i]);
-    const Vec3d v = Vec3d::from(v_[i]);
-    if (!(std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z) && std::isfinite(v.x) &&
-          std::isfinite(v.y) && std::isfinite(v.z)))
-    {
-      h.firstBadId = h.firstBadId < 0 ? id_[i] : h.firstBadId;
-      ++h.nonFinite;
-      continue;
-    }
-    if (x.x < d.min.x - slack || x.y < d.min.y - slack || x.z < d.min.z - slack ||
-      x.x > d.max.x + slack || x.y > d.max.y + slack || x.z > d.max.z + slack)
-    {
-      h.firstBadId = h.firstBadId < 0 ? id_[i] : h.firstBadId;
-      ++h.outside;
-    }
-    h.maxSpeed = std::max(h.maxSpeed, length(v));
-    // NaN densities compare false and are left out; they make non-finite positions next step.
-    maxDensity = std::max(maxDensity, static_cast<double>(density_[i]));
-  }
-  h.maxDensityError = std::max(maxDensity / parameters_.restDensity - 1.0, 0.0);
-  return h;
+  return scanHealth(parameters_, particles(), nullptr);
 }
 
 template class CpuStepper<float>;

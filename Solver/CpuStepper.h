@@ -4,6 +4,7 @@
 #pragma once
 
 #include "Equations.h"
+#include "HostParticles.h"
 #include "Stepper.h"
 
 #include <vector>
@@ -43,6 +44,8 @@ private:
   template <class Stage>
   void forEachParticle(Stage&& stage);
   FluidView<Real> view();
+  HostParticles<Real> particles() { return { x_, v_, density_, lambda_, id_ }; }
+  ConstHostParticles<Real> particles() const { return { x_, v_, density_, lambda_, id_ }; }
   void sortByCell();             // keys from p_, counting sort, gather every array
   void evaluateDensityAtRest(); // density and lambda of the current positions, nothing moves
 

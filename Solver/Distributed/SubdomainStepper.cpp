@@ -1,6 +1,7 @@
 #include "SubdomainStepper.h"
 
 #include "CellSort.h"
+#include "HostParticles.h"
 #include "ParticleChecks.h"
 
 #include <algorithm>
@@ -497,30 +498,8 @@ void SubdomainStepper<Real>::cut()
 template <class Real>
 Health SubdomainStepper<Real>::health() const
 {
-  Health h;
-  const Box& d = parameters_.domain;
-  const double slack = parameters_.particleSpacing; // as checkBatch allows
   double maxDensity = 0.0;
-  for (std::size_t i = 0; i < x_.size(); ++i)
-  {
-    const Vec3d x = Vec3d::from(x_[i]);
-    const Vec3d v = Vec3d::from(v_[i]);
-    if (!(std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z) && std::isfinite(v.x) &&
-          std::isfinite(v.y) && std::isfinite(v.z)))
-    {
-      h.firstBadId = h.firstBadId < 0 ? id_[i] : h.firstBadId;
-      ++h.nonFinite;
-      continue;
-    }
-    if (x.x < d.min.x - slack || x.y < d.min.y - slack || x.z < d.min.z - slack ||
-      x.x > d.max.x + slack || x.y > d.max.y + slack || x.z > d.max.z + slack)
-    {
-      h.firstBadId = h.firstBadId < 0 ? id_[i] : h.firstBadId;
-      ++h.outside;
-    }
-    h.maxSpeed = std::max(h.maxSpeed, length(v));
-    maxDensity = std::max(maxDensity, static_cast<double>(density_[i]));
-  }
+  const Health h = scanHealth(parameters_, particles(), &maxDensity);
   // Every rank must reach the same verdict, or one would stop while the others wait for it.
   Health all;
   for (const std::vector<double>& r : allGather(communicator_,
@@ -544,30 +523,7 @@ template <class Real>
 template <class In>
 void SubdomainStepper<Real>::loadState(const Snapshot<In>& state)
 {
-  if (sizeof(In) != sizeof(Real))
-  {
-    throw InvalidInput(std::string("checkpoint precision = ") +
-      (sizeof(In) == sizeof(float) ? "single" : "double") + ": the stepper runs in " +
-      toString(precision()) + " precision");
-  }
-  const std::size_t n = state.id.size();
-  if (state.position.size() != n || state.velocity.size() != n || state.density.size() != n ||
-    state.lambda.size() != n)
-  {
-    throw InvalidInput("checkpoint arrays differ in length (" + std::to_string(n) + " ids)");
-  }
-  x_.resize(n);
-  v_.resize(n);
-  density_.resize(n);
-  lambda_.resize(n);
-  id_ = state.id;
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    x_[i] = Vec3<Real>::from(state.position[i]);
-    v_[i] = Vec3<Real>::from(state.velocity[i]);
-    density_[i] = static_cast<Real>(state.density[i]);
-    lambda_[i] = static_cast<Real>(state.lambda[i]);
-  }
+  loadFromSnapshot(state, particles());
   // The next step cuts the slabs from this state, as the run that took it did.
 }
 
@@ -575,19 +531,7 @@ template <class Real>
 template <class Out>
 void SubdomainStepper<Real>::copyOut(Snapshot<Out>& out) const
 {
-  const std::size_t n = x_.size();
-  out.position.resize(n);
-  out.velocity.resize(n);
-  out.density.resize(n);
-  out.lambda.resize(n);
-  out.id = id_;
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    out.position[i] = Vec3<Out>::from(x_[i]);
-    out.velocity[i] = Vec3<Out>::from(v_[i]);
-    out.density[i] = static_cast<Out>(density_[i]);
-    out.lambda[i] = static_cast<Out>(lambda_[i]);
-  }
+  copyToSnapshot(particles(), out);
 }
 
 template <class Real>

@@ -20,6 +20,7 @@
 
 #include "Communicator.h"
 #include "Equations.h"
+#include "HostParticles.h"
 #include "Slabs.h"
 #include "Stepper.h"
 
@@ -83,6 +84,8 @@ private:
   template <class Stage>
   void forOwned(Stage&& stage);
   FluidView<Real> view();
+  HostParticles<Real> particles() { return { x_, v_, density_, lambda_, id_ }; }
+  ConstHostParticles<Real> particles() const { return { x_, v_, density_, lambda_, id_ }; }
   int column(const Vec3<Real>& q) const;
   void cut();                          // balanced slabs from the global column counts
   void migrate(bool byPrediction);     // to the owners of their columns

@@ -5,6 +5,7 @@
 #include "DeviceFault.h"
 #include "Scene.h"
 #include "Simulation.h"
+#include "RequireGpu.h"
 #include "Stepper.h"
 
 #include <cuda_runtime.h>
@@ -16,16 +17,6 @@
 #include <vector>
 
 using namespace pbf;
-
-#define PBF_REQUIRE_GPU()                                                                          \
-  do                                                                                               \
-  {                                                                                                \
-    std::string why;                                                                               \
-    if (!cudaAvailable(&why))                                                                      \
-    {                                                                                              \
-      GTEST_SKIP() << "no usable CUDA device: " << why;                                            \
-    }                                                                                              \
-  } while (0)
 
 namespace
 {

@@ -1,32 +1,23 @@
 // The CUDA backend against the serial reference (label "gpu"). Without a usable CUDA device every
 // test reports SKIPPED, which CTest counts as skipped, not passed.
 #include "Cuda/CudaBackend.h"
+#include "RequireGpu.h"
 #include "Scene.h"
 #include "Simulation.h"
 #include "Stepper.h"
+#include "TestScenes.h"
 
 #include <cuda_runtime.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
-#include <map>
 #include <utility>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 using namespace pbf;
-
-#define PBF_REQUIRE_GPU()                                                                          \
-  do                                                                                               \
-  {                                                                                                \
-    std::string why;                                                                               \
-    if (!cudaAvailable(&why))                                                                      \
-    {                                                                                              \
-      GTEST_SKIP() << "no usable CUDA device: " << why;                                            \
-    }                                                                                              \
-  } while (0)
 
 namespace
 {
@@ -68,37 +59,6 @@ Snapshot<Real> runCuda(const std::string& sceneName, Precision precision, int st
   Snapshot<Real> out;
   stepper->read(out);
   return out;
-}
-
-std::map<std::int64_t, std::size_t> indexById(const Snapshot<double>& s)
-{
-  std::map<std::int64_t, std::size_t> index;
-  for (std::size_t i = 0; i < s.id.size(); ++i)
-  {
-    index[s.id[i]] = i;
-  }
-  return index;
-}
-
-// Largest |x_a - x_b| / |x_b| over particles matched by id.
-double maxRelativePositionError(const Snapshot<double>& a, const Snapshot<double>& b)
-{
-  EXPECT_EQ(a.id.size(), b.id.size());
-  const auto index = indexById(b);
-  double worst = 0;
-  for (std::size_t i = 0; i < a.id.size(); ++i)
-  {
-    const auto it = index.find(a.id[i]);
-    if (it == index.end())
-    {
-      ADD_FAILURE() << "particle id " << a.id[i] << " missing";
-      return INFINITY;
-    }
-    const Vec3d& xb = b.position[it->second];
-    const double error = length(a.position[i] - xb) / length(xb);
-    worst = std::isnan(error) ? INFINITY : std::max(worst, error);
-  }
-  return worst;
 }
 
 template <class Real>
@@ -163,7 +123,7 @@ TEST(CudaStepper, OneStepMatchesSerialInSinglePrecision)
     gpu->step();
     Snapshot<double> state;
     gpu->read(state);
-    EXPECT_LE(maxRelativePositionError(state, serial.state), 1e-5);
+    EXPECT_LE(test::maxRelativePositionError(state, serial.state), 1e-5);
   }
 }
 
@@ -174,7 +134,7 @@ TEST(CudaStepper, OneStepMatchesSerialInDoublePrecision)
   // 1e-12 leaves a margin of 100 while still catching any difference in the arithmetic.
   const Outcome serial = run("dam_break", Backend::Serial, Precision::Double, 0.02, 1);
   const Outcome gpu = run("dam_break", Backend::CUDA, Precision::Double, 0.02, 1);
-  EXPECT_LE(maxRelativePositionError(gpu.state, serial.state), 1e-12);
+  EXPECT_LE(test::maxRelativePositionError(gpu.state, serial.state), 1e-12);
   // Statistics are computed on the GPU: the same formulas, summed in another order (1e-15
   // relative), so 1e-9 relative for the quantities that vary continuously with the positions.
   const Statistics& g = gpu.statistics;
@@ -299,7 +259,7 @@ TEST(CudaStepper, EmittersGrowTheDeviceArraysLikeTheSerialBackend)
   const Outcome gpu = run("stream", Backend::CUDA, Precision::Double, 0.01, 20);
   ASSERT_GT(gpu.state.id.size(), 2304u);
   ASSERT_EQ(gpu.state.id.size(), serial.state.id.size());
-  EXPECT_LE(maxRelativePositionError(gpu.state, serial.state), 1e-8);
+  EXPECT_LE(test::maxRelativePositionError(gpu.state, serial.state), 1e-8);
 }
 
 TEST(CudaStepper, MoreParticlesThanFreeMemoryIsInvalidInput)

@@ -13,7 +13,6 @@
 #include <cmath>
 #include <cstring>
 #include <mutex>
-#include <set>
 #include <vector>
 
 using namespace pbf;
@@ -84,29 +83,6 @@ Outcome runRanks(int ranks, const DecomposedScene& setup, int steps, bool histor
   return outcome;
 }
 
-// Largest |x_a - x_b| / |x_b| over particles matched by id; every id must be in both, once.
-double maxRelativePositionError(const Snapshot<double>& a, const Snapshot<double>& b)
-{
-  EXPECT_EQ(a.id.size(), b.id.size());
-  EXPECT_EQ(std::set<std::int64_t>(a.id.begin(), a.id.end()).size(), a.id.size())
-    << "an id is on two ranks";
-  const auto index = test::indexById(b);
-  double worst = 0;
-  for (std::size_t i = 0; i < a.id.size(); ++i)
-  {
-    const auto it = index.find(a.id[i]);
-    if (it == index.end())
-    {
-      ADD_FAILURE() << "particle id " << a.id[i] << " missing";
-      return INFINITY;
-    }
-    const Vec3d& xb = b.position[it->second];
-    const double error = length(a.position[i] - xb) / length(xb);
-    worst = std::isnan(error) ? INFINITY : std::max(worst, error);
-  }
-  return worst;
-}
-
 double surgeFront(const Snapshot<double>& s)
 {
   double front = -INFINITY;
@@ -166,7 +142,7 @@ TEST(Distributed, TwoAndThreeRanksMatchOneRankAfterTenStepsInDouble)
   for (int ranks : { 2, 3 })
   {
     const Outcome many = runRanks<double>(ranks, setup, 10, true);
-    EXPECT_LE(maxRelativePositionError(many.state, one.state), 1e-9) << ranks << " ranks";
+    EXPECT_LE(test::maxRelativePositionError(many.state, one.state), 1e-9) << ranks << " ranks";
     EXPECT_GT(many.exchanges.back().ghosts, 0u) << "rank 0 had no ghosts";
     for (const std::vector<std::uint64_t>& counts : many.counts)
     {

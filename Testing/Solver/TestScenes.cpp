@@ -1,5 +1,11 @@
 #include "TestScenes.h"
 
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
 namespace pbf::test
 {
 
@@ -36,6 +42,28 @@ std::map<std::int64_t, std::size_t> indexById(const Snapshot<double>& snapshot)
     index[snapshot.id[i]] = i;
   }
   return index;
+}
+
+double maxRelativePositionError(const Snapshot<double>& a, const Snapshot<double>& b)
+{
+  EXPECT_EQ(a.id.size(), b.id.size());
+  EXPECT_EQ(std::set<std::int64_t>(a.id.begin(), a.id.end()).size(), a.id.size())
+    << "an id appears twice";
+  const auto index = indexById(b);
+  double worst = 0;
+  for (std::size_t i = 0; i < a.id.size(); ++i)
+  {
+    const auto it = index.find(a.id[i]);
+    if (it == index.end())
+    {
+      ADD_FAILURE() << "particle id " << a.id[i] << " missing";
+      return INFINITY;
+    }
+    const Vec3d& xb = b.position[it->second];
+    const double error = length(a.position[i] - xb) / length(xb);
+    worst = std::isnan(error) ? INFINITY : std::max(worst, error);
+  }
+  return worst;
 }
 
 } // namespace pbf::test

@@ -18,4 +18,8 @@ double potentialEnergy(const Simulation& simulation);
 // Snapshot rows keyed by particle id, for comparisons across backends whose order may differ.
 std::map<std::int64_t, std::size_t> indexById(const Snapshot<double>& snapshot);
 
+// Largest |x_a - x_b| / |x_b| over particles matched by id (infinity for a NaN). Adds a gtest
+// failure for a count that differs, an id twice in a, or an id of a missing from b.
+double maxRelativePositionError(const Snapshot<double>& a, const Snapshot<double>& b);
+
 } // namespace pbf::test

@@ -1,0 +1,127 @@
+// What the steppers that keep their particles in host arrays share (CpuStepper and
+// distributed::SubdomainStepper): the state as a Snapshot, out and in, and the health scan.
+#pragma once
+
+#include "Parameters.h"
+#include "Stepper.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace pbf
+{
+
+// The arrays that are the state between steps (everything else is recomputed by the next step),
+// to fill (HostParticles) or to read (ConstHostParticles).
+template <class Real>
+struct HostParticles
+{
+  std::vector<Vec3<Real>>& x;
+  std::vector<Vec3<Real>>& v;
+  std::vector<Real>& density;
+  std::vector<Real>& lambda;
+  std::vector<std::int64_t>& id;
+};
+
+template <class Real>
+struct ConstHostParticles
+{
+  const std::vector<Vec3<Real>>& x;
+  const std::vector<Vec3<Real>>& v;
+  const std::vector<Real>& density;
+  const std::vector<Real>& lambda;
+  const std::vector<std::int64_t>& id;
+};
+
+template <class Real, class Out>
+void copyToSnapshot(const ConstHostParticles<Real>& p, Snapshot<Out>& out)
+{
+  const std::size_t n = p.x.size();
+  out.position.resize(n);
+  out.velocity.resize(n);
+  out.density.resize(n);
+  out.lambda.resize(n);
+  out.id = p.id;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    out.position[i] = Vec3<Out>::from(p.x[i]);
+    out.velocity[i] = Vec3<Out>::from(p.v[i]);
+    out.density[i] = static_cast<Out>(p.density[i]);
+    out.lambda[i] = static_cast<Out>(p.lambda[i]);
+  }
+}
+
+// Throws InvalidInput for a snapshot of the other precision or with arrays of different lengths.
+template <class Real, class In>
+void loadFromSnapshot(const Snapshot<In>& state, const HostParticles<Real>& p)
+{
+  if (sizeof(In) != sizeof(Real))
+  {
+    throw InvalidInput(std::string("checkpoint precision = ") +
+      (sizeof(In) == sizeof(float) ? "single" : "double") + ": the stepper runs in " +
+      (sizeof(Real) == sizeof(float) ? "single" : "double") + " precision");
+  }
+  const std::size_t n = state.id.size();
+  if (state.position.size() != n || state.velocity.size() != n || state.density.size() != n ||
+    state.lambda.size() != n)
+  {
+    throw InvalidInput("checkpoint arrays differ in length (" + std::to_string(n) + " ids)");
+  }
+  p.x.resize(n);
+  p.v.resize(n);
+  p.density.resize(n);
+  p.lambda.resize(n);
+  p.id = state.id;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    p.x[i] = Vec3<Real>::from(state.position[i]);
+    p.v[i] = Vec3<Real>::from(state.velocity[i]);
+    p.density[i] = static_cast<Real>(state.density[i]);
+    p.lambda[i] = static_cast<Real>(state.lambda[i]);
+  }
+}
+
+// The divergence check's scan (Stepper::health) of the particles held here. maxDensity, when
+// given, receives the largest density itself, for a caller that still has to combine it with
+// others' (the ranks of a decomposed run).
+template <class Real>
+Health scanHealth(
+  const Parameters& parameters, const ConstHostParticles<Real>& p, double* maxDensity)
+{
+  Health h;
+  const Box& d = parameters.domain;
+  const double slack = parameters.particleSpacing; // as checkBatch allows
+  double largest = 0.0;
+  for (std::size_t i = 0; i < p.x.size(); ++i)
+  {
+    const Vec3d x = Vec3d::from(p.x[i]);
+    const Vec3d v = Vec3d::from(p.v[i]);
+    if (!(std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z) && std::isfinite(v.x) &&
+          std::isfinite(v.y) && std::isfinite(v.z)))
+    {
+      h.firstBadId = h.firstBadId < 0 ? p.id[i] : h.firstBadId;
+      ++h.nonFinite;
+      continue;
+    }
+    if (x.x < d.min.x - slack || x.y < d.min.y - slack || x.z < d.min.z - slack ||
+      x.x > d.max.x + slack || x.y > d.max.y + slack || x.z > d.max.z + slack)
+    {
+      h.firstBadId = h.firstBadId < 0 ? p.id[i] : h.firstBadId;
+      ++h.outside;
+    }
+    h.maxSpeed = std::max(h.maxSpeed, length(v));
+    // NaN densities compare false and are left out; they make non-finite positions next step.
+    largest = std::max(largest, static_cast<double>(p.density[i]));
+  }
+  h.maxDensityError = std::max(largest / parameters.restDensity - 1.0, 0.0);
+  if (maxDensity)
+  {
+    *maxDensity = largest;
+  }
+  return h;
+}
+
+} // namespace pbf
