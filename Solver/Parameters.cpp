@@ -87,9 +87,12 @@ void Parameters::validate() const
   requirePositive("restDensity", restDensity);
   requirePositive("particleSpacing", particleSpacing);
   requireFinite("smoothingRatio", smoothingRatio);
-  if (smoothingRatio < 1.0 || smoothingRatio > 4.0)
+  if (smoothingRatio <= 1.0 || smoothingRatio > 4.0)
   {
-    reject("smoothingRatio", smoothingRatio, "h / spacing must lie in [1, 4]");
+    // At 1 the nearest lattice neighbours sit exactly at h, outside the kernels' support (r < h):
+    // every particle would be alone and the constraint has no gradient.
+    reject("smoothingRatio", smoothingRatio,
+      "h / spacing must lie in (1, 4]: at 1 or less a particle has no neighbour within h");
   }
   if (solverIterations < 1 || solverIterations > 1000)
   {

@@ -47,6 +47,8 @@ TEST(Parameters, BadValuesNameTheFieldAndTheValue)
   expectRejected([&](Parameters& p) { p.restDensity = nan; }, "restDensity", "nan");
   expectRejected([&](Parameters& p) { p.timeStep = inf; }, "timeStep", "inf");
   expectRejected([](Parameters& p) { p.smoothingRatio = 0.5; }, "smoothingRatio", "0.5");
+  // At exactly 1 the lattice neighbours sit at h, outside the support: no neighbour at all.
+  expectRejected([](Parameters& p) { p.smoothingRatio = 1.0; }, "smoothingRatio", "1");
   expectRejected([](Parameters& p) { p.solverIterations = 0; }, "solverIterations", "0");
   expectRejected([](Parameters& p) { p.solverIterations = -3; }, "solverIterations", "-3");
   expectRejected([](Parameters& p) { p.relaxation = 0; }, "relaxation", "0");
