@@ -364,6 +364,7 @@ struct FrameRow
   double KineticEnergy = 0;
   vtkIdType Particles = 0;
   std::string Backend;
+  double LoadImbalance = 0; // decomposed runs: the largest rank's particles over the mean - 1, %
 };
 
 } // namespace
@@ -561,6 +562,18 @@ public:
     row.MaxSpeed = statistics.maxSpeed;
     row.KineticEnergy = statistics.kineticEnergy;
     row.Particles = static_cast<vtkIdType>(statistics.particles);
+    if (this->Key.Ranks > 1)
+    {
+      // Collective, as statistics() is: every rank records the same frames.
+      double largest = 0, total = 0;
+      for (const std::vector<double>& r :
+        pbf::distributed::allGather(*this->Ranks, { double(stepper.size()) }))
+      {
+        largest = std::max(largest, r[0]);
+        total += r[0];
+      }
+      row.LoadImbalance = total > 0 ? 100.0 * (largest * this->Key.Ranks / total - 1.0) : 0.0;
+    }
     row.Backend = stepper.description();
     this->Rows[frame] = row;
     this->TableStale = true;
@@ -616,6 +629,16 @@ public:
         iterations, milliseconds, maxSpeed, kinetic, particles, backend })
     {
       this->Table->AddColumn(column);
+    }
+    if (this->Key.Ranks > 1)
+    {
+      auto imbalance = NewArray<vtkDoubleArray>("LoadImbalance", 1, rows);
+      r = 0;
+      for (const auto& entry : this->Rows)
+      {
+        imbalance->SetValue(r++, entry.second.LoadImbalance);
+      }
+      this->Table->AddColumn(imbalance);
     }
     this->TableStale = false;
     return this->Table;

@@ -52,7 +52,8 @@
  * slab of the fluid along x plus ghost particles, exchanged every solver iteration
  * (Solver/Distributed), on the CPU backends; it outputs its own particles, whose ids stay
  * globally unique, and field data Rank, Ranks and ParticlesPerRank. Diagnostics are reduced over
- * the ranks and rank 0 outputs the table. Every rank must take part in every request, as
+ * the ranks, with a LoadImbalance column (the largest rank's particles over the mean, minus 1, in
+ * %), and rank 0 outputs the table. Every rank must take part in every request, as
  * ParaView's parallel engine does. With it off, piece 0 simulates the whole fluid and other pieces
  * are empty. As a filter it asks its input for the whole data set on every rank.
  *
