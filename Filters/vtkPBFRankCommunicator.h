@@ -6,6 +6,7 @@
 
 #include "Distributed/Communicator.h"
 
+class vtkMPICommunicator;
 class vtkMultiProcessController;
 
 class vtkPBFRankCommunicator final : public pbf::distributed::Communicator
@@ -15,13 +16,19 @@ public:
 
   int rank() const override;
   int size() const override;
-  // Two collectives: every rank's message lengths (AllGather), then every message (AllGatherV).
-  // Each rank keeps what was sent to it. For the slab decomposition's few neighbours at a handful
-  // of ranks that is the traffic point-to-point would carry; many ranks would want MPI_Alltoallv.
+  // Over MPI (mpiexec pvbatch, pvserver): each rank tells every other how many bytes it sends,
+  // then non-blocking sends and receives carry the messages, so a slab's bytes go only to its
+  // neighbours. Under another controller: two collectives, every rank's lengths (AllGather) and
+  // every message (AllGatherV), each rank keeping what was sent to it.
   std::vector<pbf::distributed::Bytes> exchange(
     const std::vector<pbf::distributed::Bytes>& outgoing) override;
 
 private:
+  std::vector<pbf::distributed::Bytes> ExchangePointToPoint(
+    vtkMPICommunicator* mpi, const std::vector<pbf::distributed::Bytes>& outgoing);
+  std::vector<pbf::distributed::Bytes> ExchangeGathered(
+    const std::vector<pbf::distributed::Bytes>& outgoing);
+
   vtkMultiProcessController* Controller;
 };
 
