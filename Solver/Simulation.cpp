@@ -63,29 +63,9 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
     throw InvalidInput("particle count = 0: the fluid is empty");
   }
   checkEmitters(initial.position.size());
-  if (communicator)
-  {
-    if (backend == Backend::CUDA)
-    {
-      throw std::runtime_error("Backend = CUDA: a domain-decomposed run has CPU backends only so "
-                               "far; choose CPU (OpenMP) or Serial");
-    }
-    const bool parallel = backend == Backend::OpenMP;
-    if (precision == Precision::Single)
-    {
-      stepper_ = std::make_unique<distributed::SubdomainStepper<float>>(
-        *communicator, parallel, parameters_, initial);
-    }
-    else
-    {
-      stepper_ = std::make_unique<distributed::SubdomainStepper<double>>(
-        *communicator, parallel, parameters_, initial);
-    }
-  }
-  else
-  {
-    stepper_ = makeStepper(backend, precision, parameters_, initial);
-  }
+  stepper_ = communicator
+    ? distributed::makeSubdomainStepper(*communicator, backend, precision, parameters_, initial)
+    : makeStepper(backend, precision, parameters_, initial);
   nextId_ = static_cast<std::int64_t>(initial.position.size());
 
   // The divergence limits, from the initial state and the scene.

@@ -21,6 +21,17 @@ set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 carry=$root/.pipeline
 
+# There: log to $OUT/LOG, check the carry holds PROGRAM, load its libraries, say what runs.
+on_gpu_machine() {
+  out=${OUT:-$root/output/pipeline}
+  mkdir -p "$out"
+  exec > >(tee "$out/$1") 2>&1
+  [[ -x $carry/bin/$2 ]] || { echo "pipeline-gpu-run: no $carry (run prepare here first)"; exit 1; }
+  export LD_LIBRARY_PATH=$carry/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+  echo "commit $(cat "$carry/COMMIT") $( [[ -s $carry/DIRTY ]] && echo '(with local changes)')"
+  nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm --format=csv || true
+}
+
 case "${1:-}" in
 prepare)
   build=${2:-$root/build}
@@ -50,13 +61,7 @@ prepare)
   du -sh "$carry"
   ;;
 fault)
-  out=${OUT:-$root/output/pipeline}
-  mkdir -p "$out"
-  exec > >(tee "$out/fault.log") 2>&1
-  [[ -x $carry/bin/pbf_device_fault ]] || { echo "pipeline-gpu-run: no $carry (run prepare here first)"; exit 1; }
-  export LD_LIBRARY_PATH=$carry/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-  echo "commit $(cat "$carry/COMMIT") $( [[ -s $carry/DIRTY ]] && echo '(with local changes)')"
-  nvidia-smi --query-gpu=name,driver_version --format=csv,noheader || true
+  on_gpu_machine fault.log pbf_device_fault
   summary=()
   # One gtest per process: a trapped kernel loses the CUDA context for the rest of the process.
   for test in $("$carry/bin/pbf_cuda_fault_tests" --gtest_list_tests | awk '/^[^ ]/ { suite = $1 } /^  / { print suite $1 }'); do
@@ -82,13 +87,7 @@ fault)
   ! printf '%s\n' "${summary[@]}" | grep -q FAILED
   ;;
 run)
-  out=${OUT:-$root/output/pipeline}
-  mkdir -p "$out"
-  exec > >(tee "$out/pipeline.log") 2>&1
-  [[ -x $carry/bin/pbf_pipeline ]] || { echo "pipeline-gpu-run: no $carry (run prepare here first)"; exit 1; }
-  export LD_LIBRARY_PATH=$carry/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-  echo "commit $(cat "$carry/COMMIT") $( [[ -s $carry/DIRTY ]] && echo '(with local changes)')"
-  nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm --format=csv || true
+  on_gpu_machine pipeline.log pbf_pipeline
   echo "cores: $(nproc); $(uname -sr)"
   ldd "$carry/bin/pbf_pipeline" | grep -E "not found" && exit 1
   work=$(mktemp -d)

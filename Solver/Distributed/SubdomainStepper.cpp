@@ -9,6 +9,8 @@
 #include <cmath>
 #include <initializer_list>
 #include <limits>
+#include <memory>
+#include <stdexcept>
 #include <type_traits>
 
 #ifdef _OPENMP
@@ -108,7 +110,6 @@ void SubdomainStepper<Real>::append(const ParticleBatch& batch)
   }
   density_.resize(x_.size());
   lambda_.resize(x_.size());
-  p_ = x_;
   cut();
   evaluateAtRest();
 }
@@ -240,8 +241,6 @@ void SubdomainStepper<Real>::receiveGhosts()
     }
   }
   const std::vector<Bytes> in = communicator_.exchange(out);
-  ghost_.assign(owned, 0);
-  std::vector<std::uint32_t> ghostCount(ranks, 0);
   std::vector<std::int32_t> from(owned, -1);
   for (std::size_t r = 0; r < ranks; ++r)
   {
@@ -252,9 +251,7 @@ void SubdomainStepper<Real>::receiveGhosts()
       p_.push_back(q);
       v_.push_back(Vec3<Real>{ Real(0), Real(0), Real(0) });
       id_.push_back(take<std::int64_t>(in[r], offset));
-      ghost_.push_back(1);
       from.push_back(static_cast<std::int32_t>(r));
-      ++ghostCount[r];
     }
   }
   const std::size_t n = x_.size();
@@ -288,25 +285,27 @@ void SubdomainStepper<Real>::sortByCell()
     keys_[i] = geometry_.keyOf(p_[i]);
   }
   countingSortByCell(keys_, cellOffsets_, order_, cursor_);
-  auto gather = [&](auto& array) {
-    auto sorted = array;
+  // Into scratch kept from step to step, as CpuStepper gathers: nothing allocated once the
+  // arrays have their size.
+  auto gather = [&](auto& array, auto& scratch) {
+    scratch.resize(n);
     for (std::size_t k = 0; k < n; ++k)
     {
-      sorted[k] = array[order_[k]];
+      scratch[k] = array[order_[k]];
     }
-    array.swap(sorted);
+    array.swap(scratch);
   };
-  gather(x_);
-  gather(p_);
-  gather(v_);
-  gather(id_);
-  gather(keys_);
-  gather(ghost_);
-  gather(tag_);
-  gather(ghostFrom_);
+  gather(x_, gatherVec_);
+  gather(p_, gatherVec_);
+  gather(v_, gatherVec_);
+  gather(id_, gatherId_);
+  gather(keys_, gatherIndex_);
+  gather(tag_, gatherIndex_);
+  gather(ghostFrom_, gatherFrom_);
   // Sorted index of each pre-sort index; ghosts keep their arrival order per rank, which is the
   // order in which their owner packs their fields.
-  std::vector<std::uint32_t> sortedOf(n);
+  std::vector<std::uint32_t>& sortedOf = gatherIndex_;
+  sortedOf.resize(n);
   owned_.clear();
   for (std::size_t k = 0; k < n; ++k)
   {
@@ -322,7 +321,7 @@ void SubdomainStepper<Real>::sortByCell()
   }
   for (std::size_t k = 0; k < n; ++k)
   {
-    if (!ghost_[k])
+    if (ghostFrom_[k] < 0)
     {
       owned_.push_back(static_cast<std::uint32_t>(k));
     }
@@ -379,7 +378,6 @@ void SubdomainStepper<Real>::dropGhosts()
   keep(id_);
   keep(density_);
   keep(lambda_);
-  ghost_.assign(owned, 0);
   ghostFrom_.assign(owned, -1);
 }
 
@@ -598,6 +596,22 @@ template <class Real>
 void SubdomainStepper<Real>::load(const Snapshot<double>& state)
 {
   loadState(state);
+}
+
+std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backend backend,
+  Precision precision, const Parameters& parameters, const ParticleBatch& everything)
+{
+  if (backend == Backend::CUDA)
+  {
+    throw std::runtime_error("Backend = CUDA: a domain-decomposed run has CPU backends only so "
+                             "far; choose CPU (OpenMP) or Serial");
+  }
+  const bool parallel = backend == Backend::OpenMP;
+  if (precision == Precision::Single)
+  {
+    return std::make_unique<SubdomainStepper<float>>(communicator, parallel, parameters, everything);
+  }
+  return std::make_unique<SubdomainStepper<double>>(communicator, parallel, parameters, everything);
 }
 
 template class SubdomainStepper<float>;

@@ -25,6 +25,7 @@
 #include "Stepper.h"
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -109,16 +110,25 @@ private:
   std::vector<Real> density_, lambda_;
   std::vector<std::int64_t> id_;
   std::vector<CellKey> keys_;
-  std::vector<std::uint8_t> ghost_;
   std::vector<std::int32_t> ghostFrom_;        // the rank a ghost mirrors; -1 for owned
   std::vector<std::uint32_t> tag_;            // index before the sort
   std::vector<std::uint32_t> owned_;          // sorted indices of owned particles
   std::vector<std::vector<std::uint32_t>> sendIndex_;  // per rank: sorted indices it mirrors
   std::vector<std::vector<std::uint32_t>> ghostIndex_; // per rank: sorted indices of its ghosts
   std::vector<std::uint32_t> cellOffsets_, order_, cursor_;
+  // Gather targets and the sorted index of each particle, kept to avoid allocating every step.
+  std::vector<Vec3<Real>> gatherVec_;
+  std::vector<std::int64_t> gatherId_;
+  std::vector<std::uint32_t> gatherIndex_;
+  std::vector<std::int32_t> gatherFrom_;
 
   StepReport report_;
   ExchangeReport exchange_;
 };
+
+// This rank's stepper for a decomposed run: SubdomainStepper of the precision, OpenMP or serial.
+// Throws std::runtime_error for Backend::CUDA (no CUDA sub-domain stepper yet).
+std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backend backend,
+  Precision precision, const Parameters& parameters, const ParticleBatch& everything);
 
 } // namespace pbf::distributed
