@@ -351,6 +351,19 @@ double Milliseconds(std::chrono::steady_clock::time_point since)
 
 const double NaN = std::numeric_limits<double>::quiet_NaN();
 
+// Collective over the ranks of a decomposed run: true on every rank when it is true on any.
+bool AnyRank(pbf::distributed::Communicator& ranks, bool mine)
+{
+  for (const std::vector<double>& theirs : pbf::distributed::allGather(ranks, { mine ? 1.0 : 0.0 }))
+  {
+    if (theirs[0] != 0.0)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
 // One row of the diagnostics table.
 struct FrameRow
 {
@@ -1139,7 +1152,15 @@ int vtkPBFSimulation::RequestData(
             static_cast<double>(simulation.stepCount() - resumedFromStep) / total);
           // AbortExecute stays set, as VTK has it: whoever set it clears it (SetAbortExecute(0)
           // also marks this algorithm modified, so that the same time asked again re-executes).
-          if (this->GetAbortExecute() && simulation.stepCount() < targetStep)
+          bool stop = this->GetAbortExecute() && simulation.stepCount() < targetStep;
+          if (configuration.Ranks > 1 && simulation.stepCount() < targetStep)
+          {
+            // A rank that left alone would leave the others waiting for it in the next step's
+            // exchange: the ranks agree after every step, and any rank's abort stops them all at
+            // the same step (so their slabs stay consistent and the next request resumes).
+            stop = AnyRank(*internals.Ranks, stop);
+          }
+          if (stop)
           {
             aborted = true;
             break;
