@@ -6,6 +6,8 @@
 
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
+#include <cub/device/device_select.cuh>
+#include <thrust/iterator/counting_iterator.h>
 #include <cuda/functional>
 #include <cuda_runtime.h>
 
@@ -262,6 +264,32 @@ public:
     compressionFinalKernel<Real><<<1, kReduceThreads, 0, stream_>>>(
       blocks, n, k.tolerance, state, blockSums);
     check(cudaGetLastError(), "kernel launch (compression)");
+  }
+
+  // The indices i in [0, n) with pred(i), ascending, into out; their number into *count (device
+  // memory). CUB's selection keeps the input order, so the result is deterministic.
+  template <class Pred>
+  void selectIf(std::uint32_t n, Pred pred, std::uint32_t* out, std::uint32_t* count)
+  {
+    if (n == 0)
+    {
+      fillZero(count, sizeof(std::uint32_t));
+      return;
+    }
+    const thrust::counting_iterator<std::uint32_t> first(0);
+    std::size_t bytes = 0;
+    check(cub::DeviceSelect::If(nullptr, bytes, first, out, count, static_cast<std::int64_t>(n),
+            pred, stream_),
+      "cub::DeviceSelect::If (size query)");
+    if (bytes > tempBytes_)
+    {
+      throw std::logic_error("selectIf: scratch of " + std::to_string(tempBytes_) +
+        " bytes, needs " + std::to_string(bytes));
+    }
+    bytes = tempBytes_;
+    check(cub::DeviceSelect::If(temp_, bytes, first, out, count, static_cast<std::int64_t>(n),
+            pred, stream_),
+      "cub::DeviceSelect::If");
   }
 
   void fillZero(void* pointer, std::size_t bytes)

@@ -206,6 +206,44 @@ struct VorticityPass
   }
 };
 
+
+// Lines 10-19 and, in the last iteration, 21: delta p_i (eq. 14) into f.scratch, then the Jacobi
+// update in place there, so f.scratch holds the corrected positions afterwards; the largest
+// |delta p_i| goes to maxMoved[iteration] for the mask schedule.
+template <class Real, class Exec>
+void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
+  const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
+  const AdaptiveState* state)
+{
+  exec.forEachMax(CorrectionStage{}, n, b.maxMoved + iteration,
+    [=] PBF_HD(std::uint32_t i) -> double {
+      FluidView<Real, MaskedNeighbors<Real>> apply = f;
+      apply.p = f.scratch;
+      apply.scratch = f.p;
+      if (state && state->done)
+      {
+        // Adaptive mode is done: the positions stay, copied to where the next pass reads them.
+        f.scratch[i] = f.p[i];
+        if (last)
+        {
+          updateVelocity(i, apply);
+        }
+        return 0.0;
+      }
+      // delta p_i lands in the other position buffer (f.scratch), which nobody reads in this
+      // pass; applyCorrection then adds p_i to it in place. IEEE addition is commutative, so
+      // this is exactly x*_i + delta p_i, and no particle reads a position that moved.
+      positionCorrection(i, f);
+      const Vec3<Real> delta = f.scratch[i];
+      applyCorrection(i, apply);
+      if (last)
+      {
+        updateVelocity(i, apply); // line 21 needs only particle i's own corrected position
+      }
+      return static_cast<double>(length(delta));
+    });
+}
+
 } // namespace detail
 
 // Algorithm 1 of Macklin & Mueller 2013, one step; returns where x and v are afterwards.
@@ -261,34 +299,7 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
     }
 
     const bool last = iteration + 1 == k.iterations;
-    const AdaptiveState* state = adaptive ? b.adaptive : nullptr;
-    exec.forEachMax(CorrectionStage{}, n, b.maxMoved + iteration,
-      [=] PBF_HD(std::uint32_t i) -> double {
-        FluidView<Real, MaskedNeighbors<Real>> apply = f;
-        apply.p = f.scratch;
-        apply.scratch = f.p;
-        if (state && state->done)
-        {
-          // Adaptive mode is done: the positions stay, copied to where the next pass reads them.
-          f.scratch[i] = f.p[i];
-          if (last)
-          {
-            updateVelocity(i, apply);
-          }
-          return 0.0;
-        }
-        // delta p_i lands in the other position buffer (f.scratch), which nobody reads in this
-        // pass; applyCorrection then adds p_i to it in place. IEEE addition is commutative, so
-        // this is exactly x*_i + delta p_i, and no particle reads a position that moved.
-        positionCorrection(i, f);
-        const Vec3<Real> delta = f.scratch[i];
-        applyCorrection(i, apply);
-        if (last)
-        {
-          updateVelocity(i, apply); // line 21 needs only particle i's own corrected position
-        }
-        return static_cast<double>(length(delta));
-      });
+    detail::correctionPass(exec, b, n, f, iteration, last, adaptive ? b.adaptive : nullptr);
   }
 
   // Lines 22-23 (vorticity confinement and XSPH) on the corrected positions.

@@ -3,6 +3,8 @@
 #include "CellSort.h"
 #include "HostParticles.h"
 #include "ParticleChecks.h"
+#include "LocalRank.h"
+#include "RankReductions.h"
 
 #include <algorithm>
 #include <chrono>
@@ -12,6 +14,10 @@
 #include <memory>
 #include <stdexcept>
 #include <type_traits>
+
+#ifdef PBF_WITH_CUDA
+#include "Cuda/CudaSubdomain.h"
+#endif
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -460,12 +466,7 @@ void SubdomainStepper<Real>::step()
 template <class Real>
 std::vector<std::uint64_t> SubdomainStepper<Real>::particlesPerRank() const
 {
-  std::vector<std::uint64_t> counts;
-  for (const std::vector<double>& r : allGather(communicator_, { double(x_.size()) }))
-  {
-    counts.push_back(static_cast<std::uint64_t>(r[0]));
-  }
-  return counts;
+  return countsPerRank(communicator_, x_.size());
 }
 
 template <class Real>
@@ -496,25 +497,7 @@ void SubdomainStepper<Real>::cut()
 template <class Real>
 Health SubdomainStepper<Real>::health() const
 {
-  double maxDensity = 0.0;
-  const Health h = scanHealth(parameters_, particles(), &maxDensity);
-  // Every rank must reach the same verdict, or one would stop while the others wait for it.
-  Health all;
-  for (const std::vector<double>& r : allGather(communicator_,
-         { double(h.nonFinite), double(h.outside), h.maxSpeed, maxDensity,
-           double(h.firstBadId) }))
-  {
-    all.nonFinite += static_cast<std::size_t>(r[0]);
-    all.outside += static_cast<std::size_t>(r[1]);
-    all.maxSpeed = std::max(all.maxSpeed, r[2]);
-    all.maxDensityError = std::max(all.maxDensityError, r[3] / parameters_.restDensity - 1.0);
-    if (all.firstBadId < 0 && r[4] >= 0)
-    {
-      all.firstBadId = static_cast<std::int64_t>(r[4]);
-    }
-  }
-  all.maxDensityError = std::max(all.maxDensityError, 0.0);
-  return all;
+  return reduceHealth(communicator_, parameters_, particles());
 }
 
 template <class Real>
@@ -535,43 +518,7 @@ void SubdomainStepper<Real>::copyOut(Snapshot<Out>& out) const
 template <class Real>
 Statistics SubdomainStepper<Real>::statistics() const
 {
-  const double mass = calibratedParticleMass(parameters_);
-  double errorSum = 0, errorMax = 0, speedMax = 0, kinetic = 0, finite = 1;
-  Vec3d momentum{ 0, 0, 0 };
-  for (std::size_t i = 0; i < x_.size(); ++i)
-  {
-    const double error = std::max(double(density_[i]) / parameters_.restDensity - 1.0, 0.0);
-    errorSum += error;
-    errorMax = std::max(errorMax, error);
-    const Vec3d xi = Vec3d::from(x_[i]);
-    const Vec3d vi = Vec3d::from(v_[i]);
-    const double speed2 = dot(vi, vi);
-    speedMax = std::max(speedMax, std::sqrt(speed2));
-    kinetic += 0.5 * mass * speed2;
-    momentum += vi * mass;
-    if (!std::isfinite(xi.x + xi.y + xi.z + vi.x + vi.y + vi.z))
-    {
-      finite = 0;
-    }
-  }
-  Statistics s;
-  s.averageNeighbors = std::numeric_limits<double>::quiet_NaN();
-  double count = 0;
-  for (const std::vector<double>& r : allGather(communicator_,
-         { double(x_.size()), errorSum, errorMax, speedMax, kinetic, momentum.x, momentum.y,
-           momentum.z, finite }))
-  {
-    count += r[0];
-    s.averageDensityError += r[1];
-    s.maxDensityError = std::max(s.maxDensityError, r[2]);
-    s.maxSpeed = std::max(s.maxSpeed, r[3]);
-    s.kineticEnergy += r[4];
-    s.momentum += Vec3d{ r[5], r[6], r[7] };
-    s.finite = s.finite && r[8] != 0;
-  }
-  s.particles = static_cast<std::size_t>(count);
-  s.averageDensityError = count > 0 ? s.averageDensityError / count : 0.0;
-  return s;
+  return reduceStatistics(communicator_, parameters_, particles());
 }
 
 template <class Real>
@@ -603,8 +550,23 @@ std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backen
 {
   if (backend == Backend::CUDA)
   {
-    throw std::runtime_error("Backend = CUDA: a domain-decomposed run has CPU backends only so "
-                             "far; choose CPU (OpenMP) or Serial");
+#ifdef PBF_WITH_CUDA
+    // Collective: every rank asks for CUDA. A rank whose device is missing or lost fails the
+    // constructor (std::runtime_error) before its first exchange.
+    const int local = localRank(communicator);
+    const int devices = cuda::cudaDeviceCount();
+    std::string why;
+    if (devices == 0 || !cudaAvailable(&why))
+    {
+      throw std::runtime_error("CUDA backend unavailable on rank " +
+        std::to_string(communicator.rank()) + ": " + (why.empty() ? "no CUDA device" : why));
+    }
+    return cuda::makeCudaSubdomainStepper(
+      communicator, precision, parameters, everything, local % devices);
+#else
+    throw std::runtime_error("Backend = CUDA: this build has no CUDA backend (CUDA compiler not "
+                             "found at configure time); choose CPU (OpenMP) or Serial");
+#endif
   }
   const bool parallel = backend == Backend::OpenMP;
   if (precision == Precision::Single)
@@ -612,6 +574,27 @@ std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backen
     return std::make_unique<SubdomainStepper<float>>(communicator, parallel, parameters, everything);
   }
   return std::make_unique<SubdomainStepper<double>>(communicator, parallel, parameters, everything);
+}
+
+bool everyRankHasAGpu(Communicator& communicator)
+{
+  double mine = 0;
+#ifdef PBF_WITH_CUDA
+  mine = cudaAvailable() && cuda::cudaDeviceCount() > 0 ? 1.0 : 0.0;
+#endif
+  bool all = true;
+  for (const std::vector<double>& r : allGather(communicator, { mine }))
+  {
+    all = all && r[0] != 0;
+  }
+  return all;
+}
+
+std::unique_ptr<Stepper> makeSubdomainStepperAuto(Communicator& communicator, Precision precision,
+  const Parameters& parameters, const ParticleBatch& everything, Backend cpu)
+{
+  const Backend backend = everyRankHasAGpu(communicator) ? Backend::CUDA : cpu;
+  return makeSubdomainStepper(communicator, backend, precision, parameters, everything);
 }
 
 template class SubdomainStepper<float>;

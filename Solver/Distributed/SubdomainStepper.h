@@ -42,8 +42,21 @@ struct ExchangeReport
   bool cutMoved = false;       // the step began with a new cut
 };
 
+// What the benchmark and the tests ask of one rank's stepper beyond Stepper, whichever backend
+// runs it (SubdomainStepper here, cuda::DeviceSubdomainStepper on a GPU).
+class DecomposedStepper : public Stepper
+{
+public:
+  // Collective: the particles of each rank.
+  virtual std::vector<std::uint64_t> particlesPerRank() const = 0;
+  virtual const Slabs& slabs() const = 0;
+  virtual const ExchangeReport& lastExchange() const = 0;
+  virtual int rank() const = 0;
+  virtual int ranks() const = 0;
+};
+
 template <class Real>
-class SubdomainStepper final : public Stepper
+class SubdomainStepper final : public DecomposedStepper
 {
 public:
   // Every rank passes the whole initial fluid and keeps the particles of its slab.
@@ -71,11 +84,11 @@ public:
   void load(const Snapshot<double>& state) override;
 
   // Collective: the particles of each rank.
-  std::vector<std::uint64_t> particlesPerRank() const;
-  const Slabs& slabs() const { return slabs_; }
-  const ExchangeReport& lastExchange() const { return exchange_; }
-  int rank() const { return communicator_.rank(); }
-  int ranks() const { return communicator_.size(); }
+  std::vector<std::uint64_t> particlesPerRank() const override;
+  const Slabs& slabs() const override { return slabs_; }
+  const ExchangeReport& lastExchange() const override { return exchange_; }
+  int rank() const override { return communicator_.rank(); }
+  int ranks() const override { return communicator_.size(); }
 
 private:
   template <class Out>
@@ -126,9 +139,21 @@ private:
   ExchangeReport exchange_;
 };
 
-// This rank's stepper for a decomposed run: SubdomainStepper of the precision, OpenMP or serial.
-// Throws std::runtime_error for Backend::CUDA (no CUDA sub-domain stepper yet).
+// This rank's stepper for a decomposed run: SubdomainStepper of the precision, OpenMP or serial;
+// with Backend::CUDA the CUDA sub-domain stepper (Cuda/DeviceSubdomainStepper.h) on the device
+// numbered by this rank's local rank (LocalRank.h) modulo the devices it sees. Collective.
+// Throws std::runtime_error for CUDA where this build or this rank has none.
 std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backend backend,
   Precision precision, const Parameters& parameters, const ParticleBatch& everything);
+
+// Collective: whether every rank has a usable CUDA device.
+bool everyRankHasAGpu(Communicator& communicator);
+
+// Backend "Auto" for a decomposed run: CUDA when every rank has a usable GPU, otherwise the CPU
+// backend `cpu` on every rank. The CPU and CUDA sub-domain steppers exchange different messages
+// (the CUDA one merges rounds), so the ranks of one run must all use the same kind: a rank
+// without a GPU takes the whole run to the CPU. Collective.
+std::unique_ptr<Stepper> makeSubdomainStepperAuto(Communicator& communicator, Precision precision,
+  const Parameters& parameters, const ParticleBatch& everything, Backend cpu = Backend::OpenMP);
 
 } // namespace pbf::distributed

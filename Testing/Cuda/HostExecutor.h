@@ -7,6 +7,8 @@
 #include "Cuda/StepSchedule.h"
 
 #include <algorithm>
+#include <cstdlib>
+#include <string>
 #include <cstring>
 #include <numeric>
 #include <vector>
@@ -98,11 +100,49 @@ public:
     }
   }
 
+  template <class Pred>
+  void selectIf(std::uint32_t n, Pred pred, std::uint32_t* out, std::uint32_t* count)
+  {
+    std::uint32_t selected = 0;
+    for (std::uint32_t i = 0; i < n; ++i)
+    {
+      if (pred(i))
+      {
+        out[selected++] = i;
+      }
+    }
+    *count = selected;
+  }
+
   void fillZero(void* pointer, std::size_t bytes) { std::memset(pointer, 0, bytes); }
   void copy(void* destination, const void* source, std::size_t bytes)
   {
     std::memmove(destination, source, bytes);
   }
+
+private:
+  bool backwards_;
+};
+
+// The Device policy of cuda::DeviceSubdomainStepper on host memory: the decomposed CUDA step
+// runs here stage by stage, with the transfers as plain copies.
+class HostDevicePolicy
+{
+public:
+  using Exec = HostExecutor;
+  explicit HostDevicePolicy(bool backwards = false)
+    : backwards_(backwards)
+  {
+  }
+  HostExecutor executor() const { return HostExecutor(backwards_); }
+  void* allocate(std::size_t bytes) { return std::calloc(bytes > 0 ? bytes : 1, 1); }
+  void release(void* pointer) { std::free(pointer); }
+  void download(void* host, const void* device, std::size_t bytes) { std::memcpy(host, device, bytes); }
+  void upload(void* device, const void* host, std::size_t bytes) { std::memcpy(device, host, bytes); }
+  void synchronize() {}
+  void reserveTemp(std::uint32_t, std::size_t, int) {}
+  void activate() {}
+  std::string name() const { return "host executor"; }
 
 private:
   bool backwards_;

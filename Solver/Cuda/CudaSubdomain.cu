@@ -1,0 +1,40 @@
+// Entry points of the decomposed CUDA stepper: the precision switch and the device count.
+#include "CudaSubdomainStepper.cuh"
+
+#include <cuda_runtime.h>
+
+namespace pbf
+{
+namespace cuda
+{
+
+// Compiled in CudaSubdomainFloat.cu and CudaSubdomainDouble.cu.
+extern template std::unique_ptr<distributed::DecomposedStepper> makeCudaSubdomainStepperOf<float>(
+  distributed::Communicator&, const Parameters&, const ParticleBatch&, int, const Options&);
+extern template std::unique_ptr<distributed::DecomposedStepper> makeCudaSubdomainStepperOf<double>(
+  distributed::Communicator&, const Parameters&, const ParticleBatch&, int, const Options&);
+
+std::unique_ptr<distributed::DecomposedStepper> makeCudaSubdomainStepper(
+  distributed::Communicator& communicator, Precision precision, const Parameters& parameters,
+  const ParticleBatch& everything, int device, const Options& options)
+{
+  if (precision == Precision::Single)
+  {
+    return makeCudaSubdomainStepperOf<float>(communicator, parameters, everything, device, options);
+  }
+  return makeCudaSubdomainStepperOf<double>(communicator, parameters, everything, device, options);
+}
+
+int cudaDeviceCount()
+{
+  int count = 0;
+  if (cudaGetDeviceCount(&count) != cudaSuccess)
+  {
+    cudaGetLastError();
+    return 0;
+  }
+  return count;
+}
+
+} // namespace cuda
+} // namespace pbf

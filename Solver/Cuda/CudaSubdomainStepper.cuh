@@ -1,0 +1,149 @@
+// DeviceSubdomainStepper's Device policy on CUDA: one stream on the rank's device, the kernel
+// executor of StepSchedule.h, cudaMalloc'd arrays, and the transfers of the ghost and migration
+// messages (each followed by a stream synchronisation before the exchange reads the bytes).
+#pragma once
+
+#include "CudaRuntime.cuh"
+#include "CudaSubdomain.h"
+#include "DeviceSubdomainStepper.h"
+
+#include <cuda_runtime.h>
+
+#include <memory>
+#include <string>
+
+namespace pbf
+{
+namespace cuda
+{
+
+// A predicate for sizing the selection's scratch (public: CUB's kernels name it).
+struct AnyIndex
+{
+  __host__ __device__ bool operator()(std::uint32_t) const { return true; }
+};
+
+class CudaDevicePolicy
+{
+public:
+  using Exec = KernelExecutor;
+
+  CudaDevicePolicy(int device, int block)
+    : device_(device)
+    , block_(block)
+  {
+    std::string why;
+    if (!cudaDevicePresent(&why))
+    {
+      throw std::runtime_error("CUDA backend unavailable: " + why);
+    }
+    check(cudaSetDevice(device_), "cudaSetDevice");
+    cudaDeviceProp properties{};
+    check(cudaGetDeviceProperties(&properties, device_), "cudaGetDeviceProperties");
+    name_ = std::string(properties.name) + " (device " + std::to_string(device_) + ")";
+    check(cudaStreamCreate(&stream_), "cudaStreamCreate");
+  }
+
+  ~CudaDevicePolicy()
+  {
+    cudaSetDevice(device_);
+    cudaStreamSynchronize(stream_);
+    if (temp_)
+    {
+      cudaFree(temp_);
+    }
+    cudaStreamDestroy(stream_);
+  }
+
+  CudaDevicePolicy(const CudaDevicePolicy&) = delete;
+  CudaDevicePolicy& operator=(const CudaDevicePolicy&) = delete;
+
+  KernelExecutor executor() const { return KernelExecutor(stream_, temp_, tempBytes_, block_); }
+
+  void* allocate(std::size_t bytes)
+  {
+    void* p = nullptr;
+    const cudaError_t error = cudaMalloc(&p, bytes);
+    if (error == cudaErrorMemoryAllocation)
+    {
+      cudaGetLastError();
+      throw InvalidInput("particle count: the decomposed CUDA stepper could not allocate " +
+        std::to_string(bytes >> 20) + " MiB more on " + name_ +
+        "; use more ranks, fewer particles or a CPU backend");
+    }
+    check(error, "cudaMalloc");
+    return p;
+  }
+  void release(void* p) { cudaFree(p); }
+
+  void download(void* host, const void* device, std::size_t bytes)
+  {
+    check(cudaMemcpyAsync(host, device, bytes, cudaMemcpyDeviceToHost, stream_), "cudaMemcpyAsync");
+  }
+  // From pageable memory the bytes are staged before this returns, so the caller may reuse them.
+  void upload(void* device, const void* host, std::size_t bytes)
+  {
+    check(cudaMemcpyAsync(device, host, bytes, cudaMemcpyHostToDevice, stream_), "cudaMemcpyAsync");
+  }
+  void synchronize() { check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize"); }
+  void activate() { check(cudaSetDevice(device_), "cudaSetDevice"); }
+  std::string name() const { return name_; }
+
+  // Scratch for the radix sorts, the offsets' scan and the selections at this capacity.
+  void reserveTemp(std::uint32_t particles, std::size_t cells, int keyBits)
+  {
+    std::size_t need = KernelExecutor::tempBytesFor(particles, cells, keyBits);
+    std::size_t selectBytes = 0;
+    std::uint32_t* none = nullptr;
+    const thrust::counting_iterator<std::uint32_t> first(0);
+    check(cub::DeviceSelect::If(nullptr, selectBytes, first, none, none,
+            static_cast<std::int64_t>(particles), AnyIndex{}),
+      "cub::DeviceSelect::If (size query)");
+    // Room for the predicates' own instantiations, whose sizes the selection re-checks.
+    need = std::max(need, selectBytes) + 4096;
+    if (need <= tempBytes_)
+    {
+      return;
+    }
+    synchronize();
+    if (temp_)
+    {
+      cudaFree(temp_);
+      temp_ = nullptr;
+      tempBytes_ = 0;
+    }
+    temp_ = allocate(need);
+    tempBytes_ = need;
+  }
+
+private:
+  int device_;
+  int block_;
+  std::string name_;
+  cudaStream_t stream_ = nullptr;
+  void* temp_ = nullptr;
+  std::size_t tempBytes_ = 0;
+};
+
+template <class Real>
+std::unique_ptr<distributed::DecomposedStepper> makeCudaSubdomainStepperOf(
+  distributed::Communicator& communicator, const Parameters& parameters,
+  const ParticleBatch& everything, int device, const Options& options)
+{
+  if (!(options.skin > 0.0 && options.skin <= 1.0))
+  {
+    throw InvalidInput("CUDA skin = " + std::to_string(options.skin) +
+      ": must lie in (0, 1] (a fraction of h)");
+  }
+  if (options.block < 32 || options.block > kMaxBlock || options.block % 32 != 0)
+  {
+    throw InvalidInput("CUDA block = " + std::to_string(options.block) +
+      ": must be a multiple of 32 up to " + std::to_string(kMaxBlock));
+  }
+  return std::make_unique<DeviceSubdomainStepper<Real, CudaDevicePolicy>>(communicator, parameters,
+    everything, std::make_unique<CudaDevicePolicy>(device, options.block), options.skin,
+    options.search == NeighborSearch::RowMasks);
+}
+
+} // namespace cuda
+} // namespace pbf

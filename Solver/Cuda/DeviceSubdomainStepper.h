@@ -1,0 +1,974 @@
+// One rank's share of a domain-decomposed run with the particles kept on a GPU (issue 7): the
+// algorithm and the ghost protocol of distributed::SubdomainStepper (read that first), with the
+// stages of StepSchedule.h and SubdomainSchedule.h. Written over a Device policy, so the same
+// code runs on CUDA (CudaSubdomainStepper.cu) and, for the tests, on the host
+// (Testing/Cuda/HostExecutor.h).
+//
+// A step, in the order the work is queued; "sync" marks the only waits for the device, each
+// before an exchange with the other ranks, whose bytes go device -> host -> Communicator ->
+// host -> device:
+//   1. cut: column histogram of x (integer atomics), sync, allGather, Slabs::balanced; the slab
+//      borders go up to the device.
+//   2. predict; migrate by the predicted column: owner key per particle, a stable radix sort by
+//      it (kept first, leavers grouped by destination), sync for the counts; only the leavers
+//      are copied out, the arrivals copied in behind the kept ones. (The CPU stepper migrates by
+//      x and then again by x*; one migration by x* ends with the same owners.)
+//   3. ghosts: the particles of this slab's first and last columns go to the neighbours (sync
+//      for the counts, then the exchange), and theirs are appended.
+//   4. one stable radix sort by cell of owned + ghosts (StepSchedule's sortAndGather). Then the
+//      lists, by selection over the sorted keys: what each neighbour mirrors (this slab's border
+//      columns) and where its ghosts are (the columns beyond). Both sides list a border column in
+//      the order (cell, sender's order before the sort), since the receiver appended the ghosts in
+//      the order they were sent: the k-th value sent is the k-th ghost slot, with no index ever
+//      exchanged.
+//   5. the passes run over owned and ghosts alike (a ghost's own results are wrong, its
+//      neighbourhood being cut, and are overwritten by the refresh from its owner before anything
+//      reads them): density pass, refresh density+lambda (one round); the fused correction,
+//      refresh positions (and velocities after the last one); vorticity+XSPH, refresh omega;
+//      confinement; then the owned particles are gathered back, in cell order.
+//
+// Neighbour masks across ranks: the masks are exact while no particle has moved farther than
+// the schedule's bound since they were built (NeighborMasks.h). A ghost moves by its owner's
+// corrections, so the position refresh carries each rank's max |delta p| of that iteration and
+// every rank takes the max of its own and its neighbours' before the next pass decides whether
+// to rebuild: the masks stay exact, and results do not depend on the skin.
+//
+// Adaptive iterations (densityErrorTolerance > 0) are not implemented here: the constructor
+// throws InvalidInput naming the field.
+#pragma once
+
+#include "Distributed/Communicator.h"
+#include "Distributed/RankReductions.h"
+#include "Distributed/Slabs.h"
+#include "Distributed/SubdomainStepper.h"
+#include "HostParticles.h"
+#include "ParticleChecks.h"
+#include "StepSchedule.h"
+#include "SubdomainSchedule.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace pbf
+{
+namespace cuda
+{
+
+// The step constants CudaStepper uses, for a given skin (fraction of h) and neighbour search.
+template <class Real>
+StepConstants<Real> makeStepConstants(const Parameters& parameters, double skin, bool masks)
+{
+  const double h = parameters.smoothingLength();
+  StepConstants<Real> k{};
+  k.c = Coefficients<Real>::make(parameters);
+  k.geometry = makeGridGeometry<Real>(parameters.domain, h);
+  k.cellCount = k.geometry.cellCount();
+  k.keyBits = 1;
+  while (k.keyBits < 32 && (std::uint64_t(1) << k.keyBits) < k.cellCount)
+  {
+    ++k.keyBits;
+  }
+  k.iterations = parameters.solverIterations;
+  const double reach = h * (1.0 + skin);
+  k.reach2 = static_cast<Real>(reach * reach);
+  const Box& d = parameters.domain;
+  const double maxAbs = std::max({ std::abs(d.min.x), std::abs(d.min.y), std::abs(d.min.z),
+    std::abs(d.max.x), std::abs(d.max.y), std::abs(d.max.z) });
+  k.schedule.skin = skin * h;
+  k.schedule.h = h;
+  k.schedule.roundingPerStep = MaskSchedule::roundingBound<Real>(maxAbs);
+  k.schedule.enabled = masks ? 1 : 0;
+  k.tolerance = parameters.densityErrorTolerance / 100.0;
+  k.inverseRestDensity = 1.0 / parameters.restDensity;
+  return k;
+}
+
+// Device policy (a class with):
+//   using Exec; Exec executor();              StepSchedule's executor plus selectIf
+//   void* allocate(bytes); void release(p);   device memory
+//   download(host, device, bytes); upload(device, host, bytes); synchronize();
+//   reserveTemp(particles, cells, keyBits);   scratch of the sort, scan and selection
+//   activate();                               make it current (cudaSetDevice)
+//   std::string name() const;
+template <class Real, class Device>
+class DeviceSubdomainStepper final : public distributed::DecomposedStepper
+{
+public:
+  DeviceSubdomainStepper(distributed::Communicator& communicator, const Parameters& parameters,
+    const ParticleBatch& everything, std::unique_ptr<Device> device, double skin = 0.02,
+    bool masks = true)
+    : communicator_(communicator)
+    , parameters_(parameters)
+    , device_(std::move(device))
+  {
+    parameters_.validate();
+    checkBatch(parameters_, everything);
+    if (parameters_.densityErrorTolerance > 0)
+    {
+      throw InvalidInput("densityErrorTolerance = " +
+        std::to_string(parameters_.densityErrorTolerance) +
+        ": adaptive iterations are not available on the CUDA backend of a decomposed run; set it "
+        "to 0 or choose a CPU backend");
+    }
+    constants_ = makeStepConstants<Real>(parameters_, skin, masks);
+    const auto ranks = static_cast<std::size_t>(communicator_.size());
+    out_.resize(ranks);
+    hostFirst_.resize(ranks + 1);
+    hostCounts_.resize(std::max<std::size_t>(static_cast<std::size_t>(constants_.geometry.nx),
+      ranks + 1));
+    device_->activate();
+    allocateFixed();
+    slabs_ = distributed::Slabs::balanced(
+      std::vector<std::uint64_t>(static_cast<std::size_t>(constants_.geometry.nx), 1),
+      communicator_.size());
+    uploadSlabs();
+    append(everything);
+  }
+
+  ~DeviceSubdomainStepper() override
+  {
+    try
+    {
+      device_->activate();
+      device_->synchronize();
+    }
+    catch (...)
+    {
+    }
+    releaseParticles();
+    for (void* p : fixed_)
+    {
+      device_->release(p);
+    }
+  }
+
+  DeviceSubdomainStepper(const DeviceSubdomainStepper&) = delete;
+  DeviceSubdomainStepper& operator=(const DeviceSubdomainStepper&) = delete;
+
+  void step() override
+  {
+    device_->activate();
+    exchange_ = distributed::ExchangeReport{};
+    report_ = StepReport{};
+    cut(x_);
+    {
+      // x, v and the predicted positions in the free buffer.
+      const int p = freeBuffer(x_, v_, -1);
+      auto exec = device_->executor();
+      subdomain::predict(exec, constants_, count(n_), vec_[x_], vec_[v_], vec_[p]);
+      Roles4 r{ x_, p, v_, otherBuffer(x_, p, v_) };
+      r = migrate(r);
+      r = receiveGhosts(r);
+      const CellKey* keys = sortByCell(r);
+      // Now vec[r.x] = x, vec[r.p] = x*, vec[r.v] = v in cell order; vec[r.free] is free.
+      solve(r, keys);
+    }
+    report_.iterations = constants_.iterations;
+    report_.densityError = std::numeric_limits<double>::quiet_NaN();
+  }
+
+  // Every rank passes the whole batch; each keeps the particles of its slab.
+  void append(const ParticleBatch& batch) override
+  {
+    checkBatch(parameters_, batch);
+    device_->activate();
+    std::vector<Vec3<Real>> x, v;
+    std::vector<std::int64_t> id;
+    const GridGeometry<Real>& g = constants_.geometry;
+    for (std::size_t i = 0; i < batch.position.size(); ++i)
+    {
+      const Vec3<Real> q = Vec3<Real>::from(batch.position[i]);
+      if (slabs_.owner(subdomain::columnOf(g, q)) == communicator_.rank())
+      {
+        x.push_back(q);
+        v.push_back(Vec3<Real>::from(batch.velocity[i]));
+        id.push_back(batch.id[i]);
+      }
+    }
+    const std::size_t n = n_ + x.size();
+    reserve(n, n_);
+    if (!x.empty())
+    {
+      device_->upload(vec_[x_] + n_, x.data(), x.size() * sizeof(Vec3<Real>));
+      device_->upload(vec_[v_] + n_, v.data(), v.size() * sizeof(Vec3<Real>));
+      device_->upload(id_ + n_, id.data(), id.size() * sizeof(std::int64_t));
+      device_->synchronize(); // the host vectors die here
+    }
+    n_ = n;
+    cut(x_);
+    evaluateAtRest();
+  }
+
+  std::size_t size() const override { return n_; }
+  Backend backend() const override { return Backend::CUDA; }
+  Precision precision() const override
+  {
+    return sizeof(Real) == sizeof(float) ? Precision::Single : Precision::Double;
+  }
+  std::string description() const override
+  {
+    const auto r = static_cast<std::size_t>(communicator_.rank());
+    return "CUDA, " + device_->name() + ", rank " + std::to_string(r) + " of " +
+      std::to_string(communicator_.size()) + " (grid columns " + std::to_string(slabs_.first[r]) +
+      "-" + std::to_string(slabs_.first[r + 1] - 1) + " of " + std::to_string(slabs_.columns()) +
+      " along x)";
+  }
+
+  void read(Snapshot<float>& out) const override { copyToSnapshot(hostState().view(), out); }
+  void read(Snapshot<double>& out) const override { copyToSnapshot(hostState().view(), out); }
+  Statistics statistics() const override
+  {
+    const HostState s = hostState();
+    return distributed::reduceStatistics(communicator_, parameters_, s.view());
+  }
+  Health health() const override
+  {
+    const HostState s = hostState();
+    return distributed::reduceHealth(communicator_, parameters_, s.view());
+  }
+  StepReport lastStep() const override { return report_; }
+  void synchronize() const override
+  {
+    device_->activate();
+    device_->synchronize();
+  }
+  void load(const Snapshot<float>& state) override { loadState(state); }
+  void load(const Snapshot<double>& state) override { loadState(state); }
+
+  std::vector<std::uint64_t> particlesPerRank() const override
+  {
+    return distributed::countsPerRank(communicator_, n_);
+  }
+  const distributed::Slabs& slabs() const override { return slabs_; }
+  const distributed::ExchangeReport& lastExchange() const override { return exchange_; }
+  int rank() const override { return communicator_.rank(); }
+  int ranks() const override { return communicator_.size(); }
+  // Mask builds since construction (diagnostics).
+  std::uint64_t maskBuilds() const
+  {
+    unsigned long long builds = 0;
+    device_->activate();
+    device_->download(&builds, maskBuilds_, sizeof builds);
+    device_->synchronize();
+    return builds;
+  }
+
+private:
+  // Which of the four Vec3 buffers hold what during a step.
+  struct Roles4
+  {
+    int x, p, v, free;
+  };
+
+  struct HostState
+  {
+    std::vector<Vec3<Real>> x, v;
+    std::vector<Real> density, lambda;
+    std::vector<std::int64_t> id;
+    ConstHostParticles<Real> view() const { return { x, v, density, lambda, id }; }
+  };
+
+  using Clock = std::chrono::steady_clock;
+  static double since(Clock::time_point start)
+  {
+    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  }
+  static std::uint32_t count(std::size_t n) { return static_cast<std::uint32_t>(n); }
+  static int otherBuffer(int a, int b, int c)
+  {
+    for (int i = 0; i < 4; ++i)
+    {
+      if (i != a && i != b && i != c)
+      {
+        return i;
+      }
+    }
+    return -1;
+  }
+  static int freeBuffer(int a, int b, int c) { return otherBuffer(a, b, c); }
+
+  subdomain::SlabView slabView() const
+  {
+    return { slabFirst_, communicator_.size(), communicator_.rank() };
+  }
+
+  StepBuffers<Real> buffers() const
+  {
+    StepBuffers<Real> b{};
+    for (int i = 0; i < 4; ++i)
+    {
+      b.vec[i] = vec_[i];
+    }
+    b.density = density_;
+    b.lambda = lambda_;
+    b.id = id_;
+    b.keys[0] = keys_[0];
+    b.keys[1] = keys_[1];
+    b.masks = constants_.schedule.enabled ? masks_ : nullptr;
+    b.stride = count(capacity_);
+    b.cellOffsets = cellOffsets_;
+    b.maxMoved = maxMoved_;
+    b.maskBuilds = maskBuilds_;
+    b.adaptive = nullptr;
+    b.blockSums = nullptr;
+    return b;
+  }
+
+  template <class T>
+  T* allocateFixed(std::size_t n)
+  {
+    void* p = device_->allocate(std::max<std::size_t>(n, 1) * sizeof(T));
+    fixed_.push_back(p);
+    return static_cast<T*>(p);
+  }
+
+  void allocateFixed()
+  {
+    const auto ranks = static_cast<std::size_t>(communicator_.size());
+    cellOffsets_ = allocateFixed<std::uint32_t>(std::size_t(constants_.cellCount) + 1);
+    maxMoved_ = allocateFixed<unsigned long long>(
+      static_cast<std::size_t>(std::max(constants_.iterations, 1)));
+    maskBuilds_ = allocateFixed<unsigned long long>(1);
+    columnCounts_ = allocateFixed<std::uint32_t>(static_cast<std::size_t>(constants_.geometry.nx));
+    ownerCounts_ = allocateFixed<std::uint32_t>(ranks + 1);
+    slabFirst_ = allocateFixed<int>(ranks + 1);
+    selected_ = allocateFixed<std::uint32_t>(8);
+    auto exec = device_->executor();
+    exec.fillZero(maskBuilds_, sizeof(unsigned long long));
+  }
+
+  void releaseParticles()
+  {
+    for (void* p : particleArrays_)
+    {
+      device_->release(p);
+    }
+    particleArrays_.clear();
+    if (pack_)
+    {
+      device_->release(pack_);
+    }
+    if (recv_)
+    {
+      device_->release(recv_);
+    }
+    pack_ = recv_ = nullptr;
+    packBytes_ = recvBytes_ = 0;
+  }
+
+  // Grows the per-particle arrays to hold `needed` (by half again at least, so growth happens
+  // O(log N) times), keeping the first `keep` entries of the four Vec3 buffers, density, lambda
+  // and id. Never shrinks: once grown, steps allocate nothing.
+  void reserve(std::size_t needed, std::size_t keep)
+  {
+    if (needed <= capacity_ && capacity_ > 0)
+    {
+      return;
+    }
+    if (needed >= std::numeric_limits<std::uint32_t>::max())
+    {
+      throw InvalidInput("particle count = " + std::to_string(needed) +
+        ": more than 32-bit indices hold");
+    }
+    const std::size_t capacity = std::max({ needed, capacity_ + capacity_ / 2, std::size_t(1024) });
+    std::vector<void*> arrays;
+    auto make = [&](std::size_t bytesPerParticle) {
+      void* p = device_->allocate(capacity * bytesPerParticle);
+      arrays.push_back(p);
+      return p;
+    };
+    Vec3<Real>* vec[4];
+    for (auto& v : vec)
+    {
+      v = static_cast<Vec3<Real>*>(make(sizeof(Vec3<Real>)));
+    }
+    auto* density = static_cast<Real*>(make(sizeof(Real)));
+    auto* lambda = static_cast<Real*>(make(sizeof(Real)));
+    auto* densityAlt = static_cast<Real*>(make(sizeof(Real)));
+    auto* lambdaAlt = static_cast<Real*>(make(sizeof(Real)));
+    auto* id = static_cast<std::int64_t*>(make(sizeof(std::int64_t)));
+    auto* idAlt = static_cast<std::int64_t*>(make(sizeof(std::int64_t)));
+    auto* keys0 = static_cast<CellKey*>(make(sizeof(CellKey)));
+    auto* keys1 = static_cast<CellKey*>(make(sizeof(CellKey)));
+    auto* masks = static_cast<std::uint32_t*>(
+      make(constants_.schedule.enabled ? kNeighborRows * sizeof(std::uint32_t) : 1));
+    auto* sendList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
+    auto* ghostList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
+    auto* ownedList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
+    device_->reserveTemp(count(capacity), std::size_t(constants_.cellCount) + 1, constants_.keyBits);
+    auto exec = device_->executor();
+    if (keep > 0)
+    {
+      for (int i = 0; i < 4; ++i)
+      {
+        exec.copy(vec[i], vec_[i], keep * sizeof(Vec3<Real>));
+      }
+      exec.copy(density, density_, keep * sizeof(Real));
+      exec.copy(lambda, lambda_, keep * sizeof(Real));
+      exec.copy(id, id_, keep * sizeof(std::int64_t));
+    }
+    device_->synchronize();
+    for (void* p : particleArrays_)
+    {
+      device_->release(p);
+    }
+    particleArrays_ = arrays;
+    for (int i = 0; i < 4; ++i)
+    {
+      vec_[i] = vec[i];
+    }
+    density_ = density;
+    lambda_ = lambda;
+    densityAlt_ = densityAlt;
+    lambdaAlt_ = lambdaAlt;
+    id_ = id;
+    idAlt_ = idAlt;
+    keys_[0] = keys0;
+    keys_[1] = keys1;
+    masks_ = masks;
+    sendList_ = sendList;
+    ghostList_ = ghostList;
+    ownedList_ = ownedList;
+    capacity_ = capacity;
+  }
+
+  // Grow-only byte buffers for the messages.
+  unsigned char* packBuffer(std::size_t bytes) { return growBytes(pack_, packBytes_, bytes); }
+  unsigned char* recvBuffer(std::size_t bytes) { return growBytes(recv_, recvBytes_, bytes); }
+  unsigned char* growBytes(unsigned char*& buffer, std::size_t& have, std::size_t bytes)
+  {
+    if (bytes > have || !buffer)
+    {
+      const std::size_t size = std::max({ bytes, have + have / 2, std::size_t(4096) });
+      device_->synchronize();
+      if (buffer)
+      {
+        device_->release(buffer);
+      }
+      buffer = static_cast<unsigned char*>(device_->allocate(size));
+      have = size;
+    }
+    return buffer;
+  }
+
+  void uploadSlabs()
+  {
+    for (std::size_t r = 0; r < slabs_.first.size(); ++r)
+    {
+      hostFirst_[r] = slabs_.first[r];
+    }
+    device_->upload(slabFirst_, hostFirst_.data(), hostFirst_.size() * sizeof(int));
+  }
+
+  // 1. Slabs balanced from the global column counts of positions vec[from].
+  void cut(int from)
+  {
+    const auto start = Clock::now();
+    const auto nx = static_cast<std::size_t>(constants_.geometry.nx);
+    auto exec = device_->executor();
+    exec.fillZero(columnCounts_, nx * sizeof(std::uint32_t));
+    subdomain::countColumns(exec, constants_.geometry, count(n_), vec_[from], columnCounts_);
+    device_->download(hostCounts_.data(), columnCounts_, nx * sizeof(std::uint32_t));
+    device_->synchronize();
+    std::vector<double> mine(nx);
+    for (std::size_t c = 0; c < nx; ++c)
+    {
+      mine[c] = static_cast<double>(hostCounts_[c]);
+    }
+    std::vector<std::uint64_t> perColumn(nx, 0);
+    for (const std::vector<double>& r : distributed::allGather(communicator_, mine))
+    {
+      for (std::size_t c = 0; c < nx; ++c)
+      {
+        perColumn[c] += static_cast<std::uint64_t>(r[c]);
+      }
+    }
+    const distributed::Slabs balanced = distributed::Slabs::balanced(perColumn, communicator_.size());
+    exchange_.cutMoved = balanced.first != slabs_.first;
+    slabs_ = balanced;
+    uploadSlabs();
+    exchange_.migrationMilliseconds += since(start);
+  }
+
+  // 2. To the owners of the columns of vec[r.p]. Returns the new roles.
+  Roles4 migrate(Roles4 r)
+  {
+    const auto start = Clock::now();
+    const int me = communicator_.rank();
+    const auto ranks = static_cast<std::size_t>(communicator_.size());
+    int ownerBits = 1;
+    while ((std::size_t(1) << ownerBits) < ranks + 1)
+    {
+      ++ownerBits;
+    }
+    const std::uint32_t n = count(n_);
+    auto exec = device_->executor();
+    exec.fillZero(ownerCounts_, (ranks + 1) * sizeof(std::uint32_t));
+    auto* order = reinterpret_cast<std::uint32_t*>(lambda_);
+    auto* orderAlt = reinterpret_cast<std::uint32_t*>(density_);
+    subdomain::ownerKeys(
+      exec, constants_.geometry, slabView(), n, vec_[r.p], keys_[0], order, ownerCounts_);
+    const SortedPairs sorted = exec.sortByKey(keys_[0], keys_[1], order, orderAlt, n, ownerBits);
+    device_->download(hostCounts_.data(), ownerCounts_, (ranks + 1) * sizeof(std::uint32_t));
+    device_->synchronize();
+    const std::uint32_t stay = hostCounts_[0];
+    const std::uint32_t leaving = n - stay;
+    if (leaving > 0)
+    {
+      // Kept first, leavers grouped by destination; the rotation frees one buffer each time.
+      const std::uint32_t* perm = sorted.values;
+      subdomain::gather(exec, n, perm, vec_[r.x], vec_[r.free]);
+      subdomain::gather(exec, n, perm, vec_[r.p], vec_[r.x]);
+      subdomain::gather(exec, n, perm, vec_[r.v], vec_[r.p]);
+      subdomain::gather(exec, n, perm, id_, idAlt_);
+      std::swap(id_, idAlt_);
+      r = Roles4{ r.free, r.x, r.p, r.v };
+    }
+    auto* packed = reinterpret_cast<subdomain::Migrant<Real>*>(
+      packBuffer(std::size_t(leaving) * sizeof(subdomain::Migrant<Real>)));
+    subdomain::packMigrants(exec, stay, leaving, vec_[r.x], vec_[r.p], vec_[r.v], id_, packed);
+    staging_.resize(std::size_t(leaving) * sizeof(subdomain::Migrant<Real>));
+    if (leaving > 0)
+    {
+      device_->download(staging_.data(), packed, staging_.size());
+    }
+    device_->synchronize();
+    std::size_t offset = 0;
+    for (std::size_t to = 0; to < ranks; ++to)
+    {
+      out_[to].clear();
+      if (static_cast<int>(to) == me)
+      {
+        continue;
+      }
+      const std::size_t bytes = std::size_t(hostCounts_[to + 1]) * sizeof(subdomain::Migrant<Real>);
+      out_[to].assign(staging_.begin() + static_cast<std::ptrdiff_t>(offset),
+        staging_.begin() + static_cast<std::ptrdiff_t>(offset + bytes));
+      offset += bytes;
+    }
+    const std::vector<distributed::Bytes> in = communicator_.exchange(out_);
+    std::size_t arrivingBytes = 0;
+    for (const distributed::Bytes& b : in)
+    {
+      arrivingBytes += b.size();
+    }
+    const std::size_t arriving = arrivingBytes / sizeof(subdomain::Migrant<Real>);
+    reserve(stay + arriving, n);
+    unsigned char* recv = recvBuffer(arrivingBytes);
+    offset = 0;
+    for (const distributed::Bytes& b : in)
+    {
+      if (!b.empty())
+      {
+        device_->upload(recv + offset, b.data(), b.size());
+        offset += b.size();
+      }
+    }
+    exec = device_->executor();
+    subdomain::unpackMigrants(exec, stay, count(arriving),
+      reinterpret_cast<const subdomain::Migrant<Real>*>(recv), vec_[r.x], vec_[r.p], vec_[r.v],
+      id_);
+    n_ = stay + arriving;
+    exchange_.migrated += arriving;
+    exchange_.migrationMilliseconds += since(start);
+    return r;
+  }
+
+  // 3. The border particles (by vec[r.p]) to the neighbours; theirs appended as ghosts.
+  Roles4 receiveGhosts(Roles4 r)
+  {
+    const auto start = Clock::now();
+    const int me = communicator_.rank();
+    const int last = communicator_.size() - 1;
+    const std::uint32_t n = count(n_);
+    auto exec = device_->executor();
+    const GridGeometry<Real>& g = constants_.geometry;
+    // No column is -1 or nx: a side without a neighbour selects nothing.
+    const int leftColumn = me > 0 ? slabs_.first[static_cast<std::size_t>(me)] : -1;
+    const int rightColumn = me < last ? slabs_.first[static_cast<std::size_t>(me) + 1] - 1 : -1;
+    subdomain::selectColumn(exec, g, n, vec_[r.p], leftColumn, sendList_, selected_);
+    subdomain::selectColumn(exec, g, n, vec_[r.p], rightColumn, ghostList_, selected_ + 1);
+    device_->download(hostCounts_.data(), selected_, 2 * sizeof(std::uint32_t));
+    device_->synchronize();
+    sendLeft_ = hostCounts_[0];
+    sendRight_ = hostCounts_[1];
+    using Seed = subdomain::GhostSeed<Real>;
+    auto* packed = reinterpret_cast<Seed*>(packBuffer((sendLeft_ + sendRight_) * sizeof(Seed)));
+    subdomain::packSeeds(exec, sendLeft_, sendList_, vec_[r.p], id_, packed);
+    subdomain::packSeeds(exec, sendRight_, ghostList_, vec_[r.p], id_, packed + sendLeft_);
+    staging_.resize((sendLeft_ + sendRight_) * sizeof(Seed));
+    if (!staging_.empty())
+    {
+      device_->download(staging_.data(), packed, staging_.size());
+    }
+    device_->synchronize();
+    for (auto& b : out_)
+    {
+      b.clear();
+    }
+    if (me > 0)
+    {
+      out_[static_cast<std::size_t>(me - 1)].assign(
+        staging_.begin(), staging_.begin() + static_cast<std::ptrdiff_t>(sendLeft_ * sizeof(Seed)));
+    }
+    if (me < last)
+    {
+      out_[static_cast<std::size_t>(me + 1)].assign(
+        staging_.begin() + static_cast<std::ptrdiff_t>(sendLeft_ * sizeof(Seed)), staging_.end());
+    }
+    const std::vector<distributed::Bytes> in = communicator_.exchange(out_);
+    ghostLeft_ = me > 0 ? count(in[static_cast<std::size_t>(me - 1)].size() / sizeof(Seed)) : 0;
+    ghostRight_ = me < last ? count(in[static_cast<std::size_t>(me + 1)].size() / sizeof(Seed)) : 0;
+    for (std::size_t from = 0; from < in.size(); ++from)
+    {
+      const bool neighbour = static_cast<int>(from) == me - 1 || static_cast<int>(from) == me + 1;
+      if (!neighbour && !in[from].empty())
+      {
+        throw std::logic_error("ghosts from rank " + std::to_string(from) + ", not a neighbour");
+      }
+    }
+    const std::uint32_t ghosts = ghostLeft_ + ghostRight_;
+    reserve(std::size_t(n) + ghosts, n);
+    unsigned char* recv = recvBuffer(ghosts * sizeof(Seed));
+    if (ghostLeft_ > 0)
+    {
+      device_->upload(recv, in[static_cast<std::size_t>(me - 1)].data(), ghostLeft_ * sizeof(Seed));
+    }
+    if (ghostRight_ > 0)
+    {
+      device_->upload(recv + ghostLeft_ * sizeof(Seed), in[static_cast<std::size_t>(me + 1)].data(),
+        ghostRight_ * sizeof(Seed));
+    }
+    exec = device_->executor();
+    subdomain::unpackSeeds(exec, n, ghosts, reinterpret_cast<const Seed*>(recv), vec_[r.x],
+      vec_[r.p], vec_[r.v], id_);
+    total_ = std::size_t(n) + ghosts;
+    exchange_.ghosts = ghosts;
+    exchange_.ghostMilliseconds += since(start);
+    return r;
+  }
+
+  // 4. The cell sort of owned + ghosts, and the lists. Returns the sorted keys; afterwards
+  // vec[r.x] = x, vec[r.p] = x*, vec[r.v] = v (cell order), r updated.
+  const CellKey* sortByCell(Roles4& r)
+  {
+    const std::uint32_t total = count(total_);
+    auto exec = device_->executor();
+    const StepBuffers<Real> b = buffers();
+    subdomain::cellKeys(exec, constants_.geometry, total, vec_[r.p], keys_[0],
+      reinterpret_cast<std::uint32_t*>(lambda_));
+    // On entry A = x, B = v, C = p, D free; on exit D = x, A = p, C = v, B free.
+    const CellKey* keys = detail::sortAndGather(
+      exec, b, constants_, total, vec_[r.x], vec_[r.v], vec_[r.p], vec_[r.free]);
+    r = Roles4{ r.free, r.x, r.p, r.v };
+
+    const int me = communicator_.rank();
+    const int last = communicator_.size() - 1;
+    const int nx = constants_.geometry.nx;
+    const int begin = slabs_.first[static_cast<std::size_t>(me)];
+    const int end = slabs_.first[static_cast<std::size_t>(me) + 1];
+    // Empty ranges where there is no neighbour.
+    const int sendL0 = me > 0 ? begin : 0, sendL1 = me > 0 ? begin + 1 : 0;
+    const int sendR0 = me < last ? end - 1 : 0, sendR1 = me < last ? end : 0;
+    const int ghostL0 = me > 0 ? begin - 1 : 0, ghostL1 = me > 0 ? begin : 0;
+    const int ghostR0 = me < last ? end : 0, ghostR1 = me < last ? end + 1 : 0;
+    subdomain::selectColumns(exec, nx, total, keys, sendL0, sendL1, sendList_, selected_);
+    subdomain::selectColumns(
+      exec, nx, total, keys, sendR0, sendR1, sendList_ + sendLeft_, selected_ + 1);
+    subdomain::selectColumns(exec, nx, total, keys, ghostL0, ghostL1, ghostList_, selected_ + 2);
+    subdomain::selectColumns(
+      exec, nx, total, keys, ghostR0, ghostR1, ghostList_ + ghostLeft_, selected_ + 3);
+    subdomain::selectColumns(exec, nx, total, keys, begin, end, ownedList_, selected_ + 4);
+    // The counts are known already; checking them costs one small copy and catches a protocol
+    // slip at once instead of as a wrong answer.
+    device_->download(hostCounts_.data(), selected_, 5 * sizeof(std::uint32_t));
+    device_->synchronize();
+    const std::uint32_t expected[5] = { sendLeft_, sendRight_, ghostLeft_, ghostRight_,
+      count(n_) };
+    for (int i = 0; i < 5; ++i)
+    {
+      if (hostCounts_[static_cast<std::size_t>(i)] != expected[i])
+      {
+        throw std::logic_error("decomposed CUDA step: list " + std::to_string(i) + " has " +
+          std::to_string(hostCounts_[static_cast<std::size_t>(i)]) + " particles, expected " +
+          std::to_string(expected[i]));
+      }
+    }
+    return keys;
+  }
+
+  // One ghost refresh: fields a (and b) of the send lists to the neighbours, into the ghost
+  // slots. With moved >= 0 the messages also carry maxMoved[moved], and each rank keeps the max.
+  template <class T>
+  void refresh(T* a, T* b, int moved)
+  {
+    const int me = communicator_.rank();
+    const int last = communicator_.size() - 1;
+    const std::size_t record = sizeof(T) * (b ? 2 : 1);
+    const std::size_t tail = moved >= 0 ? sizeof(unsigned long long) : 0;
+    const std::size_t sendBytes = (sendLeft_ + sendRight_) * record;
+    auto exec = device_->executor();
+    unsigned char* pack = packBuffer(sendBytes + tail);
+    subdomain::packFields(exec, sendList_, sendLeft_, sendRight_, a, b, pack);
+    if (moved >= 0)
+    {
+      exec.copy(pack + sendBytes, maxMoved_ + moved, tail);
+    }
+    // The pass before is not exchange time: wait for it first.
+    device_->synchronize();
+    const auto start = Clock::now();
+    staging_.resize(sendBytes + tail);
+    if (!staging_.empty())
+    {
+      device_->download(staging_.data(), pack, staging_.size());
+    }
+    device_->synchronize();
+    for (auto& o : out_)
+    {
+      o.clear();
+    }
+    const auto send = [&](std::size_t to, std::size_t from, std::size_t bytes) {
+      distributed::Bytes& o = out_[to];
+      o.insert(o.end(), staging_.begin() + static_cast<std::ptrdiff_t>(from),
+        staging_.begin() + static_cast<std::ptrdiff_t>(from + bytes));
+      o.insert(o.end(), staging_.begin() + static_cast<std::ptrdiff_t>(sendBytes), staging_.end());
+    };
+    if (me > 0)
+    {
+      send(static_cast<std::size_t>(me - 1), 0, sendLeft_ * record);
+    }
+    if (me < last)
+    {
+      send(static_cast<std::size_t>(me + 1), sendLeft_ * record, sendRight_ * record);
+    }
+    const std::vector<distributed::Bytes> in = communicator_.exchange(out_);
+    unsigned char* recv = recvBuffer((ghostLeft_ + ghostRight_) * record);
+    unsigned long long largest = 0;
+    if (moved >= 0)
+    {
+      std::memcpy(&largest, staging_.data() + sendBytes, tail);
+    }
+    const auto receive = [&](int from, std::size_t at, std::size_t bytes) {
+      const distributed::Bytes& message = in[static_cast<std::size_t>(from)];
+      if (message.size() != bytes + tail)
+      {
+        throw std::logic_error("ghost refresh from rank " + std::to_string(from) + ": " +
+          std::to_string(message.size()) + " bytes, expected " + std::to_string(bytes + tail));
+      }
+      if (bytes > 0)
+      {
+        device_->upload(recv + at, message.data(), bytes);
+      }
+      if (moved >= 0)
+      {
+        unsigned long long theirs = 0;
+        std::memcpy(&theirs, message.data() + bytes, tail);
+        largest = std::max(largest, theirs); // non-negative doubles order as their bits
+      }
+    };
+    if (me > 0)
+    {
+      receive(me - 1, 0, ghostLeft_ * record);
+    }
+    if (me < last)
+    {
+      receive(me + 1, ghostLeft_ * record, ghostRight_ * record);
+    }
+    if (moved >= 0)
+    {
+      movedBits_ = largest;
+      device_->upload(maxMoved_ + moved, &movedBits_, tail);
+    }
+    exec = device_->executor();
+    subdomain::scatterFields(exec, ghostList_, ghostLeft_, ghostRight_, recv, a, b);
+    exchange_.ghostMilliseconds += since(start);
+  }
+
+  // 5. The passes with their refreshes, then the owned particles back into cell order.
+  void solve(Roles4 r, const CellKey* sortedKeys)
+  {
+    const std::uint32_t total = count(total_);
+    const StepConstants<Real>& k = constants_;
+    const StepBuffers<Real> b = buffers();
+    auto exec = device_->executor();
+    Vec3<Real>* const x = vec_[r.x];
+    Vec3<Real>* const v = vec_[r.v];
+    Vec3<Real>* const positions[2] = { vec_[r.p], vec_[r.free] };
+    exec.fillZero(maxMoved_, static_cast<std::size_t>(k.iterations) * sizeof(unsigned long long));
+    for (int iteration = 0; iteration < k.iterations; ++iteration)
+    {
+      FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
+      f.x = x;
+      f.v = v;
+      f.p = positions[iteration & 1];
+      f.scratch = positions[(iteration + 1) & 1];
+      detail::firstPassOnPositions(
+        exec, DensityStage{}, b, k, total, f, iteration, false, detail::DensityPass{});
+      refresh<Real>(density_, lambda_, -1);
+      const bool last = iteration + 1 == k.iterations;
+      exec = device_->executor();
+      detail::correctionPass(exec, b, total, f, iteration, last, nullptr);
+      // The last correction also updated the velocities, which XSPH and vorticity read.
+      refresh<Vec3<Real>>(f.scratch, last ? v : nullptr, iteration);
+      exec = device_->executor();
+    }
+    Vec3<Real>* const corrected = positions[k.iterations & 1];
+    Vec3<Real>* const spare = positions[(k.iterations + 1) & 1];
+    FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
+    f.p = corrected;
+    f.v = v;
+    f.omega = x; // x is no longer needed
+    f.scratch = spare;
+    detail::firstPassOnPositions(
+      exec, VorticityStage{}, b, k, total, f, k.iterations, false, detail::VorticityPass{});
+    refresh<Vec3<Real>>(x, nullptr, -1);
+    exec = device_->executor();
+    FluidView<Real, MaskedNeighbors<Real>> confine = f;
+    confine.v = spare;
+    subdomain::confine(exec, total, confine);
+    // Line 23 and the ghosts dropped: x = the corrected positions, v = spare, owned only, into
+    // the buffers that held v and omega.
+    keepOwned(corrected, spare, r.v, r.x);
+  }
+
+  // The owned particles (ownedList_) of positions and velocities into vec[toX], vec[toV], and
+  // their density, lambda and id, in cell order.
+  void keepOwned(const Vec3<Real>* x, const Vec3<Real>* v, int toX, int toV)
+  {
+    auto exec = device_->executor();
+    const std::uint32_t n = count(n_);
+    subdomain::gather(exec, n, ownedList_, x, vec_[toX]);
+    subdomain::gather(exec, n, ownedList_, v, vec_[toV]);
+    subdomain::gather(exec, n, ownedList_, density_, densityAlt_);
+    subdomain::gather(exec, n, ownedList_, lambda_, lambdaAlt_);
+    subdomain::gather(exec, n, ownedList_, id_, idAlt_);
+    std::swap(density_, densityAlt_);
+    std::swap(lambda_, lambdaAlt_);
+    std::swap(id_, idAlt_);
+    x_ = toX;
+    v_ = toV;
+  }
+
+  // Density and lambda at the current positions, nothing moves (after particles are added), as
+  // SubdomainStepper::evaluateAtRest: the ghosts' values are not refreshed, nothing reads them.
+  void evaluateAtRest()
+  {
+    auto exec = device_->executor();
+    const int p = freeBuffer(x_, v_, -1);
+    exec.copy(vec_[p], vec_[x_], n_ * sizeof(Vec3<Real>));
+    Roles4 r{ x_, p, v_, otherBuffer(x_, p, v_) };
+    r = migrate(r);
+    r = receiveGhosts(r);
+    const CellKey* keys = sortByCell(r);
+    exec = device_->executor();
+    const StepBuffers<Real> b = buffers();
+    FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, constants_, keys);
+    f.p = vec_[r.p];
+    exec.fillZero(maxMoved_, sizeof(unsigned long long));
+    detail::firstPassOnPositions(exec, DensityStage{}, b, constants_, count(total_), f, 0, false,
+      detail::DensityPass{});
+    keepOwned(vec_[r.x], vec_[r.v], r.p, r.free);
+    device_->synchronize();
+  }
+
+  HostState hostState() const
+  {
+    device_->activate();
+    HostState s;
+    s.x.resize(n_);
+    s.v.resize(n_);
+    s.density.resize(n_);
+    s.lambda.resize(n_);
+    s.id.resize(n_);
+    if (n_ > 0)
+    {
+      device_->download(s.x.data(), vec_[x_], n_ * sizeof(Vec3<Real>));
+      device_->download(s.v.data(), vec_[v_], n_ * sizeof(Vec3<Real>));
+      device_->download(s.density.data(), density_, n_ * sizeof(Real));
+      device_->download(s.lambda.data(), lambda_, n_ * sizeof(Real));
+      device_->download(s.id.data(), id_, n_ * sizeof(std::int64_t));
+    }
+    device_->synchronize();
+    return s;
+  }
+
+  // This rank's particles as read() gave them; the next step cuts the slabs from them.
+  template <class In>
+  void loadState(const Snapshot<In>& state)
+  {
+    HostState s;
+    loadFromSnapshot(state, HostParticles<Real>{ s.x, s.v, s.density, s.lambda, s.id });
+    device_->activate();
+    device_->synchronize();
+    const std::size_t n = s.id.size();
+    n_ = 0;
+    reserve(n, 0);
+    x_ = 0;
+    v_ = 1;
+    if (n > 0)
+    {
+      device_->upload(vec_[x_], s.x.data(), n * sizeof(Vec3<Real>));
+      device_->upload(vec_[v_], s.v.data(), n * sizeof(Vec3<Real>));
+      device_->upload(density_, s.density.data(), n * sizeof(Real));
+      device_->upload(lambda_, s.lambda.data(), n * sizeof(Real));
+      device_->upload(id_, s.id.data(), n * sizeof(std::int64_t));
+    }
+    device_->synchronize();
+    n_ = n;
+  }
+
+  distributed::Communicator& communicator_;
+  Parameters parameters_;
+  std::unique_ptr<Device> device_;
+  StepConstants<Real> constants_{};
+  distributed::Slabs slabs_;
+
+  // Per-particle device arrays (capacity_ each); owned particles in [0, n_) between steps, with
+  // x in vec_[x_] and v in vec_[v_].
+  std::vector<void*> particleArrays_;
+  std::size_t capacity_ = 0;
+  std::size_t n_ = 0;
+  std::size_t total_ = 0; // owned + ghosts during a step
+  int x_ = 0, v_ = 1;
+  Vec3<Real>* vec_[4] = {};
+  Real *density_ = nullptr, *lambda_ = nullptr, *densityAlt_ = nullptr, *lambdaAlt_ = nullptr;
+  std::int64_t *id_ = nullptr, *idAlt_ = nullptr;
+  CellKey* keys_[2] = {};
+  std::uint32_t* masks_ = nullptr;
+  std::uint32_t *sendList_ = nullptr, *ghostList_ = nullptr, *ownedList_ = nullptr;
+
+  // Fixed-size device arrays.
+  std::vector<void*> fixed_;
+  std::uint32_t* cellOffsets_ = nullptr;
+  unsigned long long* maxMoved_ = nullptr;
+  unsigned long long* maskBuilds_ = nullptr;
+  std::uint32_t* columnCounts_ = nullptr;
+  std::uint32_t* ownerCounts_ = nullptr;
+  int* slabFirst_ = nullptr;
+  std::uint32_t* selected_ = nullptr;
+  unsigned char *pack_ = nullptr, *recv_ = nullptr;
+  std::size_t packBytes_ = 0, recvBytes_ = 0;
+
+  // This step's list lengths: what goes to the left and right neighbours, ghosts from them.
+  std::uint32_t sendLeft_ = 0, sendRight_ = 0, ghostLeft_ = 0, ghostRight_ = 0;
+
+  // Host staging, kept between steps so that steps reuse it.
+  std::vector<std::uint32_t> hostCounts_;
+  std::vector<int> hostFirst_;
+  distributed::Bytes staging_;
+  std::vector<distributed::Bytes> out_;
+  unsigned long long movedBits_ = 0;
+
+  StepReport report_;
+  distributed::ExchangeReport exchange_;
+};
+
+} // namespace cuda
+} // namespace pbf

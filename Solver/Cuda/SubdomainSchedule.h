@@ -1,0 +1,263 @@
+// The per-particle stages that one rank of a domain-decomposed run adds to StepSchedule.h on a
+// GPU (issue 7): the column histogram for the cut, the owner of each particle, packing the
+// particles that leave and the border particles that others mirror, and gathering and
+// scattering the fields of the ghost refreshes. Written over the same executor as StepSchedule.h
+// (plus selectIf, below), so the tests run them on the host; DeviceSubdomainStepper.h strings
+// them together with the exchanges.
+//
+// Executor additions:
+//   selectIf(n, pred, out, count)   out = the i in [0, n) with pred(i), ascending; *count = how
+//                                   many (both in device memory). Stable, so deterministic.
+#pragma once
+
+#include "Equations.h"
+#include "Grid.h"
+#include "HostDevice.h"
+#include "StepSchedule.h"
+
+#include <cstddef>
+#include <cstdint>
+
+namespace pbf
+{
+namespace cuda
+{
+namespace subdomain
+{
+
+// Integer counting: exact in any order, so the histogram does not depend on scheduling. The host
+// executors run a stage sequentially.
+PBF_HD PBF_INLINE void countOne(std::uint32_t* counter)
+{
+#if defined(__CUDA_ARCH__)
+  atomicAdd(counter, 1u);
+#else
+  ++*counter;
+#endif
+}
+
+// The slabs on the device: rank r owns the grid columns [first[r], first[r + 1]).
+struct SlabView
+{
+  const int* first; // ranks + 1 entries
+  int ranks;
+  int me;
+
+  PBF_HD PBF_INLINE int owner(int column) const
+  {
+    int r = 0;
+    while (r + 1 < ranks && column >= first[r + 1])
+    {
+      ++r;
+    }
+    return r;
+  }
+  PBF_HD PBF_INLINE int begin() const { return first[me]; }
+  PBF_HD PBF_INLINE int end() const { return first[me + 1]; }
+};
+
+template <class Real>
+PBF_HD PBF_INLINE int columnOf(const GridGeometry<Real>& g, const Vec3<Real>& q)
+{
+  return g.clampedCell(q.x, g.origin.x, g.nx);
+}
+
+PBF_HD PBF_INLINE int columnOfKey(CellKey key, int nx)
+{
+  return static_cast<int>(key % static_cast<CellKey>(nx));
+}
+
+// What a particle that changes rank takes along: everything the step still needs of it.
+template <class Real>
+struct Migrant
+{
+  Vec3<Real> x, p, v;
+  std::int64_t id;
+};
+
+// What a ghost starts from: its predicted position (and id, for the tests and diagnostics).
+template <class Real>
+struct GhostSeed
+{
+  Vec3<Real> p;
+  std::int64_t id;
+};
+
+// counts[c] += particles of column c (counts zeroed by the caller).
+template <class Real, class Exec>
+void countColumns(Exec& exec, const GridGeometry<Real>& g, std::uint32_t n, const Vec3<Real>* x,
+  std::uint32_t* counts)
+{
+  exec.forEach(KeyStage{}, n, [=] PBF_HD(std::uint32_t i) { countOne(counts + columnOf(g, x[i])); });
+}
+
+// Algorithm 1, lines 1-4, on this rank's particles.
+template <class Real, class Exec>
+void predict(Exec& exec, const StepConstants<Real>& k, std::uint32_t n, const Vec3<Real>* x,
+  Vec3<Real>* v, Vec3<Real>* p)
+{
+  FluidView<Real> f = detail::plainView(k);
+  f.x = x;
+  f.v = v;
+  f.p = p;
+  exec.forEach(PredictStage{}, n, [=] PBF_HD(std::uint32_t i) { predictPosition(i, f); });
+}
+
+// The migration's sort key: 0 for a particle this rank keeps, 1 + the owner's rank otherwise,
+// so a stable sort puts the kept ones first, in their order, and the others grouped by where
+// they go. counts[key] counts them (zeroed by the caller).
+template <class Real, class Exec>
+void ownerKeys(Exec& exec, const GridGeometry<Real>& g, SlabView slabs, std::uint32_t n,
+  const Vec3<Real>* q, CellKey* keys, std::uint32_t* order, std::uint32_t* counts)
+{
+  exec.forEach(KeyStage{}, n, [=] PBF_HD(std::uint32_t i) {
+    const int owner = slabs.owner(columnOf(g, q[i]));
+    const CellKey key = owner == slabs.me ? 0u : static_cast<CellKey>(owner + 1);
+    keys[i] = key;
+    order[i] = i;
+    countOne(counts + key);
+  });
+}
+
+// to[i] = from[perm[i]].
+template <class T, class Exec>
+void gather(Exec& exec, std::uint32_t n, const std::uint32_t* perm, const T* from, T* to)
+{
+  exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { to[i] = from[perm[i]]; });
+}
+
+template <class Real, class Exec>
+void packMigrants(Exec& exec, std::uint32_t first, std::uint32_t count, const Vec3<Real>* x,
+  const Vec3<Real>* p, const Vec3<Real>* v, const std::int64_t* id, Migrant<Real>* out)
+{
+  exec.forEach(GatherStage{}, count, [=] PBF_HD(std::uint32_t k) {
+    const std::uint32_t i = first + k;
+    out[k] = Migrant<Real>{ x[i], p[i], v[i], id[i] };
+  });
+}
+
+template <class Real, class Exec>
+void unpackMigrants(Exec& exec, std::uint32_t first, std::uint32_t count,
+  const Migrant<Real>* in, Vec3<Real>* x, Vec3<Real>* p, Vec3<Real>* v, std::int64_t* id)
+{
+  exec.forEach(GatherStage{}, count, [=] PBF_HD(std::uint32_t k) {
+    const std::uint32_t i = first + k;
+    const Migrant<Real> m = in[k];
+    x[i] = m.x;
+    p[i] = m.p;
+    v[i] = m.v;
+    id[i] = m.id;
+  });
+}
+
+// The particles of one grid column (by position), in their order: the border column that a
+// neighbour mirrors.
+template <class Real, class Exec>
+void selectColumn(Exec& exec, const GridGeometry<Real>& g, std::uint32_t n, const Vec3<Real>* q,
+  int column, std::uint32_t* out, std::uint32_t* count)
+{
+  exec.selectIf(n, [=] PBF_HD(std::uint32_t i) { return columnOf(g, q[i]) == column; }, out, count);
+}
+
+// The same after the cell sort, from the sorted keys: sorted indices with a column in
+// [begin, end), ascending.
+template <class Exec>
+void selectColumns(Exec& exec, int nx, std::uint32_t n, const CellKey* keys, int begin, int end,
+  std::uint32_t* out, std::uint32_t* count)
+{
+  exec.selectIf(n,
+    [=] PBF_HD(std::uint32_t i) {
+      const int c = columnOfKey(keys[i], nx);
+      return c >= begin && c < end;
+    },
+    out, count);
+}
+
+template <class Real, class Exec>
+void packSeeds(Exec& exec, std::uint32_t count, const std::uint32_t* list, const Vec3<Real>* p,
+  const std::int64_t* id, GhostSeed<Real>* out)
+{
+  exec.forEach(GatherStage{}, count, [=] PBF_HD(std::uint32_t k) {
+    const std::uint32_t i = list[k];
+    out[k] = GhostSeed<Real>{ p[i], id[i] };
+  });
+}
+
+// Ghosts enter with x = p (only the owner updates their velocity) and v = 0 until refreshed.
+template <class Real, class Exec>
+void unpackSeeds(Exec& exec, std::uint32_t first, std::uint32_t count, const GhostSeed<Real>* in,
+  Vec3<Real>* x, Vec3<Real>* p, Vec3<Real>* v, std::int64_t* id)
+{
+  exec.forEach(GatherStage{}, count, [=] PBF_HD(std::uint32_t k) {
+    const std::uint32_t i = first + k;
+    const GhostSeed<Real> s = in[k];
+    x[i] = s.p;
+    p[i] = s.p;
+    v[i] = Vec3<Real>{ Real(0), Real(0), Real(0) };
+    id[i] = s.id;
+  });
+}
+
+// Cell keys of positions q, and the identity as the sort's values (as StepSchedule keys them).
+template <class Real, class Exec>
+void cellKeys(Exec& exec, const GridGeometry<Real>& g, std::uint32_t n, const Vec3<Real>* q,
+  CellKey* keys, std::uint32_t* order)
+{
+  exec.forEach(KeyStage{}, n, [=] PBF_HD(std::uint32_t i) {
+    keys[i] = g.keyOf(q[i]);
+    order[i] = i;
+  });
+}
+
+// Eq. 16 on the XSPH velocities in place (f.v = f.scratch), as StepSchedule's last stage.
+template <class Real, class Exec>
+void confine(Exec& exec, std::uint32_t n, const FluidView<Real, MaskedNeighbors<Real>>& f)
+{
+  exec.forEach(ConfinementStage{}, n, [=] PBF_HD(std::uint32_t i) { vorticityConfinement(i, f); });
+}
+
+// A ghost refresh's message layout, for one or two fields a (and b) of type T: to the left
+// neighbour [a of its nLeft][b of its nLeft], then to the right one [a][b] of nRight. The
+// receiver's ghosts from a side are in the order the sender lists them (DeviceSubdomainStepper.h
+// says why), so the same layout scatters them.
+template <class T, class Exec>
+void packFields(Exec& exec, const std::uint32_t* list, std::uint32_t nLeft, std::uint32_t nRight,
+  const T* a, const T* b, unsigned char* out)
+{
+  const int fields = b ? 2 : 1;
+  exec.forEach(GatherStage{}, nLeft + nRight, [=] PBF_HD(std::uint32_t k) {
+    const bool left = k < nLeft;
+    const std::uint32_t count = left ? nLeft : nRight;
+    const std::uint32_t j = left ? k : k - nLeft;
+    T* region = reinterpret_cast<T*>(out) + (left ? 0u : nLeft * fields);
+    const std::uint32_t i = list[k];
+    region[j] = a[i];
+    if (b)
+    {
+      region[count + j] = b[i];
+    }
+  });
+}
+
+template <class T, class Exec>
+void scatterFields(Exec& exec, const std::uint32_t* list, std::uint32_t nLeft,
+  std::uint32_t nRight, const unsigned char* in, T* a, T* b)
+{
+  const int fields = b ? 2 : 1;
+  exec.forEach(GatherStage{}, nLeft + nRight, [=] PBF_HD(std::uint32_t k) {
+    const bool left = k < nLeft;
+    const std::uint32_t count = left ? nLeft : nRight;
+    const std::uint32_t j = left ? k : k - nLeft;
+    const T* region = reinterpret_cast<const T*>(in) + (left ? 0u : nLeft * fields);
+    const std::uint32_t i = list[k];
+    a[i] = region[j];
+    if (b)
+    {
+      b[i] = region[count + j];
+    }
+  });
+}
+
+} // namespace subdomain
+} // namespace cuda
+} // namespace pbf

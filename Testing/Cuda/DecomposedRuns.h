@@ -1,0 +1,109 @@
+// Runs a decomposed stepper on N ranks as threads (ThreadCluster) and gathers what the tests of
+// the CUDA sub-domain stepper compare: the particles of every rank, and per step the statistics,
+// the counts per rank and what each rank exchanged. Shared by the host-executor tests (label
+// solver) and the GPU tests (label gpu).
+#pragma once
+
+#include "Distributed/SubdomainStepper.h"
+#include "Distributed/ThreadCluster.h"
+#include "Scene.h"
+#include "Stepper.h"
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace pbf::test
+{
+
+struct DecomposedSetup
+{
+  Parameters parameters;
+  ParticleBatch fluid;
+};
+
+inline DecomposedSetup decomposedDamBreak(double spacing)
+{
+  const Scene scene = presetScene("dam_break");
+  DecomposedSetup s;
+  s.parameters.particleSpacing = spacing;
+  s.parameters = withSceneDomain(s.parameters, scene);
+  s.fluid = fillScene(scene, s.parameters);
+  return s;
+}
+
+struct DecomposedOutcome
+{
+  Snapshot<double> state;          // every rank's particles, rank after rank
+  std::vector<Statistics> history; // after each step (with history)
+  std::vector<std::vector<std::uint64_t>> counts; // particles per rank after each step
+  std::uint64_t migrated = 0;      // particles received by any rank, over all steps
+  std::uint64_t ghosts = 0;        // ghosts received by any rank, over all steps
+  int cutsMoved = 0;               // steps that began with a new cut (rank 0's count)
+};
+
+using DecomposedFactory = std::function<std::unique_ptr<distributed::DecomposedStepper>(
+  distributed::Communicator&, const DecomposedSetup&)>;
+
+inline DecomposedOutcome runDecomposed(int ranks, const DecomposedSetup& setup, int steps,
+  const DecomposedFactory& make, bool history = false)
+{
+  std::vector<Snapshot<double>> parts(static_cast<std::size_t>(ranks));
+  std::vector<std::uint64_t> migrated(static_cast<std::size_t>(ranks), 0);
+  std::vector<std::uint64_t> ghosts(static_cast<std::size_t>(ranks), 0);
+  DecomposedOutcome outcome;
+  distributed::runThreadCluster(ranks, [&](distributed::Communicator& communicator) {
+    const auto r = static_cast<std::size_t>(communicator.rank());
+    std::unique_ptr<distributed::DecomposedStepper> stepper = make(communicator, setup);
+    for (int s = 0; s < steps; ++s)
+    {
+      stepper->step();
+      migrated[r] += stepper->lastExchange().migrated;
+      ghosts[r] += stepper->lastExchange().ghosts;
+      if (r == 0)
+      {
+        outcome.cutsMoved += stepper->lastExchange().cutMoved ? 1 : 0;
+      }
+      if (history)
+      {
+        const Statistics statistics = stepper->statistics();
+        const std::vector<std::uint64_t> counts = stepper->particlesPerRank();
+        if (r == 0)
+        {
+          outcome.history.push_back(statistics);
+          outcome.counts.push_back(counts);
+        }
+      }
+    }
+    stepper->read(parts[r]);
+  });
+  for (std::size_t r = 0; r < parts.size(); ++r)
+  {
+    const Snapshot<double>& part = parts[r];
+    Snapshot<double>& all = outcome.state;
+    all.position.insert(all.position.end(), part.position.begin(), part.position.end());
+    all.velocity.insert(all.velocity.end(), part.velocity.begin(), part.velocity.end());
+    all.density.insert(all.density.end(), part.density.begin(), part.density.end());
+    all.lambda.insert(all.lambda.end(), part.lambda.begin(), part.lambda.end());
+    all.id.insert(all.id.end(), part.id.begin(), part.id.end());
+    outcome.migrated += migrated[r];
+    outcome.ghosts += ghosts[r];
+  }
+  return outcome;
+}
+
+// The serial backend's state after `steps` steps, in double.
+inline Snapshot<double> serialState(const DecomposedSetup& setup, int steps, Precision precision)
+{
+  auto serial = makeStepper(Backend::Serial, precision, setup.parameters, setup.fluid);
+  for (int s = 0; s < steps; ++s)
+  {
+    serial->step();
+  }
+  Snapshot<double> state;
+  serial->read(state);
+  return state;
+}
+
+} // namespace pbf::test
