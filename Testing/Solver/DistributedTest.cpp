@@ -1,5 +1,6 @@
 // Domain decomposition (issue 7) with the ranks as threads (Distributed/ThreadCluster.h): N ranks
 // against one rank and against the serial backend, matched by particle id.
+#include "Distributed/LocalRank.h"
 #include "Distributed/Slabs.h"
 #include "Distributed/SubdomainStepper.h"
 #include "Distributed/ThreadCluster.h"
@@ -276,4 +277,18 @@ TEST(Distributed, EmittersAddEachParticleOnceAcrossRanks)
   ASSERT_GT(one.size(), 100u);
   EXPECT_EQ(run(2), one);
   EXPECT_EQ(run(3), one);
+}
+
+TEST(LocalRank, RanksOnOneHostAreNumberedInRankOrder)
+{
+  // Five ranks on hosts a, b, a, a, b: local ranks 0, 0, 1, 2, 1 (which GPU each takes).
+  const std::vector<std::string> hosts{ "node-a", "node-b", "node-a", "node-a", "node-b" };
+  std::vector<int> local(hosts.size(), -1), here(hosts.size(), -1);
+  runThreadCluster(static_cast<int>(hosts.size()), [&](Communicator& communicator) {
+    const auto r = static_cast<std::size_t>(communicator.rank());
+    local[r] = localRank(communicator, hosts[r]);
+    here[r] = localRank(communicator); // all threads share this machine's name
+  });
+  EXPECT_EQ(local, (std::vector<int>{ 0, 0, 1, 2, 1 }));
+  EXPECT_EQ(here, (std::vector<int>{ 0, 1, 2, 3, 4 }));
 }
