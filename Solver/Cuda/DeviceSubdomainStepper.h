@@ -9,9 +9,10 @@
 // host -> device:
 //   1. cut: column histogram of x (integer atomics), sync, allGather, Slabs::balanced; the slab
 //      borders go up to the device.
-//   2. predict; migrate by the predicted column: owner key per particle, a stable radix sort by
-//      it (kept first, leavers grouped by destination), sync for the counts; only the leavers
-//      are copied out, the arrivals copied in behind the kept ones. (The CPU stepper migrates by
+//   2. predict; migrate by the predicted column: owner per particle and its histogram, sync for
+//      the counts; the leavers listed per destination by stable selections, packed and copied
+//      out, their holes filled by the kept particles beyond the kept count, the arrivals copied
+//      in behind. (The CPU stepper migrates by
 //      x and then again by x*; one migration by x* ends with the same owners.)
 //   3. ghosts: the particles of this slab's first and last columns go to the neighbours (sync
 //      for the counts, then the exchange), and theirs are appended.
@@ -497,47 +498,51 @@ private:
     exchange_.migrationMilliseconds += since(start);
   }
 
-  // 2. To the owners of the columns of vec[r.p]. Returns the new roles.
+  // 2. To the owners of the columns of vec[r.p]; the roles stay. The leavers are listed per
+  // destination (stable selections), packed and copied out; the kept particles that sit behind
+  // the first `stay` slots fill the leavers' holes, so only O(leavers) particles move on the
+  // device; the arrivals are appended.
   Roles4 migrate(Roles4 r)
   {
     const auto start = Clock::now();
     const int me = communicator_.rank();
     const auto ranks = static_cast<std::size_t>(communicator_.size());
-    int ownerBits = 1;
-    while ((std::size_t(1) << ownerBits) < ranks + 1)
-    {
-      ++ownerBits;
-    }
     const std::uint32_t n = count(n_);
     auto exec = device_->executor();
     exec.fillZero(ownerCounts_, (ranks + 1) * sizeof(std::uint32_t));
-    auto* order = reinterpret_cast<std::uint32_t*>(lambda_);
-    auto* orderAlt = reinterpret_cast<std::uint32_t*>(density_);
+    auto* order = reinterpret_cast<std::uint32_t*>(lambda_); // unused identity
     subdomain::ownerKeys(
       exec, constants_.geometry, slabView(), n, vec_[r.p], keys_[0], order, ownerCounts_);
-    const SortedPairs sorted = exec.sortByKey(keys_[0], keys_[1], order, orderAlt, n, ownerBits);
     device_->download(hostCounts_.data(), ownerCounts_, (ranks + 1) * sizeof(std::uint32_t));
     device_->synchronize();
     const std::uint32_t stay = hostCounts_[0];
     const std::uint32_t leaving = n - stay;
+    using Record = subdomain::Migrant<Real>;
+    auto* packed = reinterpret_cast<Record*>(packBuffer(std::size_t(leaving) * sizeof(Record)));
+    staging_.resize(std::size_t(leaving) * sizeof(Record));
     if (leaving > 0)
     {
-      // Kept first, leavers grouped by destination; the rotation frees one buffer each time.
-      const std::uint32_t* perm = sorted.values;
-      subdomain::gather(exec, n, perm, vec_[r.x], vec_[r.free]);
-      subdomain::gather(exec, n, perm, vec_[r.p], vec_[r.x]);
-      subdomain::gather(exec, n, perm, vec_[r.v], vec_[r.p]);
-      subdomain::gather(exec, n, perm, id_, idAlt_);
-      std::swap(id_, idAlt_);
-      r = Roles4{ r.free, r.x, r.p, r.v };
-    }
-    auto* packed = reinterpret_cast<subdomain::Migrant<Real>*>(
-      packBuffer(std::size_t(leaving) * sizeof(subdomain::Migrant<Real>)));
-    subdomain::packMigrants(exec, stay, leaving, vec_[r.x], vec_[r.p], vec_[r.v], id_, packed);
-    staging_.resize(std::size_t(leaving) * sizeof(subdomain::Migrant<Real>));
-    if (leaving > 0)
-    {
+      // ownedList_ and sendList_/ghostList_ are free until the cell sort.
+      std::uint32_t offset = 0;
+      for (std::size_t to = 0; to < ranks; ++to)
+      {
+        const std::uint32_t c = hostCounts_[to + 1];
+        if (c > 0)
+        {
+          subdomain::selectKey(exec, n, keys_[0], static_cast<CellKey>(to + 1),
+            ownedList_ + offset, selected_ + 2);
+          offset += c;
+        }
+      }
+      subdomain::packMigrants(
+        exec, leaving, ownedList_, vec_[r.x], vec_[r.p], vec_[r.v], id_, packed);
       device_->download(staging_.data(), packed, staging_.size());
+      subdomain::selectHolesAndMovers(exec, n, stay, keys_[0], sendList_, ghostList_, selected_);
+      const std::uint32_t most = std::min(stay, leaving);
+      subdomain::fillHoles(exec, most, selected_, sendList_, ghostList_, vec_[r.x]);
+      subdomain::fillHoles(exec, most, selected_, sendList_, ghostList_, vec_[r.p]);
+      subdomain::fillHoles(exec, most, selected_, sendList_, ghostList_, vec_[r.v]);
+      subdomain::fillHoles(exec, most, selected_, sendList_, ghostList_, id_);
     }
     device_->synchronize();
     std::size_t offset = 0;
@@ -548,7 +553,7 @@ private:
       {
         continue;
       }
-      const std::size_t bytes = std::size_t(hostCounts_[to + 1]) * sizeof(subdomain::Migrant<Real>);
+      const std::size_t bytes = std::size_t(hostCounts_[to + 1]) * sizeof(Record);
       out_[to].assign(staging_.begin() + static_cast<std::ptrdiff_t>(offset),
         staging_.begin() + static_cast<std::ptrdiff_t>(offset + bytes));
       offset += bytes;
@@ -559,8 +564,8 @@ private:
     {
       arrivingBytes += b.size();
     }
-    const std::size_t arriving = arrivingBytes / sizeof(subdomain::Migrant<Real>);
-    reserve(stay + arriving, n);
+    const std::size_t arriving = arrivingBytes / sizeof(Record);
+    reserve(stay + arriving, stay);
     unsigned char* recv = recvBuffer(arrivingBytes);
     offset = 0;
     for (const distributed::Bytes& b : in)
@@ -573,8 +578,7 @@ private:
     }
     exec = device_->executor();
     subdomain::unpackMigrants(exec, stay, count(arriving),
-      reinterpret_cast<const subdomain::Migrant<Real>*>(recv), vec_[r.x], vec_[r.p], vec_[r.v],
-      id_);
+      reinterpret_cast<const Record*>(recv), vec_[r.x], vec_[r.p], vec_[r.v], id_);
     n_ = stay + arriving;
     exchange_.migrated += arriving;
     exchange_.migrationMilliseconds += since(start);
@@ -842,6 +846,22 @@ private:
   // their density, lambda and id, in cell order.
   void keepOwned(const Vec3<Real>* x, const Vec3<Real>* v, int toX, int toV)
   {
+    if (total_ == n_)
+    {
+      // No ghosts (one rank): the owned particles are all of them, in place.
+      for (int i = 0; i < 4; ++i)
+      {
+        if (vec_[i] == x)
+        {
+          x_ = i;
+        }
+        if (vec_[i] == v)
+        {
+          v_ = i;
+        }
+      }
+      return;
+    }
     auto exec = device_->executor();
     const std::uint32_t n = count(n_);
     subdomain::gather(exec, n, ownedList_, x, vec_[toX]);
