@@ -940,13 +940,35 @@ int vtkPBFSimulation::RequestData(
 
     configuration.Precision =
       this->Precision == PRECISION_DOUBLE ? pbf::Precision::Double : pbf::Precision::Single;
+    if (decomposed && !internals.Ranks)
+    {
+      internals.Ranks = std::make_unique<vtkPBFRankCommunicator>(controller);
+    }
+    // Whether CUDA can run. In a decomposed run every rank takes its local rank's GPU, and the
+    // ranks must agree before the first exchange (a rank whose host has no GPU must not fail
+    // alone while the others wait for it), so CUDA runs there only when every rank has a GPU.
+    bool cuda = internals.HasCuda();
+    std::string noCuda = internals.CudaAbsence;
+    if (decomposed && (this->Backend == BACKEND_CUDA || this->Backend == BACKEND_AUTO))
+    {
+      const bool everyRank = !AnyRank(*internals.Ranks, !cuda);
+      if (cuda && !everyRank)
+      {
+        noCuda = "another rank of the " + std::to_string(pieces) + " has no usable GPU";
+      }
+      else if (!cuda)
+      {
+        noCuda = "rank " + std::to_string(piece) + ": " + noCuda;
+      }
+      cuda = everyRank;
+    }
     switch (this->Backend)
     {
       case BACKEND_CUDA:
-        if (!internals.HasCuda())
+        if (!cuda)
         {
-          throw std::runtime_error("Backend = CUDA: CUDA backend unavailable: " +
-            internals.CudaAbsence + " (choose Auto or CPU (OpenMP))");
+          throw std::runtime_error(
+            "Backend = CUDA: CUDA backend unavailable: " + noCuda + " (choose Auto or CPU (OpenMP))");
         }
         configuration.Backend = pbf::Backend::CUDA;
         break;
@@ -957,7 +979,7 @@ int vtkPBFSimulation::RequestData(
         configuration.Backend = pbf::Backend::Serial;
         break;
       default:
-        if (internals.HasCuda())
+        if (cuda)
         {
           configuration.Backend = pbf::Backend::CUDA;
         }
@@ -969,7 +991,7 @@ int vtkPBFSimulation::RequestData(
             internals.FallbackReported = true;
             std::ostringstream text;
             text << this->GetClassName() << " (" << this << "): Backend Auto: no CUDA ("
-                 << internals.CudaAbsence << "); falling back to CPU (OpenMP).\n";
+                 << noCuda << "); falling back to CPU (OpenMP).\n";
             vtkOutputWindowDisplayText(text.str().c_str());
           }
         }
@@ -979,29 +1001,22 @@ int vtkPBFSimulation::RequestData(
     if (decomposed)
     {
       // Every rank gets here for the same request and makes the same choices.
-      if (this->Backend == BACKEND_CUDA)
+      if (configuration.Backend == pbf::Backend::CUDA && this->Backend == BACKEND_AUTO &&
+        p.densityErrorTolerance > 0)
       {
-        throw std::runtime_error("Backend = CUDA: a run decomposed over " +
-          std::to_string(pieces) + " ranks has CPU backends only so far; choose Auto or CPU " +
-          "(OpenMP), or turn DecomposeAcrossRanks off to run on one rank");
-      }
-      if (configuration.Backend == pbf::Backend::CUDA)
-      {
+        // The GPU's decomposed step has fixed iterations only; the CPU's has both.
         configuration.Backend = pbf::Backend::OpenMP;
         if (!internals.DecomposedReported && piece == 0)
         {
           internals.DecomposedReported = true;
           std::ostringstream text;
           text << this->GetClassName() << " (" << this << "): Backend Auto over " << pieces
-               << " ranks: decomposed runs use the CPU (OpenMP) for now.\n";
+               << " ranks with adaptive iterations: decomposed GPU runs have fixed iterations "
+                  "only, so this run uses the CPU (OpenMP).\n";
           vtkOutputWindowDisplayText(text.str().c_str());
         }
       }
       configuration.Ranks = pieces;
-      if (!internals.Ranks)
-      {
-        internals.Ranks = std::make_unique<vtkPBFRankCommunicator>(controller);
-      }
     }
     configuration.HasInput = input != nullptr;
     configuration.InputMTime = input ? input->GetMTime() : 0;

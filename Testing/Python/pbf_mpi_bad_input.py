@@ -47,6 +47,20 @@ for name, value in (("SmoothingRatio", 0.0), ("ParticleSpacing", float("nan"))):
            "%s = %s: the previous output did not stay on every rank" % (name, value))
     setattr(source, name, good)
 
+# Backend CUDA where the ranks have no GPU: each rank can tell only for itself, so the ranks agree
+# first and then all fail alike (without that, a rank with a GPU would wait for one without).
+description = servermanager.Fetch(source).GetFieldData().GetAbstractArray("Backend").GetValue(0)
+if description.startswith("CUDA"):
+    print("the ranks have GPUs (%s): the Backend = CUDA failure is not exercised here" % description)
+else:
+    source.Backend = "CUDA"
+    (failed, messages) = T.capture_messages(lambda: gathered(3 * FRAME))
+    expect("backend = cuda" in messages.lower() and "rank" in messages.lower(),
+           "Backend = CUDA without GPUs: no error naming the field and the rank: %r" % messages[:300])
+    expect(failed[0] == before[0] and numpy.array_equal(failed[2], before[2]),
+           "Backend = CUDA: the previous output did not stay on every rank")
+    source.Backend = "Auto"
+
 after = gathered(3 * FRAME)
 expect(after[0] == before[0] and after[1] == {0, 1}, "the next valid request did not work on both ranks")
 T.passed("MPI bad input")
