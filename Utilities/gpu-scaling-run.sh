@@ -65,9 +65,14 @@ bench_mpi=$build/Solver/Tools/pbf_bench_mpi
 bench=$build/Solver/Tools/pbf_bench
 [[ -x $bench_mpi ]] || { echo "pbf_bench_mpi was not built (no MPI found?)"; exit 1; }
 
-phase "ctest: CudaSubdomain (the decomposed CUDA stepper)"
-timeout "$(limit 150)" ctest --test-dir "$build" -R 'CudaSubdomain|DeviceSubdomainOnHost|LocalRank' \
-  --output-on-failure -V 2>&1 | grep -E "^[0-9]+: (\[ |[0-9]+ CUDA|2 vs|2 CUDA)|tests passed|Failed|SKIPPED|Test *#" | tail -40
+phase "the decomposed CUDA stepper's tests (CudaSubdomain.*, ranks as threads on GPU 0)"
+subdomain=$build/Testing/Cuda/pbf_cuda_subdomain_tests
+timeout "$(limit 150)" "$subdomain" 2>&1 | grep -vE "^\[ RUN|^Running main|^\[-|^$" | tail -30
+if ((PIPESTATUS[0] != 0)) && command -v gdb >/dev/null; then
+  phase "a failed or crashed test under gdb"
+  timeout "$(limit 60)" gdb -batch -ex run -ex bt --args "$subdomain" --gtest_filter='*OneTwoAndThree*' 2>&1 |
+    grep -vE "^\[New Thread|^\[Thread .* exited" | tail -30
+fi
 
 # OpenMPI: root is refused and ranks beyond the slots too unless allowed.
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1

@@ -17,12 +17,16 @@ namespace pbf
 namespace cuda
 {
 
-// A predicate for sizing the selection's scratch (public: CUB's kernels name it).
+// A predicate for sizing the selection's scratch (public: CUB's kernels name it). A template of
+// Real, as everything with device code here, so that the float and the double translation units
+// share no kernel (SubdomainSchedule.h says why).
+template <class Real>
 struct AnyIndex
 {
   __host__ __device__ bool operator()(std::uint32_t) const { return true; }
 };
 
+template <class Real>
 class CudaDevicePolicy
 {
 public:
@@ -75,6 +79,13 @@ public:
     return p;
   }
   void release(void* p) { cudaFree(p); }
+  void* allocateHost(std::size_t bytes)
+  {
+    void* p = nullptr;
+    check(cudaMallocHost(&p, bytes), "cudaMallocHost");
+    return p;
+  }
+  void releaseHost(void* p) { cudaFreeHost(p); }
 
   void download(void* host, const void* device, std::size_t bytes)
   {
@@ -97,7 +108,7 @@ public:
     std::uint32_t* none = nullptr;
     const thrust::counting_iterator<std::uint32_t> first(0);
     check(cub::DeviceSelect::If(nullptr, selectBytes, first, none, none,
-            static_cast<std::int64_t>(particles), AnyIndex{}),
+            static_cast<std::int64_t>(particles), AnyIndex<Real>{}),
       "cub::DeviceSelect::If (size query)");
     // Room for the predicates' own instantiations, whose sizes the selection re-checks.
     need = std::max(need, selectBytes) + 4096;
@@ -140,8 +151,9 @@ std::unique_ptr<distributed::DecomposedStepper> makeCudaSubdomainStepperOf(
     throw InvalidInput("CUDA block = " + std::to_string(options.block) +
       ": must be a multiple of 32 up to " + std::to_string(kMaxBlock));
   }
-  return std::make_unique<DeviceSubdomainStepper<Real, CudaDevicePolicy>>(communicator, parameters,
-    everything, std::make_unique<CudaDevicePolicy>(device, options.block), options.skin,
+  return std::make_unique<DeviceSubdomainStepper<Real, CudaDevicePolicy<Real>>>(communicator,
+    parameters, everything, std::make_unique<CudaDevicePolicy<Real>>(device, options.block),
+    options.skin,
     options.search == NeighborSearch::RowMasks);
 }
 

@@ -55,6 +55,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace pbf
@@ -95,6 +96,7 @@ StepConstants<Real> makeStepConstants(const Parameters& parameters, double skin,
 //   using Exec; Exec executor();              StepSchedule's executor plus selectIf
 //   void* allocate(bytes); void release(p);   device memory
 //   download(host, device, bytes); upload(device, host, bytes); synchronize();
+//   void* allocateHost(bytes); releaseHost(p); page-locked host memory
 //   reserveTemp(particles, cells, keyBits);   scratch of the sort, scan and selection
 //   activate();                               make it current (cudaSetDevice)
 //   std::string name() const;
@@ -122,13 +124,21 @@ public:
     const auto ranks = static_cast<std::size_t>(communicator_.size());
     out_.resize(ranks);
     hostFirst_.resize(ranks + 1);
-    hostCounts_.resize(std::max<std::size_t>(static_cast<std::size_t>(constants_.geometry.nx),
-      ranks + 1));
+    hostCounts_.resize(std::max<std::size_t>(
+      { static_cast<std::size_t>(constants_.geometry.nx), ranks + 1, std::size_t(8) }));
+    in_.resize(ranks);
     device_->activate();
     allocateFixed();
-    slabs_ = distributed::Slabs::balanced(
-      std::vector<std::uint64_t>(static_cast<std::size_t>(constants_.geometry.nx), 1),
-      communicator_.size());
+    // Every rank holds the whole initial fluid: the balanced cut follows from it on every rank
+    // alike, so each keeps its share at once and nothing migrates (a cut from uniform slabs
+    // would first gather most of a dam break on one rank and then move it: gigabytes at 64M).
+    std::vector<std::uint64_t> perColumn(static_cast<std::size_t>(constants_.geometry.nx), 0);
+    for (const Vec3d& q : everything.position)
+    {
+      ++perColumn[static_cast<std::size_t>(
+        subdomain::columnOf(constants_.geometry, Vec3<Real>::from(q)))];
+    }
+    slabs_ = distributed::Slabs::balanced(perColumn, communicator_.size());
     uploadSlabs();
     append(everything);
   }
@@ -147,6 +157,13 @@ public:
     for (void* p : fixed_)
     {
       device_->release(p);
+    }
+    for (HostBuffer* b : { &hostPack_, &hostRecv_ })
+    {
+      if (b->data)
+      {
+        device_->releaseHost(b->data);
+      }
     }
   }
 
@@ -440,6 +457,55 @@ private:
     capacity_ = capacity;
   }
 
+  // Page-locked host memory for the messages, so that the copies to and from the device run at
+  // the bus's speed and asynchronously; grow-only.
+  struct HostBuffer
+  {
+    unsigned char* data = nullptr;
+    std::size_t size = 0;
+  };
+  unsigned char* hostBuffer(HostBuffer& b, std::size_t bytes)
+  {
+    if (bytes > b.size || !b.data)
+    {
+      const std::size_t size = std::max({ bytes, b.size + b.size / 2, std::size_t(4096) });
+      device_->synchronize();
+      if (b.data)
+      {
+        device_->releaseHost(b.data);
+      }
+      b.data = static_cast<unsigned char*>(device_->allocateHost(size));
+      b.size = size;
+    }
+    return b.data;
+  }
+
+  // The incoming messages in_[from] (each from `skip` bytes on, `bytes` long) one after another
+  // into page-locked memory and up to device memory at `to`, in one copy.
+  void uploadMessages(unsigned char* to, const std::vector<std::pair<int, std::size_t>>& from,
+    std::size_t skip = 0)
+  {
+    std::size_t total = 0;
+    for (const auto& [rank, bytes] : from)
+    {
+      total += bytes;
+      (void)rank;
+    }
+    if (total == 0)
+    {
+      return;
+    }
+    unsigned char* staging = hostBuffer(hostRecv_, total);
+    std::size_t at = 0;
+    for (const auto& [rank, bytes] : from)
+    {
+      const distributed::Bytes& message = in_[static_cast<std::size_t>(rank)];
+      std::memcpy(staging + at, message.data() + skip, bytes);
+      at += bytes;
+    }
+    device_->upload(to, staging, total);
+  }
+
   // Grow-only byte buffers for the messages.
   unsigned char* packBuffer(std::size_t bytes) { return growBytes(pack_, packBytes_, bytes); }
   unsigned char* recvBuffer(std::size_t bytes) { return growBytes(recv_, recvBytes_, bytes); }
@@ -519,7 +585,7 @@ private:
     const std::uint32_t leaving = n - stay;
     using Record = subdomain::Migrant<Real>;
     auto* packed = reinterpret_cast<Record*>(packBuffer(std::size_t(leaving) * sizeof(Record)));
-    staging_.resize(std::size_t(leaving) * sizeof(Record));
+    unsigned char* staging = hostBuffer(hostPack_, std::size_t(leaving) * sizeof(Record));
     if (leaving > 0)
     {
       // ownedList_ and sendList_/ghostList_ are free until the cell sort.
@@ -529,20 +595,20 @@ private:
         const std::uint32_t c = hostCounts_[to + 1];
         if (c > 0)
         {
-          subdomain::selectKey(exec, n, keys_[0], static_cast<CellKey>(to + 1),
+          subdomain::selectKey<Real>(exec, n, keys_[0], static_cast<CellKey>(to + 1),
             ownedList_ + offset, selected_ + 2);
           offset += c;
         }
       }
       subdomain::packMigrants(
         exec, leaving, ownedList_, vec_[r.x], vec_[r.p], vec_[r.v], id_, packed);
-      device_->download(staging_.data(), packed, staging_.size());
-      subdomain::selectHolesAndMovers(exec, n, stay, keys_[0], sendList_, ghostList_, selected_);
+      device_->download(staging, packed, std::size_t(leaving) * sizeof(Record));
+      subdomain::selectHolesAndMovers<Real>(exec, n, stay, keys_[0], sendList_, ghostList_, selected_);
       const std::uint32_t most = std::min(stay, leaving);
-      subdomain::fillHoles(exec, most, selected_, sendList_, ghostList_, vec_[r.x]);
-      subdomain::fillHoles(exec, most, selected_, sendList_, ghostList_, vec_[r.p]);
-      subdomain::fillHoles(exec, most, selected_, sendList_, ghostList_, vec_[r.v]);
-      subdomain::fillHoles(exec, most, selected_, sendList_, ghostList_, id_);
+      subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, vec_[r.x]);
+      subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, vec_[r.p]);
+      subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, vec_[r.v]);
+      subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, id_);
     }
     device_->synchronize();
     std::size_t offset = 0;
@@ -554,28 +620,22 @@ private:
         continue;
       }
       const std::size_t bytes = std::size_t(hostCounts_[to + 1]) * sizeof(Record);
-      out_[to].assign(staging_.begin() + static_cast<std::ptrdiff_t>(offset),
-        staging_.begin() + static_cast<std::ptrdiff_t>(offset + bytes));
+      out_[to].assign(staging + offset, staging + offset + bytes);
       offset += bytes;
     }
-    const std::vector<distributed::Bytes> in = communicator_.exchange(out_);
+    communicator_.exchangeInto(out_, in_);
     std::size_t arrivingBytes = 0;
-    for (const distributed::Bytes& b : in)
+    std::vector<std::pair<int, std::size_t>>& from = messages_;
+    from.clear();
+    for (std::size_t r = 0; r < in_.size(); ++r)
     {
-      arrivingBytes += b.size();
+      arrivingBytes += in_[r].size();
+      from.emplace_back(static_cast<int>(r), in_[r].size());
     }
     const std::size_t arriving = arrivingBytes / sizeof(Record);
     reserve(stay + arriving, stay);
     unsigned char* recv = recvBuffer(arrivingBytes);
-    offset = 0;
-    for (const distributed::Bytes& b : in)
-    {
-      if (!b.empty())
-      {
-        device_->upload(recv + offset, b.data(), b.size());
-        offset += b.size();
-      }
-    }
+    uploadMessages(recv, from);
     exec = device_->executor();
     subdomain::unpackMigrants(exec, stay, count(arriving),
       reinterpret_cast<const Record*>(recv), vec_[r.x], vec_[r.p], vec_[r.v], id_);
@@ -607,10 +667,11 @@ private:
     auto* packed = reinterpret_cast<Seed*>(packBuffer((sendLeft_ + sendRight_) * sizeof(Seed)));
     subdomain::packSeeds(exec, sendLeft_, sendList_, vec_[r.p], id_, packed);
     subdomain::packSeeds(exec, sendRight_, ghostList_, vec_[r.p], id_, packed + sendLeft_);
-    staging_.resize((sendLeft_ + sendRight_) * sizeof(Seed));
-    if (!staging_.empty())
+    const std::size_t sendBytes = (sendLeft_ + sendRight_) * sizeof(Seed);
+    unsigned char* staging = hostBuffer(hostPack_, sendBytes);
+    if (sendBytes > 0)
     {
-      device_->download(staging_.data(), packed, staging_.size());
+      device_->download(staging, packed, sendBytes);
     }
     device_->synchronize();
     for (auto& b : out_)
@@ -619,21 +680,20 @@ private:
     }
     if (me > 0)
     {
-      out_[static_cast<std::size_t>(me - 1)].assign(
-        staging_.begin(), staging_.begin() + static_cast<std::ptrdiff_t>(sendLeft_ * sizeof(Seed)));
+      out_[static_cast<std::size_t>(me - 1)].assign(staging, staging + sendLeft_ * sizeof(Seed));
     }
     if (me < last)
     {
       out_[static_cast<std::size_t>(me + 1)].assign(
-        staging_.begin() + static_cast<std::ptrdiff_t>(sendLeft_ * sizeof(Seed)), staging_.end());
+        staging + sendLeft_ * sizeof(Seed), staging + sendBytes);
     }
-    const std::vector<distributed::Bytes> in = communicator_.exchange(out_);
-    ghostLeft_ = me > 0 ? count(in[static_cast<std::size_t>(me - 1)].size() / sizeof(Seed)) : 0;
-    ghostRight_ = me < last ? count(in[static_cast<std::size_t>(me + 1)].size() / sizeof(Seed)) : 0;
-    for (std::size_t from = 0; from < in.size(); ++from)
+    communicator_.exchangeInto(out_, in_);
+    ghostLeft_ = me > 0 ? count(in_[static_cast<std::size_t>(me - 1)].size() / sizeof(Seed)) : 0;
+    ghostRight_ = me < last ? count(in_[static_cast<std::size_t>(me + 1)].size() / sizeof(Seed)) : 0;
+    for (std::size_t from = 0; from < in_.size(); ++from)
     {
       const bool neighbour = static_cast<int>(from) == me - 1 || static_cast<int>(from) == me + 1;
-      if (!neighbour && !in[from].empty())
+      if (!neighbour && !in_[from].empty())
       {
         throw std::logic_error("ghosts from rank " + std::to_string(from) + ", not a neighbour");
       }
@@ -641,15 +701,16 @@ private:
     const std::uint32_t ghosts = ghostLeft_ + ghostRight_;
     reserve(std::size_t(n) + ghosts, n);
     unsigned char* recv = recvBuffer(ghosts * sizeof(Seed));
-    if (ghostLeft_ > 0)
+    messages_.clear();
+    if (me > 0)
     {
-      device_->upload(recv, in[static_cast<std::size_t>(me - 1)].data(), ghostLeft_ * sizeof(Seed));
+      messages_.emplace_back(me - 1, ghostLeft_ * sizeof(Seed));
     }
-    if (ghostRight_ > 0)
+    if (me < last)
     {
-      device_->upload(recv + ghostLeft_ * sizeof(Seed), in[static_cast<std::size_t>(me + 1)].data(),
-        ghostRight_ * sizeof(Seed));
+      messages_.emplace_back(me + 1, ghostRight_ * sizeof(Seed));
     }
+    uploadMessages(recv, messages_);
     exec = device_->executor();
     subdomain::unpackSeeds(exec, n, ghosts, reinterpret_cast<const Seed*>(recv), vec_[r.x],
       vec_[r.p], vec_[r.v], id_);
@@ -683,13 +744,13 @@ private:
     const int sendR0 = me < last ? end - 1 : 0, sendR1 = me < last ? end : 0;
     const int ghostL0 = me > 0 ? begin - 1 : 0, ghostL1 = me > 0 ? begin : 0;
     const int ghostR0 = me < last ? end : 0, ghostR1 = me < last ? end + 1 : 0;
-    subdomain::selectColumns(exec, nx, total, keys, sendL0, sendL1, sendList_, selected_);
-    subdomain::selectColumns(
+    subdomain::selectColumns<Real>(exec, nx, total, keys, sendL0, sendL1, sendList_, selected_);
+    subdomain::selectColumns<Real>(
       exec, nx, total, keys, sendR0, sendR1, sendList_ + sendLeft_, selected_ + 1);
-    subdomain::selectColumns(exec, nx, total, keys, ghostL0, ghostL1, ghostList_, selected_ + 2);
-    subdomain::selectColumns(
+    subdomain::selectColumns<Real>(exec, nx, total, keys, ghostL0, ghostL1, ghostList_, selected_ + 2);
+    subdomain::selectColumns<Real>(
       exec, nx, total, keys, ghostR0, ghostR1, ghostList_ + ghostLeft_, selected_ + 3);
-    subdomain::selectColumns(exec, nx, total, keys, begin, end, ownedList_, selected_ + 4);
+    subdomain::selectColumns<Real>(exec, nx, total, keys, begin, end, ownedList_, selected_ + 4);
     // The counts are known already; checking them costs one small copy and catches a protocol
     // slip at once instead of as a wrong answer.
     device_->download(hostCounts_.data(), selected_, 5 * sizeof(std::uint32_t));
@@ -728,10 +789,10 @@ private:
     // The pass before is not exchange time: wait for it first.
     device_->synchronize();
     const auto start = Clock::now();
-    staging_.resize(sendBytes + tail);
-    if (!staging_.empty())
+    unsigned char* staging = hostBuffer(hostPack_, sendBytes + tail);
+    if (sendBytes + tail > 0)
     {
-      device_->download(staging_.data(), pack, staging_.size());
+      device_->download(staging, pack, sendBytes + tail);
     }
     device_->synchronize();
     for (auto& o : out_)
@@ -740,9 +801,8 @@ private:
     }
     const auto send = [&](std::size_t to, std::size_t from, std::size_t bytes) {
       distributed::Bytes& o = out_[to];
-      o.insert(o.end(), staging_.begin() + static_cast<std::ptrdiff_t>(from),
-        staging_.begin() + static_cast<std::ptrdiff_t>(from + bytes));
-      o.insert(o.end(), staging_.begin() + static_cast<std::ptrdiff_t>(sendBytes), staging_.end());
+      o.insert(o.end(), staging + from, staging + from + bytes);
+      o.insert(o.end(), staging + sendBytes, staging + sendBytes + tail);
     };
     if (me > 0)
     {
@@ -752,24 +812,22 @@ private:
     {
       send(static_cast<std::size_t>(me + 1), sendLeft_ * record, sendRight_ * record);
     }
-    const std::vector<distributed::Bytes> in = communicator_.exchange(out_);
+    communicator_.exchangeInto(out_, in_);
     unsigned char* recv = recvBuffer((ghostLeft_ + ghostRight_) * record);
     unsigned long long largest = 0;
     if (moved >= 0)
     {
-      std::memcpy(&largest, staging_.data() + sendBytes, tail);
+      std::memcpy(&largest, staging + sendBytes, tail);
     }
-    const auto receive = [&](int from, std::size_t at, std::size_t bytes) {
-      const distributed::Bytes& message = in[static_cast<std::size_t>(from)];
+    messages_.clear();
+    const auto receive = [&](int from, std::size_t bytes) {
+      const distributed::Bytes& message = in_[static_cast<std::size_t>(from)];
       if (message.size() != bytes + tail)
       {
         throw std::logic_error("ghost refresh from rank " + std::to_string(from) + ": " +
           std::to_string(message.size()) + " bytes, expected " + std::to_string(bytes + tail));
       }
-      if (bytes > 0)
-      {
-        device_->upload(recv + at, message.data(), bytes);
-      }
+      messages_.emplace_back(from, bytes);
       if (moved >= 0)
       {
         unsigned long long theirs = 0;
@@ -779,12 +837,13 @@ private:
     };
     if (me > 0)
     {
-      receive(me - 1, 0, ghostLeft_ * record);
+      receive(me - 1, ghostLeft_ * record);
     }
     if (me < last)
     {
-      receive(me + 1, ghostLeft_ * record, ghostRight_ * record);
+      receive(me + 1, ghostRight_ * record);
     }
+    uploadMessages(recv, messages_);
     if (moved >= 0)
     {
       movedBits_ = largest;
@@ -864,11 +923,11 @@ private:
     }
     auto exec = device_->executor();
     const std::uint32_t n = count(n_);
-    subdomain::gather(exec, n, ownedList_, x, vec_[toX]);
-    subdomain::gather(exec, n, ownedList_, v, vec_[toV]);
-    subdomain::gather(exec, n, ownedList_, density_, densityAlt_);
-    subdomain::gather(exec, n, ownedList_, lambda_, lambdaAlt_);
-    subdomain::gather(exec, n, ownedList_, id_, idAlt_);
+    subdomain::gather<Real>(exec, n, ownedList_, x, vec_[toX]);
+    subdomain::gather<Real>(exec, n, ownedList_, v, vec_[toV]);
+    subdomain::gather<Real>(exec, n, ownedList_, density_, densityAlt_);
+    subdomain::gather<Real>(exec, n, ownedList_, lambda_, lambdaAlt_);
+    subdomain::gather<Real>(exec, n, ownedList_, id_, idAlt_);
     std::swap(density_, densityAlt_);
     std::swap(lambda_, lambdaAlt_);
     std::swap(id_, idAlt_);
@@ -982,8 +1041,9 @@ private:
   // Host staging, kept between steps so that steps reuse it.
   std::vector<std::uint32_t> hostCounts_;
   std::vector<int> hostFirst_;
-  distributed::Bytes staging_;
-  std::vector<distributed::Bytes> out_;
+  HostBuffer hostPack_, hostRecv_;
+  std::vector<distributed::Bytes> out_, in_;
+  std::vector<std::pair<int, std::size_t>> messages_;
   unsigned long long movedBits_ = 0;
 
   StepReport report_;

@@ -127,28 +127,74 @@ void ownerKeys(Exec& exec, const GridGeometry<Real>& g, SlabView slabs, std::uin
   });
 }
 
+// Every helper below is a template of Real, even where Real does not appear: the float and the
+// double stepper live in separate CUDA translation units, and a kernel or a selection predicate
+// instantiated identically in both (an extended lambda's wrapper above all) crashed the double
+// stepper on the H200 with a call through a null pointer on the host. Distinct per precision,
+// nothing is shared between the two units. The selections take named functors, not lambdas.
+
+// Selection predicates (CUB copies them on the host).
+template <class Real>
+struct KeyIs
+{
+  const CellKey* keys;
+  CellKey key;
+  PBF_HD bool operator()(std::uint32_t i) const { return keys[i] == key; }
+};
+
+template <class Real>
+struct HoleOrMover
+{
+  const CellKey* keys;
+  std::uint32_t stay;
+  bool hole;
+  PBF_HD bool operator()(std::uint32_t i) const
+  {
+    return hole ? (i < stay && keys[i] != 0u) : (i >= stay && keys[i] == 0u);
+  }
+};
+
+template <class Real>
+struct PositionInColumn
+{
+  GridGeometry<Real> g;
+  const Vec3<Real>* q;
+  int column;
+  PBF_HD bool operator()(std::uint32_t i) const { return columnOf(g, q[i]) == column; }
+};
+
+template <class Real>
+struct KeyInColumns
+{
+  const CellKey* keys;
+  int nx, begin, end;
+  PBF_HD bool operator()(std::uint32_t i) const
+  {
+    const int c = columnOfKey(keys[i], nx);
+    return c >= begin && c < end;
+  }
+};
+
 // The indices i with keys[i] == key, ascending (the leavers to one rank, in their order).
-template <class Exec>
+template <class Real, class Exec>
 void selectKey(Exec& exec, std::uint32_t n, const CellKey* keys, CellKey key, std::uint32_t* out,
   std::uint32_t* count)
 {
-  exec.selectIf(n, [=] PBF_HD(std::uint32_t i) { return keys[i] == key; }, out, count);
+  exec.selectIf(n, KeyIs<Real>{ keys, key }, out, count);
 }
 
 // Compaction after the leavers are packed: the holes (leavers below `stay`) and the movers (kept
 // particles at or above it), each ascending; there are as many of each.
-template <class Exec>
+template <class Real, class Exec>
 void selectHolesAndMovers(Exec& exec, std::uint32_t n, std::uint32_t stay, const CellKey* keys,
   std::uint32_t* holes, std::uint32_t* movers, std::uint32_t* counts)
 {
-  exec.selectIf(n, [=] PBF_HD(std::uint32_t i) { return i < stay && keys[i] != 0u; }, holes,
-    counts);
-  exec.selectIf(n, [=] PBF_HD(std::uint32_t i) { return i >= stay && keys[i] == 0u; }, movers,
-    counts + 1);
+  exec.selectIf(n, HoleOrMover<Real>{ keys, stay, true }, holes, counts);
+  exec.selectIf(n, HoleOrMover<Real>{ keys, stay, false }, movers, counts + 1);
 }
 
 // array[holes[j]] = array[movers[j]] for j < *count (a device count: up to `most` threads).
-template <class T, class Exec>
+template <class Real, class T, class Exec>
 void fillHoles(Exec& exec, std::uint32_t most, const std::uint32_t* count,
   const std::uint32_t* holes, const std::uint32_t* movers, T* array)
 {
@@ -161,7 +207,7 @@ void fillHoles(Exec& exec, std::uint32_t most, const std::uint32_t* count,
 }
 
 // to[i] = from[perm[i]].
-template <class T, class Exec>
+template <class Real, class T, class Exec>
 void gather(Exec& exec, std::uint32_t n, const std::uint32_t* perm, const T* from, T* to)
 {
   exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { to[i] = from[perm[i]]; });
@@ -197,21 +243,16 @@ template <class Real, class Exec>
 void selectColumn(Exec& exec, const GridGeometry<Real>& g, std::uint32_t n, const Vec3<Real>* q,
   int column, std::uint32_t* out, std::uint32_t* count)
 {
-  exec.selectIf(n, [=] PBF_HD(std::uint32_t i) { return columnOf(g, q[i]) == column; }, out, count);
+  exec.selectIf(n, PositionInColumn<Real>{ g, q, column }, out, count);
 }
 
 // The same after the cell sort, from the sorted keys: sorted indices with a column in
 // [begin, end), ascending.
-template <class Exec>
+template <class Real, class Exec>
 void selectColumns(Exec& exec, int nx, std::uint32_t n, const CellKey* keys, int begin, int end,
   std::uint32_t* out, std::uint32_t* count)
 {
-  exec.selectIf(n,
-    [=] PBF_HD(std::uint32_t i) {
-      const int c = columnOfKey(keys[i], nx);
-      return c >= begin && c < end;
-    },
-    out, count);
+  exec.selectIf(n, KeyInColumns<Real>{ keys, nx, begin, end }, out, count);
 }
 
 template <class Real, class Exec>

@@ -21,6 +21,13 @@ public:
   // Collective: sends outgoing[r] to rank r (empty for most ranks) and returns, for each rank r,
   // what r sent to this one.
   virtual std::vector<Bytes> exchange(const std::vector<Bytes>& outgoing) = 0;
+  // The same into `incoming` (resized to size()), whose buffers an implementation may reuse from
+  // call to call: a stepper that exchanges every iteration then stops allocating and touching
+  // fresh pages once the buffers have grown. The default calls exchange().
+  virtual void exchangeInto(const std::vector<Bytes>& outgoing, std::vector<Bytes>& incoming)
+  {
+    incoming = exchange(outgoing);
+  }
 };
 
 // Collective: every rank's values, in rank order. Reductions sum them in that order, so every

@@ -1,5 +1,6 @@
 #include "MpiCommunicator.h"
 
+#include <algorithm>
 #include <climits>
 #include <stdexcept>
 #include <string>
@@ -32,43 +33,61 @@ MpiCommunicator::MpiCommunicator(MPI_Comm communicator)
 
 std::vector<Bytes> MpiCommunicator::exchange(const std::vector<Bytes>& outgoing)
 {
+  std::vector<Bytes> incoming;
+  exchangeInto(outgoing, incoming);
+  return incoming;
+}
+
+void MpiCommunicator::exchangeInto(const std::vector<Bytes>& outgoing, std::vector<Bytes>& incoming)
+{
   const auto n = static_cast<std::size_t>(size_);
   if (outgoing.size() != n)
   {
     throw std::invalid_argument("exchange: one buffer per rank expected");
   }
-  std::vector<int> sendCounts(n), receiveCounts(n), sendOffsets(n), receiveOffsets(n);
-  Bytes packed;
+  sendCounts_.resize(n);
+  receiveCounts_.resize(n);
+  sendOffsets_.resize(n);
+  receiveOffsets_.resize(n);
+  std::size_t total = 0;
   for (std::size_t r = 0; r < n; ++r)
   {
-    if (outgoing[r].size() > static_cast<std::size_t>(INT_MAX) - packed.size())
+    if (outgoing[r].size() > static_cast<std::size_t>(INT_MAX) - total)
     {
       throw std::runtime_error("exchange: more than 2 GiB for one rank's messages");
     }
-    sendOffsets[r] = static_cast<int>(packed.size());
-    sendCounts[r] = static_cast<int>(outgoing[r].size());
-    packed.insert(packed.end(), outgoing[r].begin(), outgoing[r].end());
+    sendOffsets_[r] = static_cast<int>(total);
+    sendCounts_[r] = static_cast<int>(outgoing[r].size());
+    total += outgoing[r].size();
   }
-  check(MPI_Alltoall(sendCounts.data(), 1, MPI_INT, receiveCounts.data(), 1, MPI_INT, communicator_),
+  send_.resize(total + 1); // never a null buffer
+  for (std::size_t r = 0; r < n; ++r)
+  {
+    std::copy(outgoing[r].begin(), outgoing[r].end(),
+      send_.begin() + static_cast<std::ptrdiff_t>(sendOffsets_[r]));
+  }
+  check(MPI_Alltoall(sendCounts_.data(), 1, MPI_INT, receiveCounts_.data(), 1, MPI_INT, communicator_),
     "MPI_Alltoall");
-  long long total = 0;
+  long long received = 0;
   for (std::size_t r = 0; r < n; ++r)
   {
-    receiveOffsets[r] = static_cast<int>(total);
-    total += receiveCounts[r];
+    receiveOffsets_[r] = static_cast<int>(received);
+    received += receiveCounts_[r];
   }
-  Bytes all(static_cast<std::size_t>(total) + 1), send = packed;
-  send.push_back(0); // never a null buffer
-  check(MPI_Alltoallv(send.data(), sendCounts.data(), sendOffsets.data(), MPI_BYTE, all.data(),
-          receiveCounts.data(), receiveOffsets.data(), MPI_BYTE, communicator_),
+  if (received > INT_MAX)
+  {
+    throw std::runtime_error("exchange: more than 2 GiB of messages for one rank");
+  }
+  receive_.resize(static_cast<std::size_t>(received) + 1);
+  check(MPI_Alltoallv(send_.data(), sendCounts_.data(), sendOffsets_.data(), MPI_BYTE,
+          receive_.data(), receiveCounts_.data(), receiveOffsets_.data(), MPI_BYTE, communicator_),
     "MPI_Alltoallv");
-  std::vector<Bytes> incoming(n);
+  incoming.resize(n);
   for (std::size_t r = 0; r < n; ++r)
   {
-    incoming[r].assign(all.begin() + receiveOffsets[r],
-      all.begin() + receiveOffsets[r] + receiveCounts[r]);
+    incoming[r].assign(receive_.begin() + receiveOffsets_[r],
+      receive_.begin() + receiveOffsets_[r] + receiveCounts_[r]);
   }
-  return incoming;
 }
 
 } // namespace pbf::distributed

@@ -17,8 +17,12 @@ public:
   int rank() const override { return rank_; }
   int size() const override { return size_; }
   std::vector<Bytes> exchange(const std::vector<Bytes>& outgoing) override;
+  // Packs into and receives through buffers kept between calls, and fills `incoming` in place.
+  void exchangeInto(const std::vector<Bytes>& outgoing, std::vector<Bytes>& incoming) override;
 
 private:
+  Bytes send_, receive_;
+  std::vector<int> sendCounts_, receiveCounts_, sendOffsets_, receiveOffsets_;
   MPI_Comm communicator_;
   int rank_ = 0;
   int size_ = 1;

@@ -11,6 +11,10 @@
 
 #include <gtest/gtest.h>
 
+#include <execinfo.h>
+#include <unistd.h>
+
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -20,6 +24,18 @@ using namespace pbf::test;
 
 namespace
 {
+
+// A crash in these tests prints where it happened (the target exports its symbols), then dies
+// as it would have.
+void printBacktrace(int signal)
+{
+  void* frames[64];
+  const int n = backtrace(frames, 64);
+  backtrace_symbols_fd(frames, n, STDERR_FILENO);
+  std::signal(signal, SIG_DFL);
+  std::raise(signal);
+}
+const bool backtraceOnCrash = (std::signal(SIGSEGV, printBacktrace), true);
 
 DecomposedFactory onGpu(Precision precision, cuda::Options options = cuda::Options{})
 {

@@ -137,6 +137,8 @@ public:
   HostExecutor executor() const { return HostExecutor(backwards_); }
   void* allocate(std::size_t bytes) { return std::calloc(bytes > 0 ? bytes : 1, 1); }
   void release(void* pointer) { std::free(pointer); }
+  void* allocateHost(std::size_t bytes) { return std::malloc(bytes > 0 ? bytes : 1); }
+  void releaseHost(void* pointer) { std::free(pointer); }
   void download(void* host, const void* device, std::size_t bytes) { std::memcpy(host, device, bytes); }
   void upload(void* device, const void* host, std::size_t bytes) { std::memcpy(device, host, bytes); }
   void synchronize() {}
