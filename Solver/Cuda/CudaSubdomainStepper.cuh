@@ -46,6 +46,7 @@ public:
     check(cudaGetDeviceProperties(&properties, device_), "cudaGetDeviceProperties");
     name_ = std::string(properties.name) + " (device " + std::to_string(device_) + ")";
     check(cudaStreamCreate(&stream_), "cudaStreamCreate");
+    check(cudaEventCreateWithFlags(&event_, cudaEventDisableTiming), "cudaEventCreate");
   }
 
   ~CudaDevicePolicy()
@@ -56,6 +57,7 @@ public:
     {
       cudaFree(temp_);
     }
+    cudaEventDestroy(event_);
     cudaStreamDestroy(stream_);
   }
 
@@ -97,6 +99,8 @@ public:
     check(cudaMemcpyAsync(device, host, bytes, cudaMemcpyHostToDevice, stream_), "cudaMemcpyAsync");
   }
   void synchronize() { check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize"); }
+  void recordEvent() { check(cudaEventRecord(event_, stream_), "cudaEventRecord"); }
+  void waitEvent() { check(cudaEventSynchronize(event_), "cudaEventSynchronize"); }
   void activate() { check(cudaSetDevice(device_), "cudaSetDevice"); }
   std::string name() const { return name_; }
 
@@ -132,6 +136,7 @@ private:
   int block_;
   std::string name_;
   cudaStream_t stream_ = nullptr;
+  cudaEvent_t event_ = nullptr;
   void* temp_ = nullptr;
   std::size_t tempBytes_ = 0;
 };

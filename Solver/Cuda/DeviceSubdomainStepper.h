@@ -22,17 +22,17 @@
 //      the order (cell, sender's order before the sort), since the receiver appended the ghosts in
 //      the order they were sent: the k-th value sent is the k-th ghost slot, with no index ever
 //      exchanged.
-//   5. the passes run over owned and ghosts alike (a ghost's own results are wrong, its
-//      neighbourhood being cut, and are overwritten by the refresh from its owner before anything
-//      reads them): density pass, refresh density+lambda (one round); the fused correction,
-//      refresh positions (and velocities after the last one); vorticity+XSPH, refresh omega;
-//      confinement; then the owned particles are gathered back, in cell order.
+//   5. the passes run over the owned particles, each as two launches: the border particles (the
+//      columns a neighbour mirrors) first, whose fields are then packed and copied out, and the
+//      interior ones while the host exchanges them; the upload and scatter into the ghost slots
+//      are queued before the next pass. Density pass, refresh density+lambda (one round); the
+//      fused correction, refresh positions (and velocities after the last one); vorticity+XSPH,
+//      refresh omega; confinement; then the owned particles are gathered back, in cell order.
+//      Ghosts are not computed (nothing reads their own results; interior particles never read
+//      ghosts, so the scatter cannot race the interior pass).
 //
-// Neighbour masks across ranks: the masks are exact while no particle has moved farther than
-// the schedule's bound since they were built (NeighborMasks.h). A ghost moves by its owner's
-// corrections, so the position refresh carries each rank's max |delta p| of that iteration and
-// every rank takes the max of its own and its neighbours' before the next pass decides whether
-// to rebuild: the masks stay exact, and results do not depend on the skin.
+// Neighbour masks across ranks: rebuilt at every pass (see the constructor): a ghost moves by
+// its owner's corrections, which a pass over the border cannot wait for.
 //
 // Adaptive iterations (densityErrorTolerance > 0) are not implemented here: the constructor
 // throws InvalidInput naming the field.
@@ -97,6 +97,7 @@ StepConstants<Real> makeStepConstants(const Parameters& parameters, double skin,
 //   void* allocate(bytes); void release(p);   device memory
 //   download(host, device, bytes); upload(device, host, bytes); synchronize();
 //   void* allocateHost(bytes); releaseHost(p); page-locked host memory
+//   recordEvent(); waitEvent();              mark the queue, wait for the mark (one event)
 //   reserveTemp(particles, cells, keyBits);   scratch of the sort, scan and selection
 //   activate();                               make it current (cudaSetDevice)
 //   std::string name() const;
@@ -121,6 +122,12 @@ public:
         "to 0 or choose a CPU backend");
     }
     constants_ = makeStepConstants<Real>(parameters_, skin, masks);
+    // The masks are rebuilt at every pass: a ghost moves by its owner's corrections, which this
+    // rank learns only with the positions, and a pass runs its border particles before the
+    // interior ones have their max |delta p|. The single-GPU schedule rebuilds at every pass of
+    // the dam break anyway at these sizes (pbf_bench: 5.00 builds per step of 4 iterations), so
+    // the bound buys nothing here. A zero skin makes MaskSchedule::stillValid false at once.
+    constants_.schedule.skin = 0.0;
     const auto ranks = static_cast<std::size_t>(communicator_.size());
     out_.resize(ranks);
     hostFirst_.resize(ranks + 1);
@@ -420,6 +427,8 @@ private:
     auto* sendList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
     auto* ghostList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
     auto* ownedList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
+    auto* borderList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
+    auto* interiorList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
     device_->reserveTemp(count(capacity), std::size_t(constants_.cellCount) + 1, constants_.keyBits);
     auto exec = device_->executor();
     if (keep > 0)
@@ -454,6 +463,8 @@ private:
     sendList_ = sendList;
     ghostList_ = ghostList;
     ownedList_ = ownedList;
+    borderList_ = borderList;
+    interiorList_ = interiorList;
     capacity_ = capacity;
   }
 
@@ -751,10 +762,19 @@ private:
     subdomain::selectColumns<Real>(
       exec, nx, total, keys, ghostR0, ghostR1, ghostList_ + ghostLeft_, selected_ + 3);
     subdomain::selectColumns<Real>(exec, nx, total, keys, begin, end, ownedList_, selected_ + 4);
+    subdomain::selectBorder<Real>(
+      exec, nx, total, keys, begin, end, me > 0, me < last, true, borderList_, selected_ + 5);
+    subdomain::selectBorder<Real>(
+      exec, nx, total, keys, begin, end, me > 0, me < last, false, interiorList_, selected_ + 6);
     // The counts are known already; checking them costs one small copy and catches a protocol
     // slip at once instead of as a wrong answer.
-    device_->download(hostCounts_.data(), selected_, 5 * sizeof(std::uint32_t));
+    device_->download(hostCounts_.data(), selected_, 7 * sizeof(std::uint32_t));
     device_->synchronize();
+    border_ = hostCounts_[5];
+    if (hostCounts_[5] + hostCounts_[6] != n_)
+    {
+      throw std::logic_error("decomposed CUDA step: border and interior do not add up");
+    }
     const std::uint32_t expected[5] = { sendLeft_, sendRight_, ghostLeft_, ghostRight_,
       count(n_) };
     for (int i = 0; i < 5; ++i)
@@ -769,95 +789,87 @@ private:
     return keys;
   }
 
-  // One ghost refresh: fields a (and b) of the send lists to the neighbours, into the ghost
-  // slots. With moved >= 0 the messages also carry maxMoved[moved], and each rank keeps the max.
+  // One ghost refresh in two halves around the interior pass. sendRefresh: fields a (and b) of
+  // the send lists packed and on their way to page-locked memory, marked by an event.
   template <class T>
-  void refresh(T* a, T* b, int moved)
+  void sendRefresh(T* a, T* b)
+  {
+    const std::size_t record = sizeof(T) * (b ? 2 : 1);
+    const std::size_t sendBytes = (sendLeft_ + sendRight_) * record;
+    auto exec = device_->executor();
+    unsigned char* pack = packBuffer(sendBytes);
+    unsigned char* staging = hostBuffer(hostPack_, sendBytes);
+    subdomain::packFields(exec, sendList_, sendLeft_, sendRight_, a, b, pack);
+    if (sendBytes > 0)
+    {
+      device_->download(staging, pack, sendBytes);
+    }
+    device_->recordEvent();
+  }
+
+  // receiveRefresh: waits for the packed fields only (the interior pass queued behind them keeps
+  // the device busy), exchanges them with the neighbours and queues their upload and scatter
+  // into the ghost slots. The time from the packed fields' arrival to the queued scatter is the
+  // ghost time: waiting for the neighbours' border particles included.
+  template <class T>
+  void receiveRefresh(T* a, T* b)
   {
     const int me = communicator_.rank();
     const int last = communicator_.size() - 1;
     const std::size_t record = sizeof(T) * (b ? 2 : 1);
-    const std::size_t tail = moved >= 0 ? sizeof(unsigned long long) : 0;
     const std::size_t sendBytes = (sendLeft_ + sendRight_) * record;
-    auto exec = device_->executor();
-    unsigned char* pack = packBuffer(sendBytes + tail);
-    subdomain::packFields(exec, sendList_, sendLeft_, sendRight_, a, b, pack);
-    if (moved >= 0)
-    {
-      exec.copy(pack + sendBytes, maxMoved_ + moved, tail);
-    }
-    // The pass before is not exchange time: wait for it first.
-    device_->synchronize();
+    device_->waitEvent();
     const auto start = Clock::now();
-    unsigned char* staging = hostBuffer(hostPack_, sendBytes + tail);
-    if (sendBytes + tail > 0)
-    {
-      device_->download(staging, pack, sendBytes + tail);
-    }
-    device_->synchronize();
+    const unsigned char* staging = hostPack_.data;
     for (auto& o : out_)
     {
       o.clear();
     }
-    const auto send = [&](std::size_t to, std::size_t from, std::size_t bytes) {
-      distributed::Bytes& o = out_[to];
-      o.insert(o.end(), staging + from, staging + from + bytes);
-      o.insert(o.end(), staging + sendBytes, staging + sendBytes + tail);
-    };
     if (me > 0)
     {
-      send(static_cast<std::size_t>(me - 1), 0, sendLeft_ * record);
+      out_[static_cast<std::size_t>(me - 1)].assign(staging, staging + sendLeft_ * record);
     }
     if (me < last)
     {
-      send(static_cast<std::size_t>(me + 1), sendLeft_ * record, sendRight_ * record);
+      out_[static_cast<std::size_t>(me + 1)].assign(
+        staging + sendLeft_ * record, staging + sendBytes);
     }
     communicator_.exchangeInto(out_, in_);
-    unsigned char* recv = recvBuffer((ghostLeft_ + ghostRight_) * record);
-    unsigned long long largest = 0;
-    if (moved >= 0)
-    {
-      std::memcpy(&largest, staging + sendBytes, tail);
-    }
     messages_.clear();
-    const auto receive = [&](int from, std::size_t bytes) {
+    const auto expect = [&](int from, std::size_t bytes) {
       const distributed::Bytes& message = in_[static_cast<std::size_t>(from)];
-      if (message.size() != bytes + tail)
+      if (message.size() != bytes)
       {
         throw std::logic_error("ghost refresh from rank " + std::to_string(from) + ": " +
-          std::to_string(message.size()) + " bytes, expected " + std::to_string(bytes + tail));
+          std::to_string(message.size()) + " bytes, expected " + std::to_string(bytes));
       }
       messages_.emplace_back(from, bytes);
-      if (moved >= 0)
-      {
-        unsigned long long theirs = 0;
-        std::memcpy(&theirs, message.data() + bytes, tail);
-        largest = std::max(largest, theirs); // non-negative doubles order as their bits
-      }
     };
     if (me > 0)
     {
-      receive(me - 1, ghostLeft_ * record);
+      expect(me - 1, ghostLeft_ * record);
     }
     if (me < last)
     {
-      receive(me + 1, ghostRight_ * record);
+      expect(me + 1, ghostRight_ * record);
     }
+    unsigned char* recv = recvBuffer((ghostLeft_ + ghostRight_) * record);
     uploadMessages(recv, messages_);
-    if (moved >= 0)
-    {
-      movedBits_ = largest;
-      device_->upload(maxMoved_ + moved, &movedBits_, tail);
-    }
-    exec = device_->executor();
+    auto exec = device_->executor();
     subdomain::scatterFields(exec, ghostList_, ghostLeft_, ghostRight_, recv, a, b);
     exchange_.ghostMilliseconds += since(start);
   }
 
-  // 5. The passes with their refreshes, then the owned particles back into cell order.
+  // 5. The passes over the owned particles, each one border first, its fields sent while the
+  // interior runs, received before the next pass; then the owned particles back into cell
+  // order. Ghosts are never computed: nothing reads a ghost's own result.
   void solve(Roles4 r, const CellKey* sortedKeys)
   {
-    const std::uint32_t total = count(total_);
+    const std::uint32_t n = count(n_);
+    const std::uint32_t border = border_;
+    const std::uint32_t interior = n - border;
+    const detail::ListedParticles onBorder{ borderList_ };
+    const detail::ListedParticles onInterior{ interiorList_ };
     const StepConstants<Real>& k = constants_;
     const StepBuffers<Real> b = buffers();
     auto exec = device_->executor();
@@ -872,15 +884,20 @@ private:
       f.v = v;
       f.p = positions[iteration & 1];
       f.scratch = positions[(iteration + 1) & 1];
+      exec = device_->executor();
       detail::firstPassOnPositions(
-        exec, DensityStage{}, b, k, total, f, iteration, false, detail::DensityPass{});
-      refresh<Real>(density_, lambda_, -1);
+        exec, DensityStage{}, b, k, border, f, iteration, false, detail::DensityPass{}, onBorder);
+      sendRefresh<Real>(density_, lambda_);
+      detail::firstPassOnPositions(exec, DensityStage{}, b, k, interior, f, iteration, false,
+        detail::DensityPass{}, onInterior);
+      receiveRefresh<Real>(density_, lambda_);
       const bool last = iteration + 1 == k.iterations;
       exec = device_->executor();
-      detail::correctionPass(exec, b, total, f, iteration, last, nullptr);
-      // The last correction also updated the velocities, which XSPH and vorticity read.
-      refresh<Vec3<Real>>(f.scratch, last ? v : nullptr, iteration);
-      exec = device_->executor();
+      detail::correctionPass(exec, b, border, f, iteration, last, nullptr, onBorder);
+      // The last correction also updates the velocities, which XSPH and vorticity read.
+      sendRefresh<Vec3<Real>>(f.scratch, last ? v : nullptr);
+      detail::correctionPass(exec, b, interior, f, iteration, last, nullptr, onInterior);
+      receiveRefresh<Vec3<Real>>(f.scratch, last ? v : nullptr);
     }
     Vec3<Real>* const corrected = positions[k.iterations & 1];
     Vec3<Real>* const spare = positions[(k.iterations + 1) & 1];
@@ -889,13 +906,17 @@ private:
     f.v = v;
     f.omega = x; // x is no longer needed
     f.scratch = spare;
-    detail::firstPassOnPositions(
-      exec, VorticityStage{}, b, k, total, f, k.iterations, false, detail::VorticityPass{});
-    refresh<Vec3<Real>>(x, nullptr, -1);
+    exec = device_->executor();
+    detail::firstPassOnPositions(exec, VorticityStage{}, b, k, border, f, k.iterations, false,
+      detail::VorticityPass{}, onBorder);
+    sendRefresh<Vec3<Real>>(x, nullptr);
+    detail::firstPassOnPositions(exec, VorticityStage{}, b, k, interior, f, k.iterations, false,
+      detail::VorticityPass{}, onInterior);
+    receiveRefresh<Vec3<Real>>(x, nullptr);
     exec = device_->executor();
     FluidView<Real, MaskedNeighbors<Real>> confine = f;
     confine.v = spare;
-    subdomain::confine(exec, total, confine);
+    subdomain::confine<Real>(exec, n, ownedList_, confine);
     // Line 23 and the ghosts dropped: x = the corrected positions, v = spare, owned only, into
     // the buffers that held v and omega.
     keepOwned(corrected, spare, r.v, r.x);
@@ -950,9 +971,8 @@ private:
     const StepBuffers<Real> b = buffers();
     FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, constants_, keys);
     f.p = vec_[r.p];
-    exec.fillZero(maxMoved_, sizeof(unsigned long long));
-    detail::firstPassOnPositions(exec, DensityStage{}, b, constants_, count(total_), f, 0, false,
-      detail::DensityPass{});
+    detail::firstPassOnPositions(exec, DensityStage{}, b, constants_, count(n_), f, 0, false,
+      detail::DensityPass{}, detail::ListedParticles{ ownedList_ });
     keepOwned(vec_[r.x], vec_[r.v], r.p, r.free);
     device_->synchronize();
   }
@@ -1022,6 +1042,10 @@ private:
   CellKey* keys_[2] = {};
   std::uint32_t* masks_ = nullptr;
   std::uint32_t *sendList_ = nullptr, *ghostList_ = nullptr, *ownedList_ = nullptr;
+  // The owned particles that a neighbour mirrors (this slab's border columns, each once) and the
+  // others: a pass computes the border first and sends it while the interior is computed.
+  std::uint32_t *borderList_ = nullptr, *interiorList_ = nullptr;
+  std::uint32_t border_ = 0;
 
   // Fixed-size device arrays.
   std::vector<void*> fixed_;
@@ -1044,7 +1068,6 @@ private:
   HostBuffer hostPack_, hostRecv_;
   std::vector<distributed::Bytes> out_, in_;
   std::vector<std::pair<int, std::size_t>> messages_;
-  unsigned long long movedBits_ = 0;
 
   StepReport report_;
   distributed::ExchangeReport exchange_;

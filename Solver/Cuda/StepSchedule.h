@@ -160,10 +160,24 @@ FluidView<Real, MaskedNeighbors<Real>> solverView(const StepBuffers<Real>& b,
 
 // A neighbour pass that is the first to see new positions: rebuild the masks first if the
 // particles may have moved too far since they were built.
-template <class Real, class Exec, class Stage, class Pass>
+// Which particles a pass visits: all n (AllParticles, the single-GPU step), or those of a list
+// (ListedParticles: a decomposed step runs a pass over the border particles first, so that their
+// results can travel to the neighbours while the interior ones are computed).
+struct AllParticles
+{
+  PBF_HD PBF_INLINE std::uint32_t operator()(std::uint32_t k) const { return k; }
+};
+
+struct ListedParticles
+{
+  const std::uint32_t* list;
+  PBF_HD PBF_INLINE std::uint32_t operator()(std::uint32_t k) const { return list[k]; }
+};
+
+template <class Real, class Exec, class Stage, class Pass, class Visit = AllParticles>
 void firstPassOnPositions(Exec& exec, Stage stage, const StepBuffers<Real>& b,
   const StepConstants<Real>& k, std::uint32_t n, const FluidView<Real, MaskedNeighbors<Real>>& f,
-  int corrections, bool skipWhenDone, Pass pass)
+  int corrections, bool skipWhenDone, Pass pass, Visit visit = Visit{})
 {
   const MaskSchedule schedule = k.schedule;
   const unsigned long long* maxMoved = b.maxMoved;
@@ -171,14 +185,15 @@ void firstPassOnPositions(Exec& exec, Stage stage, const StepBuffers<Real>& b,
   std::uint32_t* masks = b.masks;
   const Real reach2 = k.reach2;
   const AdaptiveState* adaptive = skipWhenDone ? b.adaptive : nullptr;
-  exec.forEach(stage, n, [=] PBF_HD(std::uint32_t i) {
+  exec.forEach(stage, n, [=] PBF_HD(std::uint32_t k) {
+    const std::uint32_t i = visit(k);
     if (adaptive && adaptive->done)
     {
       return;
     }
     if (schedule.enabled && schedule.rebuildAt(corrections, maxMoved))
     {
-      if (i == 0)
+      if (k == 0)
       {
         ++*builds;
       }
@@ -210,13 +225,14 @@ struct VorticityPass
 // Lines 10-19 and, in the last iteration, 21: delta p_i (eq. 14) into f.scratch, then the Jacobi
 // update in place there, so f.scratch holds the corrected positions afterwards; the largest
 // |delta p_i| goes to maxMoved[iteration] for the mask schedule.
-template <class Real, class Exec>
+template <class Real, class Exec, class Visit = AllParticles>
 void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
-  const AdaptiveState* state)
+  const AdaptiveState* state, Visit visit = Visit{})
 {
   exec.forEachMax(CorrectionStage{}, n, b.maxMoved + iteration,
-    [=] PBF_HD(std::uint32_t i) -> double {
+    [=] PBF_HD(std::uint32_t k) -> double {
+      const std::uint32_t i = visit(k);
       FluidView<Real, MaskedNeighbors<Real>> apply = f;
       apply.p = f.scratch;
       apply.scratch = f.p;

@@ -175,6 +175,33 @@ struct KeyInColumns
   }
 };
 
+// Owned particles (columns [begin, end)) in a border column that a neighbour mirrors (the first
+// with a left neighbour, the last with a right one; each particle once), or the others.
+template <class Real>
+struct BorderOrInterior
+{
+  const CellKey* keys;
+  int nx, begin, end;
+  bool left, right, border;
+  PBF_HD bool operator()(std::uint32_t i) const
+  {
+    const int c = columnOfKey(keys[i], nx);
+    if (c < begin || c >= end)
+    {
+      return false;
+    }
+    const bool isBorder = (left && c == begin) || (right && c == end - 1);
+    return isBorder == border;
+  }
+};
+
+template <class Real, class Exec>
+void selectBorder(Exec& exec, int nx, std::uint32_t n, const CellKey* keys, int begin, int end,
+  bool left, bool right, bool border, std::uint32_t* out, std::uint32_t* count)
+{
+  exec.selectIf(n, BorderOrInterior<Real>{ keys, nx, begin, end, left, right, border }, out, count);
+}
+
 // The indices i with keys[i] == key, ascending (the leavers to one rank, in their order).
 template <class Real, class Exec>
 void selectKey(Exec& exec, std::uint32_t n, const CellKey* keys, CellKey key, std::uint32_t* out,
@@ -291,11 +318,14 @@ void cellKeys(Exec& exec, const GridGeometry<Real>& g, std::uint32_t n, const Ve
   });
 }
 
-// Eq. 16 on the XSPH velocities in place (f.v = f.scratch), as StepSchedule's last stage.
+// Eq. 16 on the XSPH velocities in place (f.v = f.scratch), as StepSchedule's last stage, for
+// the particles of a list.
 template <class Real, class Exec>
-void confine(Exec& exec, std::uint32_t n, const FluidView<Real, MaskedNeighbors<Real>>& f)
+void confine(Exec& exec, std::uint32_t n, const std::uint32_t* list,
+  const FluidView<Real, MaskedNeighbors<Real>>& f)
 {
-  exec.forEach(ConfinementStage{}, n, [=] PBF_HD(std::uint32_t i) { vorticityConfinement(i, f); });
+  exec.forEach(
+    ConfinementStage{}, n, [=] PBF_HD(std::uint32_t k) { vorticityConfinement(list[k], f); });
 }
 
 // A ghost refresh's message layout, for one or two fields a (and b) of type T: to the left

@@ -118,9 +118,9 @@ TEST(DeviceSubdomainOnHost, SinglePrecisionMatchesTheSerialBackendAfterOneStep)
 TEST(DeviceSubdomainOnHost, MasksVisitingOrderAndSkinChangeNoBit)
 {
   // Each stage visited backwards (a stage reading what another particle of it writes would
-  // differ), masks off (the 27-cell walk) and skins from tiny (a rebuild at nearly every pass)
-  // to wide: all bit-identical. A ghost moves by its owner's corrections, so a rank that
-  // bounded it by its own max |delta p| alone could skip a neighbour here.
+  // differ, and so would a pass whose border and interior launches depended on each other),
+  // masks off (the 27-cell walk) and any skin: all bit-identical. The masks must stay exact
+  // across ranks although ghosts move by their owners' corrections.
   const DecomposedSetup setup = decomposedDamBreak(0.04);
   const DecomposedOutcome base = runDecomposed(3, setup, 10, onHost<double>());
   expectBitIdentical(runDecomposed(3, setup, 10, onHost<double>(true)).state, base.state);

@@ -142,6 +142,8 @@ public:
   void download(void* host, const void* device, std::size_t bytes) { std::memcpy(host, device, bytes); }
   void upload(void* device, const void* host, std::size_t bytes) { std::memcpy(device, host, bytes); }
   void synchronize() {}
+  void recordEvent() {}
+  void waitEvent() {}
   void reserveTemp(std::uint32_t, std::size_t, int) {}
   void activate() {}
   std::string name() const { return "host executor"; }
