@@ -134,6 +134,7 @@ public:
     hostCounts_.resize(std::max<std::size_t>(
       { static_cast<std::size_t>(constants_.geometry.nx), ranks + 1, std::size_t(8) }));
     in_.resize(ranks);
+    inSizes_.resize(ranks);
     device_->activate();
     allocateFixed();
     // Every rank holds the whole initial fluid: the balanced cut follows from it on every rank
@@ -834,7 +835,17 @@ private:
       out_[static_cast<std::size_t>(me + 1)].assign(
         staging + sendLeft_ * record, staging + sendBytes);
     }
-    communicator_.exchangeInto(out_, in_);
+    // Both sides know the sizes: the ghost lists were agreed when the ghosts were sent.
+    std::fill(inSizes_.begin(), inSizes_.end(), std::size_t(0));
+    if (me > 0)
+    {
+      inSizes_[static_cast<std::size_t>(me - 1)] = ghostLeft_ * record;
+    }
+    if (me < last)
+    {
+      inSizes_[static_cast<std::size_t>(me + 1)] = ghostRight_ * record;
+    }
+    communicator_.exchangeKnownSizes(out_, in_, inSizes_);
     messages_.clear();
     const auto expect = [&](int from, std::size_t bytes) {
       const distributed::Bytes& message = in_[static_cast<std::size_t>(from)];
@@ -1068,6 +1079,7 @@ private:
   HostBuffer hostPack_, hostRecv_;
   std::vector<distributed::Bytes> out_, in_;
   std::vector<std::pair<int, std::size_t>> messages_;
+  std::vector<std::size_t> inSizes_;
 
   StepReport report_;
   distributed::ExchangeReport exchange_;

@@ -28,6 +28,16 @@ public:
   {
     incoming = exchange(outgoing);
   }
+  // As exchangeInto when every rank knows how many bytes each other rank sends it
+  // (incomingSizes, size() entries): an implementation may then skip agreeing on the lengths and
+  // talk to the ranks with messages only (a slab's neighbours) instead of all of them. The
+  // default ignores the sizes; the caller checks what arrived.
+  virtual void exchangeKnownSizes(const std::vector<Bytes>& outgoing, std::vector<Bytes>& incoming,
+    const std::vector<std::size_t>& incomingSizes)
+  {
+    (void)incomingSizes;
+    exchangeInto(outgoing, incoming);
+  }
 };
 
 // Collective: every rank's values, in rank order. Reductions sum them in that order, so every

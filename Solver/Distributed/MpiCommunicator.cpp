@@ -90,4 +90,45 @@ void MpiCommunicator::exchangeInto(const std::vector<Bytes>& outgoing, std::vect
   }
 }
 
+void MpiCommunicator::exchangeKnownSizes(const std::vector<Bytes>& outgoing,
+  std::vector<Bytes>& incoming, const std::vector<std::size_t>& incomingSizes)
+{
+  const auto n = static_cast<std::size_t>(size_);
+  if (outgoing.size() != n || incomingSizes.size() != n)
+  {
+    throw std::invalid_argument("exchange: one buffer and one size per rank expected");
+  }
+  constexpr int tag = 7007; // apart from any other traffic on the communicator
+  incoming.resize(n);
+  requests_.clear();
+  for (std::size_t r = 0; r < n; ++r)
+  {
+    if (incomingSizes[r] > static_cast<std::size_t>(INT_MAX) ||
+      outgoing[r].size() > static_cast<std::size_t>(INT_MAX))
+    {
+      throw std::runtime_error("exchange: more than 2 GiB in one message");
+    }
+    incoming[r].resize(incomingSizes[r]);
+    if (incomingSizes[r] > 0)
+    {
+      requests_.emplace_back();
+      check(MPI_Irecv(incoming[r].data(), static_cast<int>(incomingSizes[r]), MPI_BYTE,
+              static_cast<int>(r), tag, communicator_, &requests_.back()),
+        "MPI_Irecv");
+    }
+  }
+  for (std::size_t r = 0; r < n; ++r)
+  {
+    if (!outgoing[r].empty())
+    {
+      requests_.emplace_back();
+      check(MPI_Isend(outgoing[r].data(), static_cast<int>(outgoing[r].size()), MPI_BYTE,
+              static_cast<int>(r), tag, communicator_, &requests_.back()),
+        "MPI_Isend");
+    }
+  }
+  check(MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE),
+    "MPI_Waitall");
+}
+
 } // namespace pbf::distributed

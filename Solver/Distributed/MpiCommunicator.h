@@ -19,9 +19,14 @@ public:
   std::vector<Bytes> exchange(const std::vector<Bytes>& outgoing) override;
   // Packs into and receives through buffers kept between calls, and fills `incoming` in place.
   void exchangeInto(const std::vector<Bytes>& outgoing, std::vector<Bytes>& incoming) override;
+  // Non-blocking point-to-point with the ranks that send or receive something, no collective:
+  // a rank waits for its neighbours only, not for the slowest rank of the run.
+  void exchangeKnownSizes(const std::vector<Bytes>& outgoing, std::vector<Bytes>& incoming,
+    const std::vector<std::size_t>& incomingSizes) override;
 
 private:
   Bytes send_, receive_;
+  std::vector<MPI_Request> requests_;
   std::vector<int> sendCounts_, receiveCounts_, sendOffsets_, receiveOffsets_;
   MPI_Comm communicator_;
   int rank_ = 0;
