@@ -90,7 +90,7 @@ public:
   // unavailable. parameters.domain is replaced by the scene's.
   // With a communicator the run is one rank's share of a domain-decomposed run
   // (Distributed/SubdomainStepper.h): every rank constructs and advances its Simulation in step,
-  // and the stepper holds this rank's particles. CPU backends only, for now.
+  // and the stepper holds this rank's particles (Backend::CUDA: on the GPU of the local rank).
   Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
     Precision precision, distributed::Communicator* communicator = nullptr);
   // The fluid starts from given particles (the VTK filter's input points) instead of the scene's

@@ -4,17 +4,17 @@
 // code runs on CUDA (CudaSubdomainStepper.cu) and, for the tests, on the host
 // (Testing/Cuda/HostExecutor.h).
 //
-// A step, in the order the work is queued; "sync" marks the only waits for the device, each
-// before an exchange with the other ranks, whose bytes go device -> host -> Communicator ->
-// host -> device:
-//   1. cut: column histogram of x (integer atomics), sync, allGather, Slabs::balanced; the slab
+// A step, in the order the work is queued. The host waits for the device only before an
+// exchange with the other ranks (whose bytes go device -> page-locked host memory ->
+// Communicator -> device) and once to check the lists' lengths:
+//   1. cut: column histogram of x (integer atomics), wait, allGather, Slabs::balanced; the slab
 //      borders go up to the device.
-//   2. predict; migrate by the predicted column: owner per particle and its histogram, sync for
+//   2. predict; migrate by the predicted column: owner per particle and its histogram, wait for
 //      the counts; the leavers listed per destination by stable selections, packed and copied
 //      out, their holes filled by the kept particles beyond the kept count, the arrivals copied
-//      in behind. (The CPU stepper migrates by
-//      x and then again by x*; one migration by x* ends with the same owners.)
-//   3. ghosts: the particles of this slab's first and last columns go to the neighbours (sync
+//      in behind. (The CPU stepper migrates by x and then again by x*; one migration by x* ends
+//      with the same owners.)
+//   3. ghosts: the particles of this slab's first and last columns go to the neighbours (wait
 //      for the counts, then the exchange), and theirs are appended.
 //   4. one stable radix sort by cell of owned + ghosts (StepSchedule's sortAndGather). Then the
 //      lists, by selection over the sorted keys: what each neighbour mirrors (this slab's border
@@ -556,12 +556,14 @@ private:
     subdomain::countColumns(exec, constants_.geometry, count(n_), vec_[from], columnCounts_);
     device_->download(hostCounts_.data(), columnCounts_, nx * sizeof(std::uint32_t));
     device_->synchronize();
-    std::vector<double> mine(nx);
+    std::vector<double>& mine = columnsMine_;
+    mine.resize(nx);
     for (std::size_t c = 0; c < nx; ++c)
     {
       mine[c] = static_cast<double>(hostCounts_[c]);
     }
-    std::vector<std::uint64_t> perColumn(nx, 0);
+    std::vector<std::uint64_t>& perColumn = columnsAll_;
+    perColumn.assign(nx, 0);
     for (const std::vector<double>& r : distributed::allGather(communicator_, mine))
     {
       for (std::size_t c = 0; c < nx; ++c)
@@ -1080,6 +1082,8 @@ private:
   std::vector<distributed::Bytes> out_, in_;
   std::vector<std::pair<int, std::size_t>> messages_;
   std::vector<std::size_t> inSizes_;
+  std::vector<double> columnsMine_;       // the cut's column counts, this rank's and everyone's
+  std::vector<std::uint64_t> columnsAll_;
 
   StepReport report_;
   distributed::ExchangeReport exchange_;
