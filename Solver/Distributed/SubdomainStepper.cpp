@@ -551,15 +551,21 @@ std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backen
   if (backend == Backend::CUDA)
   {
 #ifdef PBF_WITH_CUDA
-    // Collective: every rank asks for CUDA. A rank whose device is missing or lost fails the
-    // constructor (std::runtime_error) before its first exchange.
+    // Collective: every rank asks for CUDA, and they agree on whether all have a device before
+    // any constructs, so that a rank without one does not leave the others waiting for it in
+    // the first exchange: then every rank throws.
     const int local = localRank(communicator);
     const int devices = cuda::cudaDeviceCount();
     std::string why;
-    if (devices == 0 || !cudaAvailable(&why))
+    const bool mine = devices > 0 && cudaAvailable(&why);
+    if (!everyRankHasAGpu(communicator))
     {
-      throw std::runtime_error("CUDA backend unavailable on rank " +
-        std::to_string(communicator.rank()) + ": " + (why.empty() ? "no CUDA device" : why));
+      throw std::runtime_error("CUDA backend unavailable on " +
+        (mine ? std::string("another rank") :
+                "rank " + std::to_string(communicator.rank()) + ": " +
+              (why.empty() ? "no CUDA device" : why)) +
+        "; a decomposed run needs a GPU on every rank for Backend = CUDA (Auto falls back to "
+        "the CPU on every rank)");
     }
     return cuda::makeCudaSubdomainStepper(
       communicator, precision, parameters, everything, local % devices);

@@ -292,3 +292,32 @@ TEST(LocalRank, RanksOnOneHostAreNumberedInRankOrder)
   EXPECT_EQ(local, (std::vector<int>{ 0, 0, 1, 2, 1 }));
   EXPECT_EQ(here, (std::vector<int>{ 0, 1, 2, 3, 4 }));
 }
+
+TEST(Distributed, CudaWithoutAGpuFailsOnEveryRankAndAutoFallsBackToTheCpu)
+{
+  if (cudaAvailable())
+  {
+    GTEST_SKIP() << "a CUDA device is present: this checks the behaviour without one";
+  }
+  // Backend = CUDA where no rank has a GPU: every rank throws (none constructs and waits in an
+  // exchange for the others); Auto gives the CPU backend on every rank.
+  const DecomposedScene setup = damBreak(0.08);
+  std::vector<int> threw(2, 0);
+  std::vector<Backend> automatic(2, Backend::CUDA);
+  runThreadCluster(2, [&](Communicator& communicator) {
+    const auto r = static_cast<std::size_t>(communicator.rank());
+    try
+    {
+      makeSubdomainStepper(
+        communicator, Backend::CUDA, Precision::Single, setup.parameters, setup.fluid);
+    }
+    catch (const std::runtime_error&)
+    {
+      threw[r] = 1;
+    }
+    automatic[r] = makeSubdomainStepperAuto(communicator, Precision::Single, setup.parameters,
+      setup.fluid, Backend::Serial)->backend();
+  });
+  EXPECT_EQ(threw, (std::vector<int>{ 1, 1 }));
+  EXPECT_EQ(automatic, (std::vector<Backend>{ Backend::Serial, Backend::Serial }));
+}
