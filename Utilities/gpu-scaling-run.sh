@@ -2,15 +2,17 @@
 # Decomposed runs on GPUs (issue 7), in one call of the device tool (carry [".deps"], made here by
 # Utilities/gpu-deps.sh):
 #   1. build Solver/ with CUDA (sm_90) and MPI, and its tests, without ParaView (all cores)
-#   2. the CUDA sub-domain tests (CudaSubdomain.*), then the rest of the gpu-labelled ctest as
-#      time allows
+#   2. the CUDA sub-domain tests (CudaSubdomain.*), the 1-2-3-rank 10-step test under
+#      compute-sanitizer memcheck and the float 1-step test under racecheck (--sanitize), then the
+#      gpu-labelled ctest (capped, before the scaling; without --no-ctest)
 #   3. pbf_bench_mpi --backend cuda, one rank per GPU (its local rank's): strong scaling at P
 #      particles (default 32M) and weak scaling at Q per GPU (default 16M) on 1, 2, 4 GPUs (counts
 #      the machine lacks are skipped), and pbf_bench's single-GPU CudaStepper at Q and P, the
-#      reference a decomposed run has to beat
+#      reference a decomposed run has to beat; strong 4 GPUs once more with
+#      PBF_CUDA_SUBDOMAIN_ONE_STREAM=1 (the refreshes' copies back on the compute stream), an A/B
 # Every phase has a time limit inside PBF_GPU_BUDGET seconds (default 560), so the short table
 # comes last within the device tool's 10 minutes. Logs and JSON go under $OUT (else
-# output/gpu-scaling). Options: --particles P --per-gpu Q --steps S --no-ctest
+# output/gpu-scaling). Options: --particles P --per-gpu Q --steps S --no-ctest --sanitize
 set -uo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 out=${OUT:-$root/output/gpu-scaling}
@@ -20,12 +22,14 @@ particles=32000000
 per_gpu=16000000
 steps=20
 ctest_all=1
+sanitize=0
 while (($#)); do
   case $1 in
     --particles) particles=$2; shift 2 ;;
     --per-gpu) per_gpu=$2; shift 2 ;;
     --steps) steps=$2; shift 2 ;;
     --no-ctest) ctest_all=0; shift ;;
+    --sanitize) sanitize=1; shift ;;
     *) sed -n '2,16p' "$0"; exit 2 ;;
   esac
 done
@@ -74,6 +78,27 @@ if ((PIPESTATUS[0] != 0)) && command -v gdb >/dev/null; then
     grep -vE "^\[New Thread|^\[Thread .* exited" | tail -30
 fi
 
+if ((sanitize)); then
+  sanitizer=$(command -v compute-sanitizer || ls /usr/local/cuda*/bin/compute-sanitizer 2>/dev/null | head -1)
+  if [[ -n $sanitizer ]]; then
+    phase "compute-sanitizer memcheck: CudaSubdomain 1, 2, 3 ranks, 10 steps"
+    timeout "$(limit 80)" "$sanitizer" --tool memcheck --leak-check full --error-exitcode 99 \
+      "$subdomain" --gtest_filter='*OneTwoAndThree*' 2>&1 | grep -vE "^\[ RUN|^Running main|^\[-|^$" | tail -12
+    echo "memcheck exit: ${PIPESTATUS[0]}"
+    phase "compute-sanitizer racecheck: CudaSubdomain float, 2 and 3 ranks, 1 step"
+    timeout "$(limit 40)" "$sanitizer" --tool racecheck --error-exitcode 99 \
+      "$subdomain" --gtest_filter='*SinglePrecision*' 2>&1 | grep -vE "^\[ RUN|^Running main|^\[-|^$" | tail -12
+    echo "racecheck exit: ${PIPESTATUS[0]}"
+  else
+    echo "compute-sanitizer: not found"
+  fi
+fi
+
+if ((ctest_all)); then
+  phase "ctest -L gpu"
+  timeout "$(limit 90)" ctest --test-dir "$build" -L gpu 2>&1 | tail -15
+fi
+
 # OpenMPI: root is refused and ranks beyond the slots too unless allowed.
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 export OMP_NUM_THREADS=1
@@ -103,17 +128,16 @@ reference cudastepper-weak 30 "$per_gpu"
 for n in 2 4; do
   if ((gpus >= n)); then
     run "strong-$n" 60 "$n" --particles "$particles" --warmup 3 --steps "$steps"
+    if ((n == 4)); then
+      PBF_CUDA_SUBDOMAIN_ONE_STREAM=1 run "strong-4-one-stream" 40 4 --particles "$particles" \
+        --warmup 3 --steps "$steps"
+    fi
     # 2 GPUs at 16M each is the strong run's 32M: the same scene, measured once more.
     run "weak-$n" 80 "$n" --per-rank "$per_gpu" --warmup 3 --steps "$steps"
   else
     echo "skipping $n GPUs: this machine has $gpus"
   fi
 done
-
-if ((ctest_all)); then
-  phase "ctest -L gpu (the rest, as time allows)"
-  timeout "$(limit 200)" ctest --test-dir "$build" -L gpu 2>&1 | tail -15
-fi
 
 phase "summary"
 python3 - "$out" "$particles" "$per_gpu" <<'EOF' || printf '%s\n' "${row[@]}"
@@ -136,8 +160,8 @@ print(f"Strong scaling, {particles:,} particles (ms/step median, slowest rank, b
 print("| GPUs | ms/step (p10-p90) | speed-up vs 1 GPU | vs CudaStepper | ghost ms | migration ms | particles per GPU | ghosts (max) |")
 print("|---:|---:|---:|---:|---:|---:|---|---:|")
 base = ms(load("strong-1"))
-for n in (1, 2, 4):
-    d = load(f"strong-{n}")
+for n, name in ((1, "strong-1"), (2, "strong-2"), (4, "strong-4"), ("4, one stream (A/B)", "strong-4-one-stream")):
+    d = load(name)
     if d is None: continue
     m = d["median_ms"]
     per = d["particles_per_rank"]
@@ -158,5 +182,11 @@ for n in (1, 2, 4):
     print(f"| {n} | {d['particles']:,} | {m:.2f} ({d['p10_ms']:.2f}-{d['p90_ms']:.2f}) | "
           f"{base / m:.2f} | {d['ghost_ms']:.2f} | {d['migration_ms']:.2f} | {min(per):,}-{max(per):,} |")
 print(f"CudaStepper (single GPU, CUDA graphs) at {per_gpu:,}: {ms(ref_weak)} ms/step")
+print()
+print("Per rank, medians in ms: own step; waiting for its device's border fields; in the refreshes' exchanges")
+for name in ("strong-2", "strong-4", "strong-4-one-stream", "weak-2", "weak-4"):
+    d = load(name)
+    if d is None or "own_ms_per_rank" not in d: continue
+    print(f"{name}: own {d['own_ms_per_rank']}; device wait {d['device_wait_ms_per_rank']}; exchange wait {d['refresh_wait_ms_per_rank']}")
 EOF
 echo "total: $((SECONDS - t0)) s"

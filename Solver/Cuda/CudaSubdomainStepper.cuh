@@ -1,6 +1,11 @@
-// DeviceSubdomainStepper's Device policy on CUDA: one stream on the rank's device, the kernel
+// DeviceSubdomainStepper's Device policy on CUDA: a compute stream on the rank's device, the kernel
 // executor of StepSchedule.h, cudaMalloc'd arrays, and the transfers of the ghost and migration
-// messages (each followed by a stream synchronisation before the exchange reads the bytes).
+// messages (each followed by a stream synchronisation before the exchange reads the bytes). The
+// ghost refreshes' copies (downloadAside, uploadAside) run on a second stream, ordered against
+// the compute stream by events, so that the interior pass does not queue behind the border
+// fields' copy to the host nor the next pass behind the neighbours' fields' copy to the device.
+// PBF_CUDA_SUBDOMAIN_ONE_STREAM=1 (a diagnostic, for A/B runs) puts them back on the compute
+// stream: the same order of work, as before the second stream.
 #pragma once
 
 #include "CudaRuntime.cuh"
@@ -9,6 +14,8 @@
 
 #include <cuda_runtime.h>
 
+#include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <string>
 
@@ -46,18 +53,37 @@ public:
     check(cudaGetDeviceProperties(&properties, device_), "cudaGetDeviceProperties");
     name_ = std::string(properties.name) + " (device " + std::to_string(device_) + ")";
     check(cudaStreamCreate(&stream_), "cudaStreamCreate");
-    check(cudaEventCreateWithFlags(&event_, cudaEventDisableTiming), "cudaEventCreate");
+    const char* one = std::getenv("PBF_CUDA_SUBDOMAIN_ONE_STREAM");
+    if (one && std::strcmp(one, "1") == 0)
+    {
+      copyStream_ = stream_;
+    }
+    else
+    {
+      check(cudaStreamCreate(&copyStream_), "cudaStreamCreate");
+    }
+    for (cudaEvent_t* e : { &event_, &packed_, &uploaded_ })
+    {
+      check(cudaEventCreateWithFlags(e, cudaEventDisableTiming), "cudaEventCreate");
+    }
   }
 
   ~CudaDevicePolicy()
   {
     cudaSetDevice(device_);
     cudaStreamSynchronize(stream_);
+    cudaStreamSynchronize(copyStream_);
     if (temp_)
     {
       cudaFree(temp_);
     }
     cudaEventDestroy(event_);
+    cudaEventDestroy(packed_);
+    cudaEventDestroy(uploaded_);
+    if (copyStream_ != stream_)
+    {
+      cudaStreamDestroy(copyStream_);
+    }
     cudaStreamDestroy(stream_);
   }
 
@@ -98,8 +124,38 @@ public:
   {
     check(cudaMemcpyAsync(device, host, bytes, cudaMemcpyHostToDevice, stream_), "cudaMemcpyAsync");
   }
-  void synchronize() { check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize"); }
+  // Both streams: after it, no copy of either is in flight.
+  void synchronize()
+  {
+    check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
+    check(cudaStreamSynchronize(copyStream_), "cudaStreamSynchronize");
+  }
   void recordEvent() { check(cudaEventRecord(event_, stream_), "cudaEventRecord"); }
+  // Device -> page-locked host on the copy stream, after the work queued so far on the compute
+  // stream; the event that waitEvent waits for marks its end. The compute stream goes on.
+  void downloadAside(void* host, const void* device, std::size_t bytes)
+  {
+    check(cudaEventRecord(packed_, stream_), "cudaEventRecord");
+    check(cudaStreamWaitEvent(copyStream_, packed_, 0), "cudaStreamWaitEvent");
+    if (bytes > 0)
+    {
+      check(cudaMemcpyAsync(host, device, bytes, cudaMemcpyDeviceToHost, copyStream_),
+        "cudaMemcpyAsync");
+    }
+    check(cudaEventRecord(event_, copyStream_), "cudaEventRecord");
+  }
+  // Page-locked host -> device on the copy stream (behind the last downloadAside); the work
+  // queued on the compute stream from now on waits for it.
+  void uploadAside(void* device, const void* host, std::size_t bytes)
+  {
+    if (bytes > 0)
+    {
+      check(cudaMemcpyAsync(device, host, bytes, cudaMemcpyHostToDevice, copyStream_),
+        "cudaMemcpyAsync");
+    }
+    check(cudaEventRecord(uploaded_, copyStream_), "cudaEventRecord");
+    check(cudaStreamWaitEvent(stream_, uploaded_, 0), "cudaStreamWaitEvent");
+  }
   void waitEvent() { check(cudaEventSynchronize(event_), "cudaEventSynchronize"); }
   void activate() { check(cudaSetDevice(device_), "cudaSetDevice"); }
   std::string name() const { return name_; }
@@ -136,7 +192,8 @@ private:
   int block_;
   std::string name_;
   cudaStream_t stream_ = nullptr;
-  cudaEvent_t event_ = nullptr;
+  cudaStream_t copyStream_ = nullptr; // stream_ itself under PBF_CUDA_SUBDOMAIN_ONE_STREAM=1
+  cudaEvent_t event_ = nullptr, packed_ = nullptr, uploaded_ = nullptr;
   void* temp_ = nullptr;
   std::size_t tempBytes_ = 0;
 };

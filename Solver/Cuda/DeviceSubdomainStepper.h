@@ -6,7 +6,8 @@
 //
 // A step, in the order the work is queued. The host waits for the device only before an
 // exchange with the other ranks (whose bytes go device -> page-locked host memory ->
-// Communicator -> device) and once to check the lists' lengths:
+// Communicator -> device); the lists' lengths are checked at the first of those waits after the
+// sort, not by a wait of their own:
 //   1. cut: column histogram of x (integer atomics), wait, allGather, Slabs::balanced; the slab
 //      borders go up to the device.
 //   2. predict; migrate by the predicted column: owner per particle and its histogram, wait for
@@ -25,7 +26,9 @@
 //   5. the passes run over the owned particles, each as two launches: the border particles (the
 //      columns a neighbour mirrors) first, whose fields are then packed and copied out, and the
 //      interior ones while the host exchanges them; the upload and scatter into the ghost slots
-//      are queued before the next pass. Density pass, refresh density+lambda (one round); the
+//      are queued before the next pass. The refreshes' copies (down and up) run on the device
+//      policy's copy stream (downloadAside, uploadAside), so the interior pass does not wait for
+//      the border fields' copy to the host, and the neighbours' fields go up while it runs. Density pass, refresh density+lambda (one round); the
 //      fused correction, refresh positions (and velocities after the last one); vorticity+XSPH,
 //      refresh omega; confinement; then the owned particles are gathered back, in cell order.
 //      Ghosts are not computed (nothing reads their own results; interior particles never read
@@ -98,6 +101,10 @@ StepConstants<Real> makeStepConstants(const Parameters& parameters, double skin,
 //   download(host, device, bytes); upload(device, host, bytes); synchronize();
 //   void* allocateHost(bytes); releaseHost(p); page-locked host memory
 //   recordEvent(); waitEvent();              mark the queue, wait for the mark (one event)
+//   downloadAside(host, device, bytes);       device -> page-locked host after the queued work,
+//                                             off the compute queue; marks the event at its end
+//   uploadAside(device, host, bytes);         page-locked host -> device off the compute queue;
+//                                             the compute work queued afterwards waits for it
 //   reserveTemp(particles, cells, keyBits);   scratch of the sort, scan and selection
 //   activate();                               make it current (cudaSetDevice)
 //   std::string name() const;
@@ -172,6 +179,10 @@ public:
       {
         device_->releaseHost(b->data);
       }
+    }
+    if (listCounts_)
+    {
+      device_->releaseHost(listCounts_);
     }
   }
 
@@ -366,6 +377,7 @@ private:
     ownerCounts_ = allocateFixed<std::uint32_t>(ranks + 1);
     slabFirst_ = allocateFixed<int>(ranks + 1);
     selected_ = allocateFixed<std::uint32_t>(8);
+    listCounts_ = static_cast<std::uint32_t*>(device_->allocateHost(8 * sizeof(std::uint32_t)));
     auto exec = device_->executor();
     exec.fillZero(maskBuilds_, sizeof(unsigned long long));
   }
@@ -495,7 +507,7 @@ private:
   // The incoming messages in_[from] (each from `skip` bytes on, `bytes` long) one after another
   // into page-locked memory and up to device memory at `to`, in one copy.
   void uploadMessages(unsigned char* to, const std::vector<std::pair<int, std::size_t>>& from,
-    std::size_t skip = 0)
+    std::size_t skip = 0, bool aside = false)
   {
     std::size_t total = 0;
     for (const auto& [rank, bytes] : from)
@@ -515,7 +527,14 @@ private:
       std::memcpy(staging + at, message.data() + skip, bytes);
       at += bytes;
     }
-    device_->upload(to, staging, total);
+    if (aside)
+    {
+      device_->uploadAside(to, staging, total);
+    }
+    else
+    {
+      device_->upload(to, staging, total);
+    }
   }
 
   // Grow-only byte buffers for the messages.
@@ -769,27 +788,36 @@ private:
       exec, nx, total, keys, begin, end, me > 0, me < last, true, borderList_, selected_ + 5);
     subdomain::selectBorder<Real>(
       exec, nx, total, keys, begin, end, me > 0, me < last, false, interiorList_, selected_ + 6);
-    // The counts are known already; checking them costs one small copy and catches a protocol
-    // slip at once instead of as a wrong answer.
-    device_->download(hostCounts_.data(), selected_, 7 * sizeof(std::uint32_t));
-    device_->synchronize();
-    border_ = hostCounts_[5];
-    if (hostCounts_[5] + hostCounts_[6] != n_)
+    // The lengths are known already: the border is this slab's first column (with a left
+    // neighbour) and its last (with a right one), the ones sent as ghosts, counted once where
+    // they are the same column. The device's counts come back to page-locked memory without a
+    // wait and are checked at the next one (checkLists): a protocol slip still fails the step,
+    // instead of giving a wrong answer, without draining the device here.
+    border_ = me > 0 && me < last && begin + 1 == end ? sendLeft_ : sendLeft_ + sendRight_;
+    device_->download(listCounts_, selected_, 7 * sizeof(std::uint32_t));
+    listsUnchecked_ = true;
+    return keys;
+  }
+
+  // The lists' lengths from the device against the ones the step used (after a wait for the
+  // device that follows sortByCell's copy of them).
+  void checkLists()
+  {
+    if (!listsUnchecked_)
     {
-      throw std::logic_error("decomposed CUDA step: border and interior do not add up");
+      return;
     }
-    const std::uint32_t expected[5] = { sendLeft_, sendRight_, ghostLeft_, ghostRight_,
-      count(n_) };
-    for (int i = 0; i < 5; ++i)
+    listsUnchecked_ = false;
+    const std::uint32_t expected[7] = { sendLeft_, sendRight_, ghostLeft_, ghostRight_, count(n_),
+      border_, count(n_) - border_ };
+    for (int i = 0; i < 7; ++i)
     {
-      if (hostCounts_[static_cast<std::size_t>(i)] != expected[i])
+      if (listCounts_[i] != expected[i])
       {
         throw std::logic_error("decomposed CUDA step: list " + std::to_string(i) + " has " +
-          std::to_string(hostCounts_[static_cast<std::size_t>(i)]) + " particles, expected " +
-          std::to_string(expected[i]));
+          std::to_string(listCounts_[i]) + " particles, expected " + std::to_string(expected[i]));
       }
     }
-    return keys;
   }
 
   // One ghost refresh in two halves around the interior pass. sendRefresh: fields a (and b) of
@@ -803,11 +831,8 @@ private:
     unsigned char* pack = packBuffer(sendBytes);
     unsigned char* staging = hostBuffer(hostPack_, sendBytes);
     subdomain::packFields(exec, sendList_, sendLeft_, sendRight_, a, b, pack);
-    if (sendBytes > 0)
-    {
-      device_->download(staging, pack, sendBytes);
-    }
-    device_->recordEvent();
+    // Off the compute queue: the interior pass queued next does not wait for this copy.
+    device_->downloadAside(staging, pack, sendBytes);
   }
 
   // receiveRefresh: waits for the packed fields only (the interior pass queued behind them keeps
@@ -821,8 +846,12 @@ private:
     const int last = communicator_.size() - 1;
     const std::size_t record = sizeof(T) * (b ? 2 : 1);
     const std::size_t sendBytes = (sendLeft_ + sendRight_) * record;
+    const auto waitStart = Clock::now();
     device_->waitEvent();
     const auto start = Clock::now();
+    exchange_.deviceWaitMilliseconds +=
+      std::chrono::duration<double, std::milli>(start - waitStart).count();
+    checkLists(); // their copy was queued before the border fields'
     const unsigned char* staging = hostPack_.data;
     for (auto& o : out_)
     {
@@ -847,7 +876,9 @@ private:
     {
       inSizes_[static_cast<std::size_t>(me + 1)] = ghostRight_ * record;
     }
+    const auto exchangeStart = Clock::now();
     communicator_.exchangeKnownSizes(out_, in_, inSizes_);
+    exchange_.refreshWaitMilliseconds += since(exchangeStart);
     messages_.clear();
     const auto expect = [&](int from, std::size_t bytes) {
       const distributed::Bytes& message = in_[static_cast<std::size_t>(from)];
@@ -867,7 +898,8 @@ private:
       expect(me + 1, ghostRight_ * record);
     }
     unsigned char* recv = recvBuffer((ghostLeft_ + ghostRight_) * record);
-    uploadMessages(recv, messages_);
+    // Off the compute queue too: it overlaps the interior pass; the scatter waits for it.
+    uploadMessages(recv, messages_, 0, true);
     auto exec = device_->executor();
     subdomain::scatterFields(exec, ghostList_, ghostLeft_, ghostRight_, recv, a, b);
     exchange_.ghostMilliseconds += since(start);
@@ -988,6 +1020,7 @@ private:
       detail::DensityPass{}, detail::ListedParticles{ ownedList_ });
     keepOwned(vec_[r.x], vec_[r.v], r.p, r.free);
     device_->synchronize();
+    checkLists();
   }
 
   HostState hostState() const
@@ -1069,6 +1102,9 @@ private:
   std::uint32_t* ownerCounts_ = nullptr;
   int* slabFirst_ = nullptr;
   std::uint32_t* selected_ = nullptr;
+  // The lists' lengths as the device counted them (page-locked, 8 entries), checked late.
+  std::uint32_t* listCounts_ = nullptr;
+  bool listsUnchecked_ = false;
   unsigned char *pack_ = nullptr, *recv_ = nullptr;
   std::size_t packBytes_ = 0, recvBytes_ = 0;
 

@@ -40,6 +40,11 @@ struct ExchangeReport
   double ghostMilliseconds = 0;
   double migrationMilliseconds = 0; // the cut included
   bool cutMoved = false;       // the step began with a new cut
+  // Diagnostics of the CUDA sub-domain stepper's ghost refreshes (0 elsewhere): the host's time
+  // waiting for its own device's border fields, and inside the exchanges with the neighbours
+  // (waiting for theirs; ~0 on the rank that paces the others).
+  double deviceWaitMilliseconds = 0;
+  double refreshWaitMilliseconds = 0;
 };
 
 // What the benchmark and the tests ask of one rank's stepper beyond Stepper, whichever backend

@@ -10,7 +10,10 @@
 // each rank runs the CUDA sub-domain stepper on the GPU of its local rank and waits for its GPU
 // before the closing barrier. Ghost exchange and migration (with the cut) are timed inside the
 // step on each rank and reported as the largest over the ranks. Medians and p10/p90 over the
-// timed steps, warm-up excluded. Rank 0 prints one table row and, with --json, the run.
+// timed steps, warm-up excluded. Rank 0 prints one table row and, with --json, the run. Per rank
+// (stderr and JSON; the CUDA stepper only): the medians of the step's time, of the host's wait
+// for its own device's border fields and of its wait inside the refreshes' exchanges with the
+// neighbours: the rank that waits least for its neighbours is the one that paces them.
 #include "Distributed/MpiCommunicator.h"
 #include "Distributed/SubdomainStepper.h"
 #include "ScaledScenes.h"
@@ -42,6 +45,26 @@ double percentile(std::vector<double> v, double q)
   return v[lo] + (at - static_cast<double>(lo)) * (v[hi] - v[lo]);
 }
 
+// Every rank's value, on rank 0 (elsewhere empty).
+std::vector<double> gatherToRankZero(double mine, int ranks)
+{
+  std::vector<double> all(static_cast<std::size_t>(ranks), 0.0);
+  MPI_Gather(&mine, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  return all;
+}
+
+std::string listed(const std::vector<double>& values)
+{
+  std::string text;
+  char item[32];
+  for (std::size_t r = 0; r < values.size(); ++r)
+  {
+    std::snprintf(item, sizeof item, "%s%.2f", r ? ", " : "", values[r]);
+    text += item;
+  }
+  return text;
+}
+
 double largestOverRanks(double mine)
 {
   double largest = 0;
@@ -69,13 +92,15 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
   const double setupSeconds = largestOverRanks(
     std::chrono::duration<double>(std::chrono::steady_clock::now() - setupStart).count());
 
-  std::vector<double> ms, ghostMs, migrationMs;
+  std::vector<double> ms, ghostMs, migrationMs, ownMs, deviceWaitMs, refreshWaitMs;
   for (long s = 0; s < warmup + steps; ++s)
   {
     MPI_Barrier(MPI_COMM_WORLD);
     const auto start = std::chrono::steady_clock::now();
     stepper.step();
     stepper.synchronize(); // a GPU's queued work belongs to the step
+    const double own =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     MPI_Barrier(MPI_COMM_WORLD);
     const double elapsed =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -86,11 +111,19 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
       ms.push_back(elapsed);
       ghostMs.push_back(ghost);
       migrationMs.push_back(migration);
+      ownMs.push_back(own);
+      deviceWaitMs.push_back(stepper.lastExchange().deviceWaitMilliseconds);
+      refreshWaitMs.push_back(stepper.lastExchange().refreshWaitMilliseconds);
     }
   }
   const std::vector<std::uint64_t> perRank = stepper.particlesPerRank();
   const Statistics statistics = stepper.statistics();
   const double ghosts = largestOverRanks(static_cast<double>(stepper.lastExchange().ghosts));
+  const std::vector<double> ownPerRank = gatherToRankZero(percentile(ownMs, 0.5), ranks);
+  const std::vector<double> deviceWaitPerRank =
+    gatherToRankZero(percentile(deviceWaitMs, 0.5), ranks);
+  const std::vector<double> refreshWaitPerRank =
+    gatherToRankZero(percentile(refreshWaitMs, 0.5), ranks);
   if (communicator.rank() != 0)
   {
     return 0;
@@ -99,6 +132,10 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
   const double median = percentile(ms, 0.5);
   std::fprintf(stderr, "setup (scene, constructor, first evaluation) %.1f s on the slowest rank; "
     "%s\n", setupSeconds, stepper.description().c_str());
+  std::fprintf(stderr, "per rank, medians in ms: own step (to its device's end) [%s]; waiting for "
+    "its device's border fields [%s]; in the refreshes' exchanges [%s]\n",
+    listed(ownPerRank).c_str(), listed(deviceWaitPerRank).c_str(),
+    listed(refreshWaitPerRank).c_str());
   std::printf("| ranks | backend | precision | particles | ms/step median (p10-p90) | steps/s | "
               "ghost ms | migration ms | particles per rank (min-max) | ghosts (max) | finite |\n");
   std::printf("| %d | %s | %s | %zu | %.2f (%.2f-%.2f) | %.1f | %.2f | %.2f | %llu-%llu | %.0f | "
@@ -118,7 +155,10 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
         << ", \"p90_ms\": " << percentile(ms, 0.9)
         << ", \"ghost_ms\": " << percentile(ghostMs, 0.5)
         << ", \"migration_ms\": " << percentile(migrationMs, 0.5) << ", \"ghosts_max\": " << ghosts
-        << ", \"setup_s\": " << setupSeconds << ", \"particles_per_rank\": [";
+        << ", \"setup_s\": " << setupSeconds << ", \"own_ms_per_rank\": [" << listed(ownPerRank)
+        << "], \"device_wait_ms_per_rank\": [" << listed(deviceWaitPerRank)
+        << "], \"refresh_wait_ms_per_rank\": [" << listed(refreshWaitPerRank)
+        << "], \"particles_per_rank\": [";
     for (std::size_t r = 0; r < perRank.size(); ++r)
     {
       out << (r ? ", " : "") << perRank[r];

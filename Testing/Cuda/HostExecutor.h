@@ -144,6 +144,20 @@ public:
   void synchronize() {}
   void recordEvent() {}
   void waitEvent() {}
+  void downloadAside(void* host, const void* device, std::size_t bytes)
+  {
+    if (bytes > 0)
+    {
+      std::memcpy(host, device, bytes);
+    }
+  }
+  void uploadAside(void* device, const void* host, std::size_t bytes)
+  {
+    if (bytes > 0)
+    {
+      std::memcpy(device, host, bytes);
+    }
+  }
   void reserveTemp(std::uint32_t, std::size_t, int) {}
   void activate() {}
   std::string name() const { return "host executor"; }
