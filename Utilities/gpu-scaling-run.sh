@@ -9,7 +9,7 @@
 #      particles (default 32M) and weak scaling at Q per GPU (default 16M) on 1, 2, 4 GPUs (counts
 #      the machine lacks are skipped), and pbf_bench's single-GPU CudaStepper at Q and P, the
 #      reference a decomposed run has to beat; strong 4 GPUs once more with
-#      PBF_SUBDOMAIN_BORDER_WEIGHT=0 (slabs of equal particle counts, no border weight), an A/B
+#      PBF_CUDA_SUBDOMAIN_ONE_STREAM=1 (the refreshes' copies back on the compute stream), an A/B
 # Every phase has a time limit inside PBF_GPU_BUDGET seconds (default 560), so the short table
 # comes last within the device tool's 10 minutes. Logs and JSON go under $OUT (else
 # output/gpu-scaling). Options: --particles P --per-gpu Q --steps S --no-ctest --sanitize
@@ -129,7 +129,7 @@ for n in 2 4; do
   if ((gpus >= n)); then
     run "strong-$n" 60 "$n" --particles "$particles" --warmup 3 --steps "$steps"
     if ((n == 4)); then
-      PBF_SUBDOMAIN_BORDER_WEIGHT=0 run "strong-4-even-cut" 40 4 --particles "$particles" \
+      PBF_CUDA_SUBDOMAIN_ONE_STREAM=1 run "strong-4-one-stream" 40 4 --particles "$particles" \
         --warmup 3 --steps "$steps"
     fi
     # 2 GPUs at 16M each is the strong run's 32M: the same scene, measured once more.
@@ -160,7 +160,7 @@ print(f"Strong scaling, {particles:,} particles (ms/step median, slowest rank, b
 print("| GPUs | ms/step (p10-p90) | speed-up vs 1 GPU | vs CudaStepper | ghost ms | migration ms | particles per GPU | ghosts (max) |")
 print("|---:|---:|---:|---:|---:|---:|---|---:|")
 base = ms(load("strong-1"))
-for n, name in ((1, "strong-1"), (2, "strong-2"), (4, "strong-4"), ("4, even cut (A/B)", "strong-4-even-cut")):
+for n, name in ((1, "strong-1"), (2, "strong-2"), (4, "strong-4"), ("4, one stream (A/B)", "strong-4-one-stream")):
     d = load(name)
     if d is None: continue
     m = d["median_ms"]

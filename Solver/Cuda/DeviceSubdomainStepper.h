@@ -53,7 +53,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -154,8 +153,7 @@ public:
       ++perColumn[static_cast<std::size_t>(
         subdomain::columnOf(constants_.geometry, Vec3<Real>::from(q)))];
     }
-    borderWeight_ = borderWeight();
-    slabs_ = distributed::Slabs::balancedWithBorders(perColumn, communicator_.size(), borderWeight_);
+    slabs_ = distributed::Slabs::balanced(perColumn, communicator_.size());
     uploadSlabs();
     append(everything);
   }
@@ -592,8 +590,7 @@ private:
         perColumn[c] += static_cast<std::uint64_t>(r[c]);
       }
     }
-    const distributed::Slabs balanced =
-      distributed::Slabs::balancedWithBorders(perColumn, communicator_.size(), borderWeight_);
+    const distributed::Slabs balanced = distributed::Slabs::balanced(perColumn, communicator_.size());
     exchange_.cutMoved = balanced.first != slabs_.first;
     slabs_ = balanced;
     uploadSlabs();
@@ -1072,31 +1069,11 @@ private:
     n_ = n;
   }
 
-  // What a ghost costs in particles when the slabs are cut (Slabs::balancedWithBorders). On 4
-  // H200s at 32M a rank with two borders was busy ~2.2 ms a step longer than an end rank with
-  // the same 8M particles and one border of ~76,000 ghosts: ~11 particles a ghost (a border pass
-  // is a small launch of its own, and each of the 9 rounds waits for it). The results do not
-  // depend on the cut (the tests compare 1, 2 and 3 ranks bit for bit), only the balance does.
-  // PBF_SUBDOMAIN_BORDER_WEIGHT overrides it, for A/B runs of the benchmark.
-  static double borderWeight()
-  {
-    constexpr double kBorderWeight = 10.0;
-    const char* text = std::getenv("PBF_SUBDOMAIN_BORDER_WEIGHT");
-    if (!text || !*text)
-    {
-      return kBorderWeight;
-    }
-    char* end = nullptr;
-    const double w = std::strtod(text, &end);
-    return end && *end == '\0' && w >= 0 && w < 1e6 ? w : kBorderWeight;
-  }
-
   distributed::Communicator& communicator_;
   Parameters parameters_;
   std::unique_ptr<Device> device_;
   StepConstants<Real> constants_{};
   distributed::Slabs slabs_;
-  double borderWeight_ = 0;
 
   // Per-particle device arrays (capacity_ each); owned particles in [0, n_) between steps, with
   // x in vec_[x_] and v in vec_[v_].

@@ -111,27 +111,6 @@ TEST(Slabs, BalancedCutsGiveEachRankItsShareAndAtLeastAColumn)
   EXPECT_THROW(Slabs::balanced(perColumn, 9), std::invalid_argument);
 }
 
-TEST(Slabs, BorderWeightGivesTheEndRanksMoreParticles)
-{
-  // 400 columns of 100 particles: an even cut gives 4 ranks 10,000 each and a middle rank 200
-  // ghosts (100 a border). With each ghost weighing 10 particles more, equal loads n + 10 g mean
-  // the end ranks take 1,000 more particles than the middle ones: 10,500 and 9,500.
-  const std::vector<std::uint64_t> perColumn(400, 100);
-  const Slabs even = Slabs::balanced(perColumn, 4);
-  ASSERT_EQ(even.first, (std::vector<int>{ 0, 100, 200, 300, 400 }));
-  EXPECT_EQ(Slabs::balancedWithBorders(perColumn, 4, 0.0).first, even.first);
-  EXPECT_EQ(Slabs::balancedWithBorders(perColumn, 2, 10.0).first, Slabs::balanced(perColumn, 2).first)
-    << "two ranks have one border each: nothing to shift";
-  const Slabs weighted = Slabs::balancedWithBorders(perColumn, 4, 10.0);
-  EXPECT_EQ(weighted.first, (std::vector<int>{ 0, 105, 200, 295, 400 }));
-  // Whatever the weight, every rank keeps at least one column.
-  const Slabs extreme = Slabs::balancedWithBorders(perColumn, 4, 1e5);
-  for (int r = 0; r < 4; ++r)
-  {
-    EXPECT_GE(extreme.first[static_cast<std::size_t>(r) + 1] - extreme.first[static_cast<std::size_t>(r)], 1);
-  }
-}
-
 TEST(Distributed, OneRankIsBitIdenticalToTheSerialBackend)
 {
   // One rank has no ghosts and migrates nothing: the same stages on the same particles in the
