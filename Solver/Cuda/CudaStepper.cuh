@@ -267,28 +267,8 @@ CudaStepper<Real>::CudaStepper(
   check(cudaGetDeviceProperties(&properties, device_), "cudaGetDeviceProperties");
   deviceName_ = properties.name;
 
-  const double h = parameters_.smoothingLength();
-  StepConstants<Real>& k = constants_;
-  k.c = Coefficients<Real>::make(parameters_);
-  k.geometry = makeGridGeometry<Real>(parameters_.domain, h);
-  k.cellCount = k.geometry.cellCount();
-  k.keyBits = 1;
-  while (k.keyBits < 32 && (std::uint64_t(1) << k.keyBits) < k.cellCount)
-  {
-    ++k.keyBits;
-  }
-  k.iterations = parameters_.solverIterations;
-  const double reach = h * (1.0 + options_.skin);
-  k.reach2 = static_cast<Real>(reach * reach);
-  const Box& d = parameters_.domain;
-  const double maxAbs = std::max({ std::abs(d.min.x), std::abs(d.min.y), std::abs(d.min.z),
-    std::abs(d.max.x), std::abs(d.max.y), std::abs(d.max.z) });
-  k.schedule.skin = options_.skin * h;
-  k.schedule.h = h;
-  k.schedule.roundingPerStep = MaskSchedule::roundingBound<Real>(maxAbs);
-  k.schedule.enabled = options_.search == NeighborSearch::RowMasks ? 1 : 0;
-  k.tolerance = parameters_.densityErrorTolerance / 100.0;
-  k.inverseRestDensity = 1.0 / parameters_.restDensity;
+  constants_ = makeStepConstants<Real>(
+    parameters_, options_.skin, options_.search == NeighborSearch::RowMasks);
 
   check(cudaStreamCreate(&stream_), "cudaStreamCreate");
   try

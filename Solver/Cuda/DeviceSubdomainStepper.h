@@ -66,35 +66,6 @@ namespace pbf
 namespace cuda
 {
 
-// The step constants CudaStepper uses, for a given skin (fraction of h) and neighbour search.
-template <class Real>
-StepConstants<Real> makeStepConstants(const Parameters& parameters, double skin, bool masks)
-{
-  const double h = parameters.smoothingLength();
-  StepConstants<Real> k{};
-  k.c = Coefficients<Real>::make(parameters);
-  k.geometry = makeGridGeometry<Real>(parameters.domain, h);
-  k.cellCount = k.geometry.cellCount();
-  k.keyBits = 1;
-  while (k.keyBits < 32 && (std::uint64_t(1) << k.keyBits) < k.cellCount)
-  {
-    ++k.keyBits;
-  }
-  k.iterations = parameters.solverIterations;
-  const double reach = h * (1.0 + skin);
-  k.reach2 = static_cast<Real>(reach * reach);
-  const Box& d = parameters.domain;
-  const double maxAbs = std::max({ std::abs(d.min.x), std::abs(d.min.y), std::abs(d.min.z),
-    std::abs(d.max.x), std::abs(d.max.y), std::abs(d.max.z) });
-  k.schedule.skin = skin * h;
-  k.schedule.h = h;
-  k.schedule.roundingPerStep = MaskSchedule::roundingBound<Real>(maxAbs);
-  k.schedule.enabled = masks ? 1 : 0;
-  k.tolerance = parameters.densityErrorTolerance / 100.0;
-  k.inverseRestDensity = 1.0 / parameters.restDensity;
-  return k;
-}
-
 // Device policy (a class with):
 //   using Exec; Exec executor();              StepSchedule's executor plus selectIf
 //   void* allocate(bytes); void release(p);   device memory

@@ -25,6 +25,8 @@
 #include "HostDevice.h"
 #include "NeighborMasks.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -90,6 +92,37 @@ struct StepConstants
   double tolerance;            // adaptive mode when > 0: densityErrorTolerance as a fraction
   double inverseRestDensity;   // 1 / rho_0 in double, for the compression of adaptive mode
 };
+
+// The constants of a step for given parameters: skin is how far beyond h the masks reach, as a
+// fraction of h; masks off means the 27-cell walk. CudaStepper and DeviceSubdomainStepper both
+// build theirs here.
+template <class Real>
+StepConstants<Real> makeStepConstants(const Parameters& parameters, double skin, bool masks)
+{
+  const double h = parameters.smoothingLength();
+  StepConstants<Real> k{};
+  k.c = Coefficients<Real>::make(parameters);
+  k.geometry = makeGridGeometry<Real>(parameters.domain, h);
+  k.cellCount = k.geometry.cellCount();
+  k.keyBits = 1;
+  while (k.keyBits < 32 && (std::uint64_t(1) << k.keyBits) < k.cellCount)
+  {
+    ++k.keyBits;
+  }
+  k.iterations = parameters.solverIterations;
+  const double reach = h * (1.0 + skin);
+  k.reach2 = static_cast<Real>(reach * reach);
+  const Box& d = parameters.domain;
+  const double maxAbs = std::max({ std::abs(d.min.x), std::abs(d.min.y), std::abs(d.min.z),
+    std::abs(d.max.x), std::abs(d.max.y), std::abs(d.max.z) });
+  k.schedule.skin = skin * h;
+  k.schedule.h = h;
+  k.schedule.roundingPerStep = MaskSchedule::roundingBound<Real>(maxAbs);
+  k.schedule.enabled = masks ? 1 : 0;
+  k.tolerance = parameters.densityErrorTolerance / 100.0;
+  k.inverseRestDensity = 1.0 / parameters.restDensity;
+  return k;
+}
 
 // Which of vec[0], vec[1] hold x and v between steps.
 struct Roles
