@@ -12,7 +12,13 @@
 #      PBF_CUDA_SUBDOMAIN_ONE_STREAM=1 (the refreshes' copies back on the compute stream), an A/B
 # Every phase has a time limit inside PBF_GPU_BUDGET seconds (default 560), so the short table
 # comes last within the device tool's 10 minutes. Logs and JSON go under $OUT (else
-# output/gpu-scaling). Options: --particles P --per-gpu Q --steps S --no-ctest --sanitize
+# output/gpu-scaling). Options: --particles P --per-gpu Q --steps S --no-ctest --sanitize --quick
+# (--quick: no CudaStepper references and no one-stream row; strong 1, 2 and 4 GPUs and weak 1 and
+# 4, strong 4 twice, each time followed by an A/B row with the step set-up's waits and copies as
+# at 1fb8409 (PBF_CUDA_SUBDOMAIN_COUNT_DRAINS=1: the count drains, the holes filled before the
+# migration's exchange, the lengths agreed by all ranks; PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1: the
+# refreshes' messages copied on the host; the border stream stays on), and once with
+# PBF_CUDA_SUBDOMAIN_BORDER_STREAM=0 (the border launches back on the compute stream))
 set -uo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 out=${OUT:-$root/output/gpu-scaling}
@@ -23,6 +29,7 @@ per_gpu=16000000
 steps=20
 ctest_all=1
 sanitize=0
+quick=0
 while (($#)); do
   case $1 in
     --particles) particles=$2; shift 2 ;;
@@ -30,7 +37,8 @@ while (($#)); do
     --steps) steps=$2; shift 2 ;;
     --no-ctest) ctest_all=0; shift ;;
     --sanitize) sanitize=1; shift ;;
-    *) sed -n '2,16p' "$0"; exit 2 ;;
+    --quick) quick=1; shift ;;
+    *) sed -n '2,20p' "$0"; exit 2 ;;
   esac
 done
 mkdir -p "$out"
@@ -122,18 +130,29 @@ reference() {
 }
 
 run strong-1 60 1 --particles "$particles" --warmup 3 --steps "$steps"
-reference cudastepper-strong 40 "$particles"
+((quick)) || reference cudastepper-strong 40 "$particles"
 run weak-1 50 1 --per-rank "$per_gpu" --warmup 3 --steps "$steps"
-reference cudastepper-weak 30 "$per_gpu"
+((quick)) || reference cudastepper-weak 30 "$per_gpu"
 for n in 2 4; do
   if ((gpus >= n)); then
     run "strong-$n" 60 "$n" --particles "$particles" --warmup 3 --steps "$steps"
     if ((n == 4)); then
-      PBF_CUDA_SUBDOMAIN_ONE_STREAM=1 run "strong-4-one-stream" 40 4 --particles "$particles" \
-        --warmup 3 --steps "$steps"
+      if ((quick)); then
+        PBF_CUDA_SUBDOMAIN_COUNT_DRAINS=1 PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1 \
+          run "strong-4-before" 40 4 --particles "$particles" --warmup 3 --steps "$steps"
+        run "strong-4-again" 40 4 --particles "$particles" --warmup 3 --steps "$steps"
+        PBF_CUDA_SUBDOMAIN_COUNT_DRAINS=1 PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1 \
+          run "strong-4-before-again" 40 4 --particles "$particles" --warmup 3 --steps "$steps"
+        PBF_CUDA_SUBDOMAIN_BORDER_STREAM=0 \
+          run "strong-4-no-border-stream" 40 4 --particles "$particles" --warmup 3 --steps "$steps"
+      else
+        PBF_CUDA_SUBDOMAIN_ONE_STREAM=1 run "strong-4-one-stream" 40 4 --particles "$particles" \
+          --warmup 3 --steps "$steps"
+        run "strong-4-again" 40 4 --particles "$particles" --warmup 3 --steps "$steps"
+      fi
     fi
     # 2 GPUs at 16M each is the strong run's 32M: the same scene, measured once more.
-    run "weak-$n" 80 "$n" --per-rank "$per_gpu" --warmup 3 --steps "$steps"
+    ((quick && n == 2)) || run "weak-$n" 80 "$n" --per-rank "$per_gpu" --warmup 3 --steps "$steps"
   else
     echo "skipping $n GPUs: this machine has $gpus"
   fi
@@ -160,7 +179,10 @@ print(f"Strong scaling, {particles:,} particles (ms/step median, slowest rank, b
 print("| GPUs | ms/step (p10-p90) | speed-up vs 1 GPU | vs CudaStepper | ghost ms | migration ms | particles per GPU | ghosts (max) |")
 print("|---:|---:|---:|---:|---:|---:|---|---:|")
 base = ms(load("strong-1"))
-for n, name in ((1, "strong-1"), (2, "strong-2"), (4, "strong-4"), ("4, one stream (A/B)", "strong-4-one-stream")):
+for n, name in ((1, "strong-1"), (2, "strong-2"), (4, "strong-4"), ("4, again", "strong-4-again"),
+                ("4, one stream (A/B)", "strong-4-one-stream"), ("4, count drains and host copies back (A/B)", "strong-4-before"),
+                ("4, count drains and host copies back (A/B), again", "strong-4-before-again"),
+                ("4, border launches on the compute stream (A/B)", "strong-4-no-border-stream")):
     d = load(name)
     if d is None: continue
     m = d["median_ms"]
@@ -183,10 +205,11 @@ for n in (1, 2, 4):
           f"{base / m:.2f} | {d['ghost_ms']:.2f} | {d['migration_ms']:.2f} | {min(per):,}-{max(per):,} |")
 print(f"CudaStepper (single GPU, CUDA graphs) at {per_gpu:,}: {ms(ref_weak)} ms/step")
 print()
-print("Per rank, medians in ms: own step; waiting for its device's border fields; in the refreshes' exchanges")
-for name in ("strong-2", "strong-4", "strong-4-one-stream", "weak-2", "weak-4"):
+print("Per rank, medians in ms: own step; waiting for its device's border fields; in the refreshes' exchanges; host time from the step's start to the passes")
+for name in ("strong-2", "strong-4", "strong-4-again", "strong-4-one-stream", "strong-4-before",
+             "strong-4-before-again", "strong-4-no-border-stream", "weak-2", "weak-4"):
     d = load(name)
     if d is None or "own_ms_per_rank" not in d: continue
-    print(f"{name}: own {d['own_ms_per_rank']}; device wait {d['device_wait_ms_per_rank']}; exchange wait {d['refresh_wait_ms_per_rank']}")
+    print(f"{name}: own {d['own_ms_per_rank']}; device wait {d['device_wait_ms_per_rank']}; exchange wait {d['refresh_wait_ms_per_rank']}; before passes {d.get('before_passes_ms_per_rank')}")
 EOF
 echo "total: $((SECONDS - t0)) s"

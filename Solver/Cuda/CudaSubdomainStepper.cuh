@@ -5,7 +5,11 @@
 // the compute stream by events, so that the interior pass does not queue behind the border
 // fields' copy to the host nor the next pass behind the neighbours' fields' copy to the device.
 // PBF_CUDA_SUBDOMAIN_ONE_STREAM=1 (a diagnostic, for A/B runs) puts them back on the compute
-// stream: the same order of work, as before the second stream.
+// stream: the same order of work, as before the second stream. The passes' border launches and
+// the packing of their fields run on a third stream of the highest priority, forked from the
+// compute stream before them and joined after the interior launch, so that the border particles
+// (a small launch) run beside the interior ones instead of before them and their fields leave
+// sooner; PBF_CUDA_SUBDOMAIN_BORDER_STREAM=0 (A/B) puts them back on the compute stream.
 #pragma once
 
 #include "CudaRuntime.cuh"
@@ -62,7 +66,19 @@ public:
     {
       check(cudaStreamCreate(&copyStream_), "cudaStreamCreate");
     }
-    for (cudaEvent_t* e : { &event_, &packed_, &uploaded_ })
+    const char* border = std::getenv("PBF_CUDA_SUBDOMAIN_BORDER_STREAM");
+    if (border && std::strcmp(border, "0") == 0)
+    {
+      borderStream_ = stream_;
+    }
+    else
+    {
+      int least = 0, greatest = 0;
+      check(cudaDeviceGetStreamPriorityRange(&least, &greatest), "cudaDeviceGetStreamPriorityRange");
+      check(cudaStreamCreateWithPriority(&borderStream_, cudaStreamDefault, greatest),
+        "cudaStreamCreateWithPriority");
+    }
+    for (cudaEvent_t* e : { &event_, &packed_, &uploaded_, &forked_, &joined_ })
     {
       check(cudaEventCreateWithFlags(e, cudaEventDisableTiming), "cudaEventCreate");
     }
@@ -73,6 +89,7 @@ public:
     cudaSetDevice(device_);
     cudaStreamSynchronize(stream_);
     cudaStreamSynchronize(copyStream_);
+    cudaStreamSynchronize(borderStream_);
     if (temp_)
     {
       cudaFree(temp_);
@@ -80,6 +97,12 @@ public:
     cudaEventDestroy(event_);
     cudaEventDestroy(packed_);
     cudaEventDestroy(uploaded_);
+    cudaEventDestroy(forked_);
+    cudaEventDestroy(joined_);
+    if (borderStream_ != stream_)
+    {
+      cudaStreamDestroy(borderStream_);
+    }
     if (copyStream_ != stream_)
     {
       cudaStreamDestroy(copyStream_);
@@ -91,6 +114,27 @@ public:
   CudaDevicePolicy& operator=(const CudaDevicePolicy&) = delete;
 
   KernelExecutor executor() const { return KernelExecutor(stream_, temp_, tempBytes_, block_); }
+  // The border stream's executor: per-particle launches only (no scratch: a sort or selection
+  // there would fail, not race the compute stream's).
+  KernelExecutor borderExecutor() const { return KernelExecutor(borderStream_, nullptr, 0, block_); }
+  // The border stream starts after the work queued so far on the compute stream.
+  void forkBorder()
+  {
+    if (borderStream_ != stream_)
+    {
+      check(cudaEventRecord(forked_, stream_), "cudaEventRecord");
+      check(cudaStreamWaitEvent(borderStream_, forked_, 0), "cudaStreamWaitEvent");
+    }
+  }
+  // The compute stream's work queued from now on waits for the border stream's.
+  void joinBorder()
+  {
+    if (borderStream_ != stream_)
+    {
+      check(cudaEventRecord(joined_, borderStream_), "cudaEventRecord");
+      check(cudaStreamWaitEvent(stream_, joined_, 0), "cudaStreamWaitEvent");
+    }
+  }
 
   void* allocate(std::size_t bytes)
   {
@@ -129,13 +173,15 @@ public:
   {
     check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
     check(cudaStreamSynchronize(copyStream_), "cudaStreamSynchronize");
+    check(cudaStreamSynchronize(borderStream_), "cudaStreamSynchronize");
   }
   void recordEvent() { check(cudaEventRecord(event_, stream_), "cudaEventRecord"); }
-  // Device -> page-locked host on the copy stream, after the work queued so far on the compute
-  // stream; the event that waitEvent waits for marks its end. The compute stream goes on.
+  // Device -> page-locked host on the copy stream, after the work queued so far on the border
+  // stream (where the fields are packed); the event that waitEvent waits for marks its end. The
+  // compute stream goes on.
   void downloadAside(void* host, const void* device, std::size_t bytes)
   {
-    check(cudaEventRecord(packed_, stream_), "cudaEventRecord");
+    check(cudaEventRecord(packed_, borderStream_), "cudaEventRecord");
     check(cudaStreamWaitEvent(copyStream_, packed_, 0), "cudaStreamWaitEvent");
     if (bytes > 0)
     {
@@ -193,7 +239,9 @@ private:
   std::string name_;
   cudaStream_t stream_ = nullptr;
   cudaStream_t copyStream_ = nullptr; // stream_ itself under PBF_CUDA_SUBDOMAIN_ONE_STREAM=1
+  cudaStream_t borderStream_ = nullptr; // stream_ itself under PBF_CUDA_SUBDOMAIN_BORDER_STREAM=0
   cudaEvent_t event_ = nullptr, packed_ = nullptr, uploaded_ = nullptr;
+  cudaEvent_t forked_ = nullptr, joined_ = nullptr;
   void* temp_ = nullptr;
   std::size_t tempBytes_ = 0;
 };

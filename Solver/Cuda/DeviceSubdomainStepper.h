@@ -8,15 +8,23 @@
 // exchange with the other ranks (whose bytes go device -> page-locked host memory ->
 // Communicator -> device); the lists' lengths are checked at the first of those waits after the
 // sort, not by a wait of their own:
-//   1. cut: column histogram of x (integer atomics), wait, allGather, Slabs::balanced; the slab
-//      borders go up to the device.
-//   2. predict; migrate by the predicted column: owner per particle and its histogram, wait for
-//      the counts; the leavers listed per destination by stable selections, packed and copied
-//      out, their holes filled by the kept particles beyond the kept count, the arrivals copied
-//      in behind. (The CPU stepper migrates by x and then again by x*; one migration by x* ends
-//      with the same owners.)
-//   3. ghosts: the particles of this slab's first and last columns go to the neighbours (wait
-//      for the counts, then the exchange), and theirs are appended.
+//   1. predict; cut: column histograms of x and of the predicted positions x* (integer
+//      atomics), one wait, one allGather of both, Slabs::balanced from x's; the slab borders go
+//      up to the device. After the migration a rank holds every particle of its columns, so the
+//      x* counts give, on the host and without another wait: the leavers per destination (this
+//      rank's counts), the arrivals per sender (each rank's, from the allGather) and every ghost
+//      message's length (the global counts). The device's own counts are copied back without a
+//      wait and checked at the next one; a mismatch fails the step.
+//   2. migrate by the predicted column: owner per particle; the leavers listed per destination
+//      by stable selections, packed and copied out (a wait for that copy only: their holes are
+//      filled by the kept particles beyond the kept count while the host exchanges them,
+//      point-to-point, the lengths known), the arrivals copied in behind. (The CPU stepper
+//      migrates by x and then again by x*; one migration by x* ends with the same owners.)
+//   3. ghosts: the particles of this slab's first and last columns go to the neighbours (one
+//      wait for their bytes, then the exchange with the neighbours only), and theirs are
+//      appended.
+//   (PBF_CUDA_SUBDOMAIN_COUNT_DRAINS=1, for A/B runs: the waits for the counts, the holes
+//   filled before the exchange and the lengths agreed by all ranks, as before.)
 //   4. one stable radix sort by cell of owned + ghosts (StepSchedule's sortAndGather). Then the
 //      lists, by selection over the sorted keys: what each neighbour mirrors (this slab's border
 //      columns) and where its ghosts are (the columns beyond). Both sides list a border column in
@@ -28,7 +36,12 @@
 //      interior ones while the host exchanges them; the upload and scatter into the ghost slots
 //      are queued before the next pass. The refreshes' copies (down and up) run on the device
 //      policy's copy stream (downloadAside, uploadAside), so the interior pass does not wait for
-//      the border fields' copy to the host, and the neighbours' fields go up while it runs. Density pass, refresh density+lambda (one round); the
+//      the border fields' copy to the host, and the neighbours' fields go up while it runs.
+//      The border launches and the packing run on the policy's border stream (forkBorder,
+//      joinBorder), beside the interior launch. The refreshes' messages go from and into the
+//      page-locked staging directly where the Communicator exchanges in place (MPI;
+//      PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1 copies them through byte vectors, as for a
+//      Communicator without it). Density pass, refresh density+lambda (one round); the
 //      fused correction, refresh positions (and velocities after the last one); vorticity+XSPH,
 //      refresh omega; confinement; then the owned particles are gathered back, in cell order.
 //      Ghosts are not computed (nothing reads their own results; interior particles never read
@@ -53,6 +66,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -72,6 +86,8 @@ namespace cuda
 //   download(host, device, bytes); upload(device, host, bytes); synchronize();
 //   void* allocateHost(bytes); releaseHost(p); page-locked host memory
 //   recordEvent(); waitEvent();              mark the queue, wait for the mark (one event)
+//   Exec borderExecutor(); forkBorder(); joinBorder();  the border launches' queue: forked from
+//                                             the compute queue, joined back into it
 //   downloadAside(host, device, bytes);       device -> page-locked host after the queued work,
 //                                             off the compute queue; marks the event at its end
 //   uploadAside(device, host, bytes);         page-locked host -> device off the compute queue;
@@ -100,6 +116,12 @@ public:
         "to 0 or choose a CPU backend");
     }
     constants_ = makeStepConstants<Real>(parameters_, skin, masks);
+    {
+      const char* drains = std::getenv("PBF_CUDA_SUBDOMAIN_COUNT_DRAINS");
+      countDrains_ = drains && std::strcmp(drains, "1") == 0;
+      const char* copies = std::getenv("PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE");
+      inPlace_ = communicator_.exchangesInPlace() && !(copies && std::strcmp(copies, "1") == 0);
+    }
     // The masks are rebuilt at every pass: a ghost moves by its owner's corrections, which this
     // rank learns only with the positions, and a pass runs its border particles before the
     // interior ones have their max |delta p|. The single-GPU schedule rebuilds at every pass of
@@ -110,9 +132,13 @@ public:
     out_.resize(ranks);
     hostFirst_.resize(ranks + 1);
     hostCounts_.resize(std::max<std::size_t>(
-      { static_cast<std::size_t>(constants_.geometry.nx), ranks + 1, std::size_t(8) }));
+      { 2 * static_cast<std::size_t>(constants_.geometry.nx), ranks + 1, std::size_t(8) }));
+    ownerExpected_.resize(ranks + 1);
     in_.resize(ranks);
     inSizes_.resize(ranks);
+    sendAt_.resize(ranks);
+    sendSizes_.resize(ranks);
+    receiveAt_.resize(ranks);
     device_->activate();
     allocateFixed();
     // Every rank holds the whole initial fluid: the balanced cut follows from it on every rank
@@ -155,6 +181,10 @@ public:
     {
       device_->releaseHost(listCounts_);
     }
+    if (setupCounts_)
+    {
+      device_->releaseHost(setupCounts_);
+    }
   }
 
   DeviceSubdomainStepper(const DeviceSubdomainStepper&) = delete;
@@ -163,18 +193,22 @@ public:
   void step() override
   {
     device_->activate();
+    const auto stepStart = Clock::now();
     exchange_ = distributed::ExchangeReport{};
     report_ = StepReport{};
-    cut(x_);
     {
-      // x, v and the predicted positions in the free buffer.
+      // x, v and the predicted positions in the free buffer. The prediction does not depend on
+      // the cut, so it runs first and the cut's one wait also brings back the predicted
+      // positions' column counts, from which the migration's and the ghosts' counts follow.
       const int p = freeBuffer(x_, v_, -1);
       auto exec = device_->executor();
       subdomain::predict(exec, constants_, count(n_), vec_[x_], vec_[v_], vec_[p]);
+      cut(x_, p);
       Roles4 r{ x_, p, v_, otherBuffer(x_, p, v_) };
       r = migrate(r);
       r = receiveGhosts(r);
       const CellKey* keys = sortByCell(r);
+      exchange_.beforePassesMilliseconds = since(stepStart);
       // Now vec[r.x] = x, vec[r.p] = x*, vec[r.v] = v in cell order; vec[r.free] is free.
       solve(r, keys);
     }
@@ -210,7 +244,7 @@ public:
       device_->synchronize(); // the host vectors die here
     }
     n_ = n;
-    cut(x_);
+    cut(x_, -1); // evaluateAtRest predicts nothing: p = x
     evaluateAtRest();
   }
 
@@ -344,13 +378,18 @@ private:
     maxMoved_ = allocateFixed<unsigned long long>(
       static_cast<std::size_t>(std::max(constants_.iterations, 1)));
     maskBuilds_ = allocateFixed<unsigned long long>(1);
-    columnCounts_ = allocateFixed<std::uint32_t>(static_cast<std::size_t>(constants_.geometry.nx));
+    borderMaskBuilds_ = allocateFixed<unsigned long long>(1);
+    columnCounts_ =
+      allocateFixed<std::uint32_t>(2 * static_cast<std::size_t>(constants_.geometry.nx));
     ownerCounts_ = allocateFixed<std::uint32_t>(ranks + 1);
     slabFirst_ = allocateFixed<int>(ranks + 1);
     selected_ = allocateFixed<std::uint32_t>(8);
     listCounts_ = static_cast<std::uint32_t*>(device_->allocateHost(8 * sizeof(std::uint32_t)));
+    setupCounts_ =
+      static_cast<std::uint32_t*>(device_->allocateHost((ranks + 3) * sizeof(std::uint32_t)));
     auto exec = device_->executor();
     exec.fillZero(maskBuilds_, sizeof(unsigned long long));
+    exec.fillZero(borderMaskBuilds_, sizeof(unsigned long long));
   }
 
   void releaseParticles()
@@ -536,36 +575,117 @@ private:
     device_->upload(slabFirst_, hostFirst_.data(), hostFirst_.size() * sizeof(int));
   }
 
-  // 1. Slabs balanced from the global column counts of positions vec[from].
-  void cut(int from)
+  // 1. Slabs balanced from the global column counts of positions vec[from]. In the same wait and
+  // allGather, the global column counts of the predicted positions vec[predicted] (-1: they are
+  // vec[from], as before evaluateAtRest): after the migration a rank holds every particle of its
+  // columns, so these give each rank's leavers per destination (its own counts) and every
+  // ghost message's length (the global ones) without waiting for the device again.
+  void cut(int from, int predicted)
   {
     const auto start = Clock::now();
     const auto nx = static_cast<std::size_t>(constants_.geometry.nx);
+    const std::size_t histograms = predicted >= 0 ? 2 : 1;
     auto exec = device_->executor();
-    exec.fillZero(columnCounts_, nx * sizeof(std::uint32_t));
+    exec.fillZero(columnCounts_, histograms * nx * sizeof(std::uint32_t));
     subdomain::countColumns(exec, constants_.geometry, count(n_), vec_[from], columnCounts_);
-    device_->download(hostCounts_.data(), columnCounts_, nx * sizeof(std::uint32_t));
+    if (predicted >= 0)
+    {
+      subdomain::countColumns(
+        exec, constants_.geometry, count(n_), vec_[predicted], columnCounts_ + nx);
+    }
+    device_->download(hostCounts_.data(), columnCounts_, histograms * nx * sizeof(std::uint32_t));
     device_->synchronize();
     std::vector<double>& mine = columnsMine_;
-    mine.resize(nx);
+    mine.resize(2 * nx);
+    predictedMine_.resize(nx);
     for (std::size_t c = 0; c < nx; ++c)
     {
       mine[c] = static_cast<double>(hostCounts_[c]);
+      predictedMine_[c] = hostCounts_[(histograms - 1) * nx + c];
+      mine[nx + c] = static_cast<double>(predictedMine_[c]);
     }
     std::vector<std::uint64_t>& perColumn = columnsAll_;
     perColumn.assign(nx, 0);
-    for (const std::vector<double>& r : distributed::allGather(communicator_, mine))
+    predictedAll_.assign(nx, 0);
+    const std::vector<std::vector<double>> all = distributed::allGather(communicator_, mine);
+    for (const std::vector<double>& r : all)
     {
+      if (r.size() != 2 * nx)
+      {
+        throw std::logic_error("decomposed CUDA step: a rank's column counts have the wrong length");
+      }
       for (std::size_t c = 0; c < nx; ++c)
       {
         perColumn[c] += static_cast<std::uint64_t>(r[c]);
+        predictedAll_[c] += static_cast<std::uint64_t>(r[nx + c]);
       }
     }
     const distributed::Slabs balanced = distributed::Slabs::balanced(perColumn, communicator_.size());
     exchange_.cutMoved = balanced.first != slabs_.first;
     slabs_ = balanced;
     uploadSlabs();
+    // How many particles each rank sends this one in the migration: its predicted positions in
+    // this rank's columns (every rank's own counts came with the allGather).
+    const int me = communicator_.rank();
+    arrivingFrom_.assign(all.size(), 0);
+    for (std::size_t c = 0; c < nx; ++c)
+    {
+      if (ownerOf(static_cast<int>(c)) != me)
+      {
+        continue;
+      }
+      for (std::size_t from = 0; from < all.size(); ++from)
+      {
+        if (static_cast<int>(from) != me)
+        {
+          arrivingFrom_[from] += static_cast<std::uint64_t>(all[from][nx + c]);
+        }
+      }
+    }
     exchange_.migrationMilliseconds += since(start);
+  }
+
+  // The owner of a column as the device computes it (SlabView over the same borders).
+  int ownerOf(int column) const
+  {
+    return subdomain::SlabView{ hostFirst_.data(), communicator_.size(), 0 }.owner(column);
+  }
+  // What rank s sends its left (right) neighbour as ghosts: the particles of its first (last)
+  // column after the migration, i.e. all of that column's predicted positions when s owns it.
+  std::uint32_t ghostsSentLeft(int s) const
+  {
+    const int c = hostFirst_[static_cast<std::size_t>(s)];
+    return s > 0 ? columnHeldBy(c, s) : 0u;
+  }
+  std::uint32_t ghostsSentRight(int s) const
+  {
+    const int c = hostFirst_[static_cast<std::size_t>(s) + 1] - 1;
+    return s < communicator_.size() - 1 ? columnHeldBy(c, s) : 0u;
+  }
+  std::uint32_t columnHeldBy(int c, int s) const
+  {
+    if (c < 0 || c >= constants_.geometry.nx || ownerOf(c) != s)
+    {
+      return 0u;
+    }
+    return count(predictedAll_[static_cast<std::size_t>(c)]);
+  }
+
+  // The counts the host derived against the device's own (page-locked, copied after the
+  // kernels that counted them; called after a wait for the device that follows the copy).
+  void checkSetupCounts(std::size_t first, std::size_t n, const std::uint32_t* expected,
+    const char* what)
+  {
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      if (setupCounts_[first + i] != expected[i])
+      {
+        throw std::logic_error(std::string("decomposed CUDA step: ") + what + " " +
+          std::to_string(i) + " is " + std::to_string(setupCounts_[first + i]) +
+          " on the device, expected " + std::to_string(expected[i]) +
+          " from the column counts");
+      }
+    }
   }
 
   // 2. To the owners of the columns of vec[r.p]; the roles stay. The leavers are listed per
@@ -583,9 +703,26 @@ private:
     auto* order = reinterpret_cast<std::uint32_t*>(lambda_); // unused identity
     subdomain::ownerKeys(
       exec, constants_.geometry, slabView(), n, vec_[r.p], keys_[0], order, ownerCounts_);
-    device_->download(hostCounts_.data(), ownerCounts_, (ranks + 1) * sizeof(std::uint32_t));
-    device_->synchronize();
-    const std::uint32_t stay = hostCounts_[0];
+    // The counts per destination from this rank's predicted column counts (the cut's); the
+    // device's own come back without a wait and are checked at the wait below.
+    std::vector<std::uint32_t>& owners = ownerExpected_;
+    std::fill(owners.begin(), owners.end(), 0u);
+    for (std::size_t c = 0; c < predictedMine_.size(); ++c)
+    {
+      const int o = ownerOf(static_cast<int>(c));
+      owners[o == me ? 0 : static_cast<std::size_t>(o) + 1] += predictedMine_[c];
+    }
+    device_->download(setupCounts_, ownerCounts_, (ranks + 1) * sizeof(std::uint32_t));
+    if (countDrains_)
+    {
+      device_->synchronize(); // A/B: the wait these counts used to take
+      checkSetupCounts(0, ranks + 1, owners.data(), "leavers to rank key");
+    }
+    if (owners[0] > n)
+    {
+      throw std::logic_error("decomposed CUDA step: more particles stay than there are");
+    }
+    const std::uint32_t stay = owners[0];
     const std::uint32_t leaving = n - stay;
     using Record = subdomain::Migrant<Real>;
     auto* packed = reinterpret_cast<Record*>(packBuffer(std::size_t(leaving) * sizeof(Record)));
@@ -596,7 +733,7 @@ private:
       std::uint32_t offset = 0;
       for (std::size_t to = 0; to < ranks; ++to)
       {
-        const std::uint32_t c = hostCounts_[to + 1];
+        const std::uint32_t c = owners[to + 1];
         if (c > 0)
         {
           subdomain::selectKey<Real>(exec, n, keys_[0], static_cast<CellKey>(to + 1),
@@ -607,6 +744,12 @@ private:
       subdomain::packMigrants(
         exec, leaving, ownedList_, vec_[r.x], vec_[r.p], vec_[r.v], id_, packed);
       device_->download(staging, packed, std::size_t(leaving) * sizeof(Record));
+    }
+    // The exchange needs the leavers' bytes (and the counts) only: the holes are filled while
+    // the host exchanges them.
+    device_->recordEvent();
+    if (leaving > 0)
+    {
       subdomain::selectHolesAndMovers<Real>(exec, n, stay, keys_[0], sendList_, ghostList_, selected_);
       const std::uint32_t most = std::min(stay, leaving);
       subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, vec_[r.x]);
@@ -614,7 +757,12 @@ private:
       subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, vec_[r.v]);
       subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, id_);
     }
-    device_->synchronize();
+    if (countDrains_)
+    {
+      device_->synchronize(); // A/B: as before, the holes filled before the exchange
+    }
+    device_->waitEvent();
+    checkSetupCounts(0, ranks + 1, owners.data(), "leavers to rank key");
     std::size_t offset = 0;
     for (std::size_t to = 0; to < ranks; ++to)
     {
@@ -623,11 +771,33 @@ private:
       {
         continue;
       }
-      const std::size_t bytes = std::size_t(hostCounts_[to + 1]) * sizeof(Record);
+      const std::size_t bytes = std::size_t(owners[to + 1]) * sizeof(Record);
       out_[to].assign(staging + offset, staging + offset + bytes);
       offset += bytes;
     }
-    communicator_.exchangeInto(out_, in_);
+    if (countDrains_)
+    {
+      communicator_.exchangeInto(out_, in_); // A/B: the lengths agreed by all ranks, as before
+    }
+    else
+    {
+      // Every rank knows what each sends it (the cut's counts): point-to-point with the ranks
+      // that send or receive, no collective over all ranks.
+      for (std::size_t from = 0; from < ranks; ++from)
+      {
+        inSizes_[from] = std::size_t(arrivingFrom_[from]) * sizeof(Record);
+      }
+      communicator_.exchangeKnownSizes(out_, in_, inSizes_);
+    }
+    for (std::size_t from = 0; from < ranks; ++from)
+    {
+      if (in_[from].size() != std::size_t(arrivingFrom_[from]) * sizeof(Record))
+      {
+        throw std::logic_error("migration from rank " + std::to_string(from) + ": " +
+          std::to_string(in_[from].size()) + " bytes, expected " +
+          std::to_string(std::size_t(arrivingFrom_[from]) * sizeof(Record)));
+      }
+    }
     std::size_t arrivingBytes = 0;
     std::vector<std::pair<int, std::size_t>>& from = messages_;
     from.clear();
@@ -663,10 +833,24 @@ private:
     const int rightColumn = me < last ? slabs_.first[static_cast<std::size_t>(me) + 1] - 1 : -1;
     subdomain::selectColumn(exec, g, n, vec_[r.p], leftColumn, sendList_, selected_);
     subdomain::selectColumn(exec, g, n, vec_[r.p], rightColumn, ghostList_, selected_ + 1);
-    device_->download(hostCounts_.data(), selected_, 2 * sizeof(std::uint32_t));
-    device_->synchronize();
-    sendLeft_ = hostCounts_[0];
-    sendRight_ = hostCounts_[1];
+    // Every message's length from the global predicted column counts (the cut's): no wait for
+    // the device's counts, which come back with the seeds and are checked then.
+    const std::size_t ranks = static_cast<std::size_t>(communicator_.size());
+    sendLeft_ = ghostsSentLeft(me);
+    sendRight_ = ghostsSentRight(me);
+    ghostLeft_ = me > 0 ? ghostsSentRight(me - 1) : 0u;
+    ghostRight_ = me < last ? ghostsSentLeft(me + 1) : 0u;
+    const std::uint32_t sent[2] = { sendLeft_, sendRight_ };
+    device_->download(setupCounts_ + ranks + 1, selected_, 2 * sizeof(std::uint32_t));
+    if (countDrains_)
+    {
+      device_->synchronize(); // A/B: the wait these counts used to take
+      checkSetupCounts(ranks + 1, 2, sent, "ghosts sent to side");
+    }
+    if (sendLeft_ > n || sendRight_ > n) // one column may go both ways (a slab one column wide)
+    {
+      throw std::logic_error("decomposed CUDA step: more ghosts to send than particles");
+    }
     using Seed = subdomain::GhostSeed<Real>;
     auto* packed = reinterpret_cast<Seed*>(packBuffer((sendLeft_ + sendRight_) * sizeof(Seed)));
     subdomain::packSeeds(exec, sendLeft_, sendList_, vec_[r.p], id_, packed);
@@ -678,6 +862,7 @@ private:
       device_->download(staging, packed, sendBytes);
     }
     device_->synchronize();
+    checkSetupCounts(ranks + 1, 2, sent, "ghosts sent to side");
     for (auto& b : out_)
     {
       b.clear();
@@ -691,15 +876,34 @@ private:
       out_[static_cast<std::size_t>(me + 1)].assign(
         staging + sendLeft_ * sizeof(Seed), staging + sendBytes);
     }
-    communicator_.exchangeInto(out_, in_);
-    ghostLeft_ = me > 0 ? count(in_[static_cast<std::size_t>(me - 1)].size() / sizeof(Seed)) : 0;
-    ghostRight_ = me < last ? count(in_[static_cast<std::size_t>(me + 1)].size() / sizeof(Seed)) : 0;
+    if (countDrains_)
+    {
+      communicator_.exchangeInto(out_, in_); // A/B: the lengths agreed by all ranks, as before
+    }
+    else
+    {
+      // Both sides know the lengths: with the neighbours only, no collective over all ranks.
+      std::fill(inSizes_.begin(), inSizes_.end(), std::size_t(0));
+      if (me > 0)
+      {
+        inSizes_[static_cast<std::size_t>(me - 1)] = ghostLeft_ * sizeof(Seed);
+      }
+      if (me < last)
+      {
+        inSizes_[static_cast<std::size_t>(me + 1)] = ghostRight_ * sizeof(Seed);
+      }
+      communicator_.exchangeKnownSizes(out_, in_, inSizes_);
+    }
     for (std::size_t from = 0; from < in_.size(); ++from)
     {
-      const bool neighbour = static_cast<int>(from) == me - 1 || static_cast<int>(from) == me + 1;
-      if (!neighbour && !in_[from].empty())
+      const bool left = static_cast<int>(from) == me - 1;
+      const bool right = static_cast<int>(from) == me + 1;
+      const std::size_t expected =
+        (left ? ghostLeft_ : right ? ghostRight_ : 0u) * sizeof(Seed);
+      if (in_[from].size() != expected)
       {
-        throw std::logic_error("ghosts from rank " + std::to_string(from) + ", not a neighbour");
+        throw std::logic_error("ghosts from rank " + std::to_string(from) + ": " +
+          std::to_string(in_[from].size()) + " bytes, expected " + std::to_string(expected));
       }
     }
     const std::uint32_t ghosts = ghostLeft_ + ghostRight_;
@@ -798,10 +1002,10 @@ private:
   {
     const std::size_t record = sizeof(T) * (b ? 2 : 1);
     const std::size_t sendBytes = (sendLeft_ + sendRight_) * record;
-    auto exec = device_->executor();
     unsigned char* pack = packBuffer(sendBytes);
     unsigned char* staging = hostBuffer(hostPack_, sendBytes);
-    subdomain::packFields(exec, sendList_, sendLeft_, sendRight_, a, b, pack);
+    auto edge = device_->borderExecutor(); // behind the border launch it packs
+    subdomain::packFields(edge, sendList_, sendLeft_, sendRight_, a, b, pack);
     // Off the compute queue: the interior pass queued next does not wait for this copy.
     device_->downloadAside(staging, pack, sendBytes);
   }
@@ -823,6 +1027,59 @@ private:
     exchange_.deviceWaitMilliseconds +=
       std::chrono::duration<double, std::milli>(start - waitStart).count();
     checkLists(); // their copy was queued before the border fields'
+    const std::size_t leftBytes = ghostLeft_ * record, rightBytes = ghostRight_ * record;
+    unsigned char* recv = recvBuffer(leftBytes + rightBytes);
+    if (inPlace_)
+    {
+      // Straight from the page-locked border fields to the neighbours and from theirs into the
+      // page-locked staging of the upload: no host copy (the last upload from that staging was
+      // queued on the copy stream before the download just waited for, so it is done).
+      unsigned char* staging = hostBuffer(hostRecv_, leftBytes + rightBytes);
+      std::fill(sendSizes_.begin(), sendSizes_.end(), std::size_t(0));
+      std::fill(inSizes_.begin(), inSizes_.end(), std::size_t(0));
+      std::fill(sendAt_.begin(), sendAt_.end(), nullptr);
+      std::fill(receiveAt_.begin(), receiveAt_.end(), nullptr);
+      if (me > 0)
+      {
+        const auto left = static_cast<std::size_t>(me - 1);
+        sendAt_[left] = hostPack_.data;
+        sendSizes_[left] = sendLeft_ * record;
+        receiveAt_[left] = staging;
+        inSizes_[left] = leftBytes;
+      }
+      if (me < last)
+      {
+        const auto right = static_cast<std::size_t>(me + 1);
+        sendAt_[right] = hostPack_.data + sendLeft_ * record;
+        sendSizes_[right] = sendRight_ * record;
+        receiveAt_[right] = staging + leftBytes;
+        inSizes_[right] = rightBytes;
+      }
+      const auto exchangeStart = Clock::now();
+      communicator_.exchangeKnownSizesInPlace(sendAt_, sendSizes_, receiveAt_, inSizes_);
+      exchange_.refreshWaitMilliseconds += since(exchangeStart);
+      if (leftBytes + rightBytes > 0)
+      {
+        // Off the compute queue too: it overlaps the interior pass; the scatter waits for it.
+        device_->uploadAside(recv, staging, leftBytes + rightBytes);
+      }
+    }
+    else
+    {
+      exchangeCopied(record, sendBytes, recv);
+    }
+    auto exec = device_->executor();
+    subdomain::scatterFields(exec, ghostList_, ghostLeft_, ghostRight_, recv, a, b);
+    exchange_.ghostMilliseconds += since(start);
+  }
+
+  // receiveRefresh's exchange through the Communicator's byte vectors (a Communicator that does
+  // not exchange in place, or PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1 for A/B): the messages copied
+  // out of and into the page-locked staging on the host.
+  void exchangeCopied(std::size_t record, std::size_t sendBytes, unsigned char* recv)
+  {
+    const int me = communicator_.rank();
+    const int last = communicator_.size() - 1;
     const unsigned char* staging = hostPack_.data;
     for (auto& o : out_)
     {
@@ -868,12 +1125,8 @@ private:
     {
       expect(me + 1, ghostRight_ * record);
     }
-    unsigned char* recv = recvBuffer((ghostLeft_ + ghostRight_) * record);
     // Off the compute queue too: it overlaps the interior pass; the scatter waits for it.
     uploadMessages(recv, messages_, 0, true);
-    auto exec = device_->executor();
-    subdomain::scatterFields(exec, ghostList_, ghostLeft_, ghostRight_, recv, a, b);
-    exchange_.ghostMilliseconds += since(start);
   }
 
   // 5. The passes over the owned particles, each one border first, its fields sent while the
@@ -893,6 +1146,12 @@ private:
     Vec3<Real>* const v = vec_[r.v];
     Vec3<Real>* const positions[2] = { vec_[r.p], vec_[r.free] };
     exec.fillZero(maxMoved_, static_cast<std::size_t>(k.iterations) * sizeof(unsigned long long));
+    // The border launches run on the device's border stream, beside the interior ones (the two
+    // write disjoint particles; interior particles read no ghost); their mask builds are counted
+    // apart, so that no counter is written by two launches at once.
+    StepBuffers<Real> edgeBuffers = b;
+    edgeBuffers.maskBuilds = borderMaskBuilds_;
+    const StepBuffers<Real>& be = edgeBuffers;
     for (int iteration = 0; iteration < k.iterations; ++iteration)
     {
       FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
@@ -901,18 +1160,23 @@ private:
       f.p = positions[iteration & 1];
       f.scratch = positions[(iteration + 1) & 1];
       exec = device_->executor();
+      auto edge = device_->borderExecutor();
+      device_->forkBorder();
       detail::firstPassOnPositions(
-        exec, DensityStage{}, b, k, border, f, iteration, false, detail::DensityPass{}, onBorder);
+        edge, DensityStage{}, be, k, border, f, iteration, false, detail::DensityPass{}, onBorder);
       sendRefresh<Real>(density_, lambda_);
       detail::firstPassOnPositions(exec, DensityStage{}, b, k, interior, f, iteration, false,
         detail::DensityPass{}, onInterior);
+      device_->joinBorder();
       receiveRefresh<Real>(density_, lambda_);
       const bool last = iteration + 1 == k.iterations;
       exec = device_->executor();
-      detail::correctionPass(exec, b, border, f, iteration, last, nullptr, onBorder);
+      device_->forkBorder();
+      detail::correctionPass(edge, be, border, f, iteration, last, nullptr, onBorder);
       // The last correction also updates the velocities, which XSPH and vorticity read.
       sendRefresh<Vec3<Real>>(f.scratch, last ? v : nullptr);
       detail::correctionPass(exec, b, interior, f, iteration, last, nullptr, onInterior);
+      device_->joinBorder();
       receiveRefresh<Vec3<Real>>(f.scratch, last ? v : nullptr);
     }
     Vec3<Real>* const corrected = positions[k.iterations & 1];
@@ -923,11 +1187,16 @@ private:
     f.omega = x; // x is no longer needed
     f.scratch = spare;
     exec = device_->executor();
-    detail::firstPassOnPositions(exec, VorticityStage{}, b, k, border, f, k.iterations, false,
-      detail::VorticityPass{}, onBorder);
+    {
+      auto edge = device_->borderExecutor();
+      device_->forkBorder();
+      detail::firstPassOnPositions(edge, VorticityStage{}, be, k, border, f, k.iterations, false,
+        detail::VorticityPass{}, onBorder);
+    }
     sendRefresh<Vec3<Real>>(x, nullptr);
     detail::firstPassOnPositions(exec, VorticityStage{}, b, k, interior, f, k.iterations, false,
       detail::VorticityPass{}, onInterior);
+    device_->joinBorder();
     receiveRefresh<Vec3<Real>>(x, nullptr);
     exec = device_->executor();
     FluidView<Real, MaskedNeighbors<Real>> confine = f;
@@ -1069,6 +1338,7 @@ private:
   std::uint32_t* cellOffsets_ = nullptr;
   unsigned long long* maxMoved_ = nullptr;
   unsigned long long* maskBuilds_ = nullptr;
+  unsigned long long* borderMaskBuilds_ = nullptr; // the border launches' (apart: concurrent)
   std::uint32_t* columnCounts_ = nullptr;
   std::uint32_t* ownerCounts_ = nullptr;
   int* slabFirst_ = nullptr;
@@ -1089,8 +1359,23 @@ private:
   std::vector<distributed::Bytes> out_, in_;
   std::vector<std::pair<int, std::size_t>> messages_;
   std::vector<std::size_t> inSizes_;
+  // The in-place refresh exchange's pointers and lengths (size() entries each).
+  std::vector<const unsigned char*> sendAt_;
+  std::vector<std::size_t> sendSizes_;
+  std::vector<unsigned char*> receiveAt_;
+  bool inPlace_ = false; // the Communicator exchanges in place, not PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1
   std::vector<double> columnsMine_;       // the cut's column counts, this rank's and everyone's
   std::vector<std::uint64_t> columnsAll_;
+  // The predicted positions' column counts, this rank's and everyone's (the cut's), and the
+  // migration's counts per destination derived from them.
+  std::vector<std::uint32_t> predictedMine_;
+  std::vector<std::uint64_t> predictedAll_;
+  std::vector<std::uint32_t> ownerExpected_;
+  std::vector<std::uint64_t> arrivingFrom_; // the migration's particles from each rank
+  // The device's own counts of the migration ([0, ranks]) and the ghosts sent ([ranks + 1,
+  // ranks + 2]), page-locked, checked after the next wait.
+  std::uint32_t* setupCounts_ = nullptr;
+  bool countDrains_ = false; // PBF_CUDA_SUBDOMAIN_COUNT_DRAINS=1: wait for them at once (A/B)
 
   StepReport report_;
   distributed::ExchangeReport exchange_;

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace pbf::distributed
@@ -37,6 +39,41 @@ public:
   {
     (void)incomingSizes;
     exchangeInto(outgoing, incoming);
+  }
+  // As exchangeKnownSizes with the messages in the caller's memory (page-locked staging of a
+  // GPU, say): to rank r the sendSizes[r] bytes at send[r], from rank r exactly receiveSizes[r]
+  // bytes into receive[r] (every entry size() long; both sides know the lengths; 0 sends or
+  // receives nothing). An implementation over MPI then copies nothing on the host. Callers use it
+  // where exchangesInPlace() says so (and exchangeKnownSizes otherwise). The default goes through
+  // exchangeKnownSizes, allocating, and checks the lengths that arrived.
+  virtual bool exchangesInPlace() const { return false; }
+  virtual void exchangeKnownSizesInPlace(const std::vector<const unsigned char*>& send,
+    const std::vector<std::size_t>& sendSizes, const std::vector<unsigned char*>& receive,
+    const std::vector<std::size_t>& receiveSizes)
+  {
+    const std::size_t n = send.size();
+    std::vector<Bytes> outgoing(n), incoming;
+    for (std::size_t r = 0; r < n; ++r)
+    {
+      if (sendSizes[r] > 0)
+      {
+        outgoing[r].assign(send[r], send[r] + sendSizes[r]);
+      }
+    }
+    exchangeKnownSizes(outgoing, incoming, receiveSizes);
+    for (std::size_t r = 0; r < n; ++r)
+    {
+      const std::size_t got = r < incoming.size() ? incoming[r].size() : 0;
+      if (got != receiveSizes[r])
+      {
+        throw std::runtime_error("exchange: " + std::to_string(got) + " bytes from rank " +
+          std::to_string(r) + ", expected " + std::to_string(receiveSizes[r]));
+      }
+      if (got > 0)
+      {
+        std::copy(incoming[r].begin(), incoming[r].end(), receive[r]);
+      }
+    }
   }
 };
 

@@ -131,4 +131,61 @@ void MpiCommunicator::exchangeKnownSizes(const std::vector<Bytes>& outgoing,
     "MPI_Waitall");
 }
 
+void MpiCommunicator::exchangeKnownSizesInPlace(const std::vector<const unsigned char*>& send,
+  const std::vector<std::size_t>& sendSizes, const std::vector<unsigned char*>& receive,
+  const std::vector<std::size_t>& receiveSizes)
+{
+  const auto n = static_cast<std::size_t>(size_);
+  if (send.size() != n || sendSizes.size() != n || receive.size() != n || receiveSizes.size() != n)
+  {
+    throw std::invalid_argument("exchange: one buffer and one size per rank expected");
+  }
+  constexpr int tag = 7008; // apart from any other traffic on the communicator
+  requests_.clear();
+  for (std::size_t r = 0; r < n; ++r)
+  {
+    if (receiveSizes[r] > static_cast<std::size_t>(INT_MAX) ||
+      sendSizes[r] > static_cast<std::size_t>(INT_MAX))
+    {
+      throw std::runtime_error("exchange: more than 2 GiB in one message");
+    }
+    if (receiveSizes[r] > 0)
+    {
+      requests_.emplace_back();
+      check(MPI_Irecv(receive[r], static_cast<int>(receiveSizes[r]), MPI_BYTE,
+              static_cast<int>(r), tag, communicator_, &requests_.back()),
+        "MPI_Irecv");
+    }
+  }
+  for (std::size_t r = 0; r < n; ++r)
+  {
+    if (sendSizes[r] > 0)
+    {
+      requests_.emplace_back();
+      check(MPI_Isend(send[r], static_cast<int>(sendSizes[r]), MPI_BYTE, static_cast<int>(r), tag,
+              communicator_, &requests_.back()),
+        "MPI_Isend");
+    }
+  }
+  statuses_.resize(requests_.size());
+  check(MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), statuses_.data()),
+    "MPI_Waitall");
+  // A message longer than expected is an error (MPI_ERR_TRUNCATE above); a shorter one is one too.
+  std::size_t k = 0;
+  for (std::size_t r = 0; r < n; ++r)
+  {
+    if (receiveSizes[r] > 0)
+    {
+      int got = 0;
+      check(MPI_Get_count(&statuses_[k], MPI_BYTE, &got), "MPI_Get_count");
+      if (static_cast<std::size_t>(got) != receiveSizes[r])
+      {
+        throw std::runtime_error("exchange: " + std::to_string(got) + " bytes from rank " +
+          std::to_string(r) + ", expected " + std::to_string(receiveSizes[r]));
+      }
+      ++k;
+    }
+  }
+}
+
 } // namespace pbf::distributed

@@ -23,10 +23,17 @@ public:
   // a rank waits for its neighbours only, not for the slowest rank of the run.
   void exchangeKnownSizes(const std::vector<Bytes>& outgoing, std::vector<Bytes>& incoming,
     const std::vector<std::size_t>& incomingSizes) override;
+  // The same straight from and into the caller's memory (MPI_Irecv posted into it before the
+  // sends): no host copy of the messages.
+  bool exchangesInPlace() const override { return true; }
+  void exchangeKnownSizesInPlace(const std::vector<const unsigned char*>& send,
+    const std::vector<std::size_t>& sendSizes, const std::vector<unsigned char*>& receive,
+    const std::vector<std::size_t>& receiveSizes) override;
 
 private:
   Bytes send_, receive_;
   std::vector<MPI_Request> requests_;
+  std::vector<MPI_Status> statuses_;
   std::vector<int> sendCounts_, receiveCounts_, sendOffsets_, receiveOffsets_;
   MPI_Comm communicator_;
   int rank_ = 0;

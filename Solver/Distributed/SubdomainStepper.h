@@ -45,6 +45,9 @@ struct ExchangeReport
   // (waiting for theirs; ~0 on the rank that paces the others).
   double deviceWaitMilliseconds = 0;
   double refreshWaitMilliseconds = 0;
+  // The host's time from the start of the step to the passes (cut, prediction, migration,
+  // ghosts, cell sort and lists queued; its waits for the device and the other ranks included).
+  double beforePassesMilliseconds = 0;
 };
 
 // What the benchmark and the tests ask of one rank's stepper beyond Stepper, whichever backend

@@ -91,6 +91,9 @@ public:
   }
   int rank() const override { return rank_; }
   int size() const override { return shared_.ranks; }
+  // The base class's in-place exchange (through exchange()), so that the tests run the callers'
+  // in-place path too.
+  bool exchangesInPlace() const override { return true; }
 
   std::vector<Bytes> exchange(const std::vector<Bytes>& outgoing) override
   {

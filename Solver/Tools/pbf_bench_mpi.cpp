@@ -92,7 +92,7 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
   const double setupSeconds = largestOverRanks(
     std::chrono::duration<double>(std::chrono::steady_clock::now() - setupStart).count());
 
-  std::vector<double> ms, ghostMs, migrationMs, ownMs, deviceWaitMs, refreshWaitMs;
+  std::vector<double> ms, ghostMs, migrationMs, ownMs, deviceWaitMs, refreshWaitMs, beforeMs;
   for (long s = 0; s < warmup + steps; ++s)
   {
     MPI_Barrier(MPI_COMM_WORLD);
@@ -114,6 +114,7 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
       ownMs.push_back(own);
       deviceWaitMs.push_back(stepper.lastExchange().deviceWaitMilliseconds);
       refreshWaitMs.push_back(stepper.lastExchange().refreshWaitMilliseconds);
+      beforeMs.push_back(stepper.lastExchange().beforePassesMilliseconds);
     }
   }
   const std::vector<std::uint64_t> perRank = stepper.particlesPerRank();
@@ -124,6 +125,7 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
     gatherToRankZero(percentile(deviceWaitMs, 0.5), ranks);
   const std::vector<double> refreshWaitPerRank =
     gatherToRankZero(percentile(refreshWaitMs, 0.5), ranks);
+  const std::vector<double> beforePerRank = gatherToRankZero(percentile(beforeMs, 0.5), ranks);
   if (communicator.rank() != 0)
   {
     return 0;
@@ -133,9 +135,10 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
   std::fprintf(stderr, "setup (scene, constructor, first evaluation) %.1f s on the slowest rank; "
     "%s\n", setupSeconds, stepper.description().c_str());
   std::fprintf(stderr, "per rank, medians in ms: own step (to its device's end) [%s]; waiting for "
-    "its device's border fields [%s]; in the refreshes' exchanges [%s]\n",
+    "its device's border fields [%s]; in the refreshes' exchanges [%s]; from the step's start to "
+    "the passes [%s]\n",
     listed(ownPerRank).c_str(), listed(deviceWaitPerRank).c_str(),
-    listed(refreshWaitPerRank).c_str());
+    listed(refreshWaitPerRank).c_str(), listed(beforePerRank).c_str());
   std::printf("| ranks | backend | precision | particles | ms/step median (p10-p90) | steps/s | "
               "ghost ms | migration ms | particles per rank (min-max) | ghosts (max) | finite |\n");
   std::printf("| %d | %s | %s | %zu | %.2f (%.2f-%.2f) | %.1f | %.2f | %.2f | %llu-%llu | %.0f | "
@@ -158,6 +161,7 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
         << ", \"setup_s\": " << setupSeconds << ", \"own_ms_per_rank\": [" << listed(ownPerRank)
         << "], \"device_wait_ms_per_rank\": [" << listed(deviceWaitPerRank)
         << "], \"refresh_wait_ms_per_rank\": [" << listed(refreshWaitPerRank)
+        << "], \"before_passes_ms_per_rank\": [" << listed(beforePerRank)
         << "], \"particles_per_rank\": [";
     for (std::size_t r = 0; r < perRank.size(); ++r)
     {

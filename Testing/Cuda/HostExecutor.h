@@ -135,6 +135,9 @@ public:
   {
   }
   HostExecutor executor() const { return HostExecutor(backwards_); }
+  HostExecutor borderExecutor() const { return HostExecutor(backwards_); }
+  void forkBorder() {}
+  void joinBorder() {}
   void* allocate(std::size_t bytes) { return std::calloc(bytes > 0 ? bytes : 1, 1); }
   void release(void* pointer) { std::free(pointer); }
   void* allocateHost(std::size_t bytes) { return std::malloc(bytes > 0 ? bytes : 1); }
