@@ -39,7 +39,7 @@ const bool backtraceOnCrash = (std::signal(SIGSEGV, printBacktrace), true);
 
 DecomposedFactory onGpu(Precision precision, cuda::Options options = cuda::Options{})
 {
-  return [=](distributed::Communicator& communicator, const DecomposedSetup& setup) {
+  return [=](distributed::Communicator& communicator, const PresetFluid& setup) {
     return cuda::makeCudaSubdomainStepper(
       communicator, precision, setup.parameters, setup.fluid, 0, options);
   };
@@ -65,7 +65,7 @@ TEST(CudaSubdomain, OneTwoAndThreeRanksMatchTheSerialBackendAfterTenStepsInDoubl
   // per operation, grown over ten steps to ~1e-13 (CudaStepperTest sees 1e-14 after one step),
   // far under the 1e-9, while a neighbour missed or counted twice moves a particle by
   // ~1e-3 of its coordinate.
-  const DecomposedSetup setup = decomposedDamBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
   const Snapshot<double> reference = serialState(setup, 10, Precision::Double);
   for (int ranks : { 1, 2, 3 })
   {
@@ -86,7 +86,7 @@ TEST(CudaSubdomain, SinglePrecisionMatchesTheSerialBackendAfterOneStep)
   PBF_REQUIRE_GPU();
   // Float rounding in another order: a few ulps after 4 iterations (~1e-7 relative); 1e-5 is far
   // above that and far below a wrong neighbour (>= 1e-4 of the spacing).
-  const DecomposedSetup setup = decomposedDamBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
   const Snapshot<double> reference = serialState(setup, 1, Precision::Single);
   for (int ranks : { 2, 3 })
   {
@@ -100,7 +100,7 @@ TEST(CudaSubdomain, TwoRunsAreBitIdentical)
   PBF_REQUIRE_GPU();
   // No float atomics anywhere: the histogram and the counts are integer, the max |dp| is an
   // integer max of bits, selections and sorts are stable. So the same bits every time.
-  const DecomposedSetup setup = decomposedDamBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
   const DecomposedOutcome a = runDecomposed(3, setup, 30, onGpu(Precision::Single));
   const DecomposedOutcome b = runDecomposed(3, setup, 30, onGpu(Precision::Single));
   ASSERT_EQ(a.state.id, b.state.id);
@@ -118,7 +118,7 @@ TEST(CudaSubdomain, ParticlesMigrateAndTheCutMovesAndTheCellWalkAgrees)
   // the same bits. (Against the serial backend the GPU's own rounding, FMA and the reciprocal
   // square root, grows chaotically over 60 steps of the collapse, to 1.3e-4 on the H200: the
   // host-executor test makes that comparison with the serial arithmetic, at 4e-10.)
-  const DecomposedSetup setup = decomposedDamBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
   const DecomposedOutcome masks = runDecomposed(2, setup, 60, onGpu(Precision::Double));
   cuda::Options walk;
   walk.search = cuda::NeighborSearch::CellWalk;
@@ -141,7 +141,7 @@ TEST(CudaSubdomain, FiveHundredStepsOfADamBreakOnTwoRanksAgreeWithOne)
   // The figures: mean density error and kinetic energy within 1% of one rank. The
   // collapse is chaotic at the particle level, so both are compared as means over the run, as in
   // DistributedTest. 500 steps of 3,000 particles take seconds on a GPU.
-  const DecomposedSetup setup = decomposedDamBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
   const DecomposedOutcome one = runDecomposed(1, setup, 500, onGpu(Precision::Double), true);
   const DecomposedOutcome two = runDecomposed(2, setup, 500, onGpu(Precision::Double), true);
   ASSERT_EQ(two.state.id.size(), one.state.id.size());
@@ -160,7 +160,7 @@ TEST(CudaSubdomain, FiveHundredStepsOfADamBreakOnTwoRanksAgreeWithOne)
 TEST(CudaSubdomain, MakeSubdomainStepperGivesTheCudaStepperOnTheLocalRanksDevice)
 {
   PBF_REQUIRE_GPU();
-  const DecomposedSetup setup = decomposedDamBreak(0.08);
+  const PresetFluid setup = presetFluid("dam_break", 0.08);
   distributed::runThreadCluster(2, [&](distributed::Communicator& communicator) {
     auto stepper = distributed::makeSubdomainStepper(
       communicator, Backend::CUDA, Precision::Single, setup.parameters, setup.fluid);

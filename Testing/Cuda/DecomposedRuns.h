@@ -8,6 +8,7 @@
 #include "Distributed/ThreadCluster.h"
 #include "Scene.h"
 #include "Stepper.h"
+#include "TestScenes.h"
 
 #include <cstdint>
 #include <functional>
@@ -16,22 +17,6 @@
 
 namespace pbf::test
 {
-
-struct DecomposedSetup
-{
-  Parameters parameters;
-  ParticleBatch fluid;
-};
-
-inline DecomposedSetup decomposedDamBreak(double spacing)
-{
-  const Scene scene = presetScene("dam_break");
-  DecomposedSetup s;
-  s.parameters.particleSpacing = spacing;
-  s.parameters = withSceneDomain(s.parameters, scene);
-  s.fluid = fillScene(scene, s.parameters);
-  return s;
-}
 
 struct DecomposedOutcome
 {
@@ -44,9 +29,9 @@ struct DecomposedOutcome
 };
 
 using DecomposedFactory = std::function<std::unique_ptr<distributed::DecomposedStepper>(
-  distributed::Communicator&, const DecomposedSetup&)>;
+  distributed::Communicator&, const PresetFluid&)>;
 
-inline DecomposedOutcome runDecomposed(int ranks, const DecomposedSetup& setup, int steps,
+inline DecomposedOutcome runDecomposed(int ranks, const PresetFluid& setup, int steps,
   const DecomposedFactory& make, bool history = false)
 {
   std::vector<Snapshot<double>> parts(static_cast<std::size_t>(ranks));
@@ -94,7 +79,7 @@ inline DecomposedOutcome runDecomposed(int ranks, const DecomposedSetup& setup, 
 }
 
 // The serial backend's state after `steps` steps, in double.
-inline Snapshot<double> serialState(const DecomposedSetup& setup, int steps, Precision precision)
+inline Snapshot<double> serialState(const PresetFluid& setup, int steps, Precision precision)
 {
   auto serial = makeStepper(Backend::Serial, precision, setup.parameters, setup.fluid);
   for (int s = 0; s < steps; ++s)

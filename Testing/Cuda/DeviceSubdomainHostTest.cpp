@@ -23,7 +23,7 @@ namespace
 template <class Real>
 DecomposedFactory onHost(bool backwards = false, double skin = 0.02, bool masks = true)
 {
-  return [=](distributed::Communicator& communicator, const DecomposedSetup& setup) {
+  return [=](distributed::Communicator& communicator, const PresetFluid& setup) {
     return std::unique_ptr<distributed::DecomposedStepper>(
       new cuda::DeviceSubdomainStepper<Real, HostDevicePolicy>(communicator, setup.parameters,
         setup.fluid, std::make_unique<HostDevicePolicy>(backwards), skin, masks));
@@ -55,7 +55,7 @@ TEST(DeviceSubdomainOnHost, OneRankIsBitIdenticalToTheSerialBackend)
 {
   // One rank has no ghosts and migrates nothing: StepSchedule's stages in StepSchedule's order,
   // which reproduce the serial backend bit for bit (StepScheduleTest).
-  const DecomposedSetup setup = decomposedDamBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
   const Snapshot<double> reference = serialState(setup, 10, Precision::Double);
   const DecomposedOutcome one = runDecomposed(1, setup, 10, onHost<double>());
   EXPECT_EQ(one.state.id, reference.id); // the same cell order, too
@@ -69,7 +69,7 @@ TEST(DeviceSubdomainOnHost, TwoAndThreeRanksMatchTheSerialBackendAfterTenStepsIn
   // the serial backend by rounding: ~1e-16 per sum, grown over ten steps to well under the
   // issue's 1e-9, while a neighbour missed or counted twice moves a particle by ~1e-3 of its
   // coordinate.
-  const DecomposedSetup setup = decomposedDamBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
   const Snapshot<double> reference = serialState(setup, 10, Precision::Double);
   for (int ranks : { 2, 3 })
   {
@@ -94,7 +94,7 @@ TEST(DeviceSubdomainOnHost, ParticlesMigrateAndTheCutMoves)
   // cross borders; the state must still match the serial backend (looser: 60 steps let the
   // rounding differences grow, to 4e-10 here; 1e-6 is still three orders below a wrong
   // neighbour: without the lambda refresh this reads 0.56).
-  const DecomposedSetup setup = decomposedDamBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
   const Snapshot<double> reference = serialState(setup, 60, Precision::Double);
   const DecomposedOutcome two = runDecomposed(2, setup, 60, onHost<double>());
   const double error = maxRelativePositionError(two.state, reference);
@@ -109,7 +109,7 @@ TEST(DeviceSubdomainOnHost, SinglePrecisionMatchesTheSerialBackendAfterOneStep)
 {
   // Reordered float sums: a few ulps of a position after 4 iterations, ~1e-7 relative; 1e-5 is
   // far above that and far below a wrong neighbour.
-  const DecomposedSetup setup = decomposedDamBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
   const Snapshot<double> reference = serialState(setup, 1, Precision::Single);
   const DecomposedOutcome two = runDecomposed(2, setup, 1, onHost<float>());
   EXPECT_LE(maxRelativePositionError(two.state, reference), 1e-5);
@@ -121,7 +121,7 @@ TEST(DeviceSubdomainOnHost, MasksVisitingOrderAndSkinChangeNoBit)
   // differ, and so would a pass whose border and interior launches depended on each other),
   // masks off (the 27-cell walk) and any skin: all bit-identical. The masks must stay exact
   // across ranks although ghosts move by their owners' corrections.
-  const DecomposedSetup setup = decomposedDamBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
   const DecomposedOutcome base = runDecomposed(3, setup, 10, onHost<double>());
   expectBitIdentical(runDecomposed(3, setup, 10, onHost<double>(true)).state, base.state);
   expectBitIdentical(runDecomposed(3, setup, 10, onHost<double>(false, 0.02, false)).state,
@@ -134,7 +134,7 @@ TEST(DeviceSubdomainOnHost, MasksVisitingOrderAndSkinChangeNoBit)
 
 TEST(DeviceSubdomainOnHost, AdaptiveIterationsAreRefusedNamingTheField)
 {
-  DecomposedSetup setup = decomposedDamBreak(0.08);
+  PresetFluid setup = presetFluid("dam_break", 0.08);
   setup.parameters.densityErrorTolerance = 0.1;
   try
   {

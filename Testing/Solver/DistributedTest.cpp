@@ -18,25 +18,11 @@
 
 using namespace pbf;
 using namespace pbf::distributed;
+using pbf::test::PresetFluid;
+using pbf::test::presetFluid;
 
 namespace
 {
-
-struct DecomposedScene
-{
-  Parameters parameters;
-  ParticleBatch fluid;
-};
-
-DecomposedScene damBreak(double spacing)
-{
-  const Scene scene = presetScene("dam_break");
-  DecomposedScene s;
-  s.parameters.particleSpacing = spacing;
-  s.parameters = withSceneDomain(s.parameters, scene);
-  s.fluid = fillScene(scene, s.parameters);
-  return s;
-}
 
 struct Outcome
 {
@@ -48,7 +34,7 @@ struct Outcome
 };
 
 template <class Real>
-Outcome runRanks(int ranks, const DecomposedScene& setup, int steps, bool history = false)
+Outcome runRanks(int ranks, const PresetFluid& setup, int steps, bool history = false)
 {
   std::vector<Snapshot<double>> parts(static_cast<std::size_t>(ranks));
   Outcome outcome;
@@ -115,7 +101,7 @@ TEST(Distributed, OneRankIsBitIdenticalToTheSerialBackend)
 {
   // One rank has no ghosts and migrates nothing: the same stages on the same particles in the
   // same order as CpuStepper, so not one bit may differ.
-  const DecomposedScene setup = damBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
   auto serial = makeStepper(Backend::Serial, Precision::Double, setup.parameters, setup.fluid);
   for (int s = 0; s < 20; ++s)
   {
@@ -138,7 +124,7 @@ TEST(Distributed, TwoAndThreeRanksMatchOneRankAfterTenStepsInDouble)
   // of a cell), so results differ from one rank by rounding: ~1e-16 per sum, grown over ten calm
   // steps to well under the 1e-9, while a neighbour missed or counted twice moves a
   // particle by ~1e-3 of its coordinate.
-  const DecomposedScene setup = damBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
   const Outcome one = runRanks<double>(1, setup, 10);
   for (int ranks : { 2, 3 })
   {
@@ -162,7 +148,7 @@ TEST(Distributed, FiveHundredStepsOfADamBreakAgreeWithOneRank)
   // fluid is nearly at rest (average compression ~4e-5, where rounding alone moves it by
   // several percent), so the error and the energy are compared as means over the run, which the
   // flow decides, and the front, a maximum over particles, at the end.
-  const DecomposedScene setup = damBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
 #ifdef PBF_SANITIZE
   const int steps = 150; // the sanitizers make a step 6 x slower; the collapse is well under way
 #else
@@ -216,7 +202,7 @@ TEST(Distributed, ACheckpointRestoredOnTheSameRanksContinuesBitIdentically)
 {
   // The cut is a function of the state, so a rank that loads its particles of step 10 takes the
   // same steps as the run that went on from step 10, bit for bit.
-  const DecomposedScene setup = damBreak(0.04);
+  const PresetFluid setup = presetFluid("dam_break", 0.04);
   std::vector<Snapshot<double>> straight(2), resumed(2);
   runThreadCluster(2, [&](Communicator& communicator) {
     const auto r = static_cast<std::size_t>(communicator.rank());
@@ -301,7 +287,7 @@ TEST(Distributed, CudaWithoutAGpuFailsOnEveryRankAndAutoFallsBackToTheCpu)
   }
   // Backend = CUDA where no rank has a GPU: every rank throws (none constructs and waits in an
   // exchange for the others); Auto gives the CPU backend on every rank.
-  const DecomposedScene setup = damBreak(0.08);
+  const PresetFluid setup = presetFluid("dam_break", 0.08);
   std::vector<int> threw(2, 0);
   std::vector<Backend> automatic(2, Backend::CUDA);
   runThreadCluster(2, [&](Communicator& communicator) {

@@ -9,6 +9,16 @@
 namespace pbf::test
 {
 
+PresetFluid presetFluid(const std::string& name, double spacing)
+{
+  const Scene scene = presetScene(name);
+  PresetFluid s;
+  s.parameters.particleSpacing = spacing;
+  s.parameters = withSceneDomain(s.parameters, scene);
+  s.fluid = fillScene(scene, s.parameters);
+  return s;
+}
+
 Scene restingBlock(int side, double spacing)
 {
   const double width = side * spacing;

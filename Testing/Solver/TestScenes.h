@@ -5,9 +5,19 @@
 #include "Simulation.h"
 
 #include <map>
+#include <string>
 
 namespace pbf::test
 {
+
+// A preset scene at the given particle spacing: its parameters (domain from the scene) and the
+// particles that fill it, as every rank of a decomposed run is handed them.
+struct PresetFluid
+{
+  Parameters parameters;
+  ParticleBatch fluid;
+};
+PresetFluid presetFluid(const std::string& name, double spacing);
 
 // A block of fluid filling the floor of a closed box: side x side x side lattice sites.
 Scene restingBlock(int side, double spacing);
