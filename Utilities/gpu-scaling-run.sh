@@ -19,6 +19,8 @@
 # migration's exchange, the lengths agreed by all ranks; PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1: the
 # refreshes' messages copied on the host; the border stream stays on), and once with
 # PBF_CUDA_SUBDOMAIN_BORDER_STREAM=0 (the border launches back on the compute stream))
+# --ab "VAR=VALUE[ VAR=VALUE...]" (repeatable, with --quick): these A/B rows instead, each run
+# after strong 4 and again after its repeat, with the given environment.
 set -uo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 out=${OUT:-$root/output/gpu-scaling}
@@ -30,6 +32,7 @@ steps=20
 ctest_all=1
 sanitize=0
 quick=0
+ab=()
 while (($#)); do
   case $1 in
     --particles) particles=$2; shift 2 ;;
@@ -38,7 +41,8 @@ while (($#)); do
     --no-ctest) ctest_all=0; shift ;;
     --sanitize) sanitize=1; shift ;;
     --quick) quick=1; shift ;;
-    *) sed -n '2,20p' "$0"; exit 2 ;;
+    --ab) ab+=("$2"); shift 2 ;;
+    *) sed -n '2,22p' "$0"; exit 2 ;;
   esac
 done
 mkdir -p "$out"
@@ -137,7 +141,16 @@ for n in 2 4; do
   if ((gpus >= n)); then
     run "strong-$n" 60 "$n" --particles "$particles" --warmup 3 --steps "$steps"
     if ((n == 4)); then
-      if ((quick)); then
+      if ((quick)) && ((${#ab[@]})); then
+        for again in "" "-again"; do
+          [[ -n $again ]] && run "strong-4-again" 40 4 --particles "$particles" --warmup 3 --steps "$steps"
+          for k in "${!ab[@]}"; do
+            echo "${ab[$k]}" >"$out/strong-4-ab$k$again.label"
+            # A subshell: the environment stays with this row (its table row is read from the JSON).
+            (export ${ab[$k]}; run "strong-4-ab$k$again" 40 4 --particles "$particles" --warmup 3 --steps "$steps")
+          done
+        done
+      elif ((quick)); then
         PBF_CUDA_SUBDOMAIN_COUNT_DRAINS=1 PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1 \
           run "strong-4-before" 40 4 --particles "$particles" --warmup 3 --steps "$steps"
         run "strong-4-again" 40 4 --particles "$particles" --warmup 3 --steps "$steps"
@@ -182,7 +195,9 @@ base = ms(load("strong-1"))
 for n, name in ((1, "strong-1"), (2, "strong-2"), (4, "strong-4"), ("4, again", "strong-4-again"),
                 ("4, one stream (A/B)", "strong-4-one-stream"), ("4, count drains and host copies back (A/B)", "strong-4-before"),
                 ("4, count drains and host copies back (A/B), again", "strong-4-before-again"),
-                ("4, border launches on the compute stream (A/B)", "strong-4-no-border-stream")):
+                ("4, border launches on the compute stream (A/B)", "strong-4-no-border-stream"),
+                *[(f"4, A/B {open(os.path.join(out, f)).read().strip()}{' (again)' if 'again' in f else ''}", f[:-6])
+                  for f in sorted(os.listdir(out)) if f.endswith(".label")]):
     d = load(name)
     if d is None: continue
     m = d["median_ms"]
@@ -207,7 +222,8 @@ print(f"CudaStepper (single GPU, CUDA graphs) at {per_gpu:,}: {ms(ref_weak)} ms/
 print()
 print("Per rank, medians in ms: own step; waiting for its device's border fields; in the refreshes' exchanges; host time from the step's start to the passes")
 for name in ("strong-2", "strong-4", "strong-4-again", "strong-4-one-stream", "strong-4-before",
-             "strong-4-before-again", "strong-4-no-border-stream", "weak-2", "weak-4"):
+             "strong-4-before-again", "strong-4-no-border-stream", "weak-2", "weak-4",
+             *[f[:-6] for f in sorted(os.listdir(out)) if f.endswith(".label")]):
     d = load(name)
     if d is None or "own_ms_per_rank" not in d: continue
     print(f"{name}: own {d['own_ms_per_rank']}; device wait {d['device_wait_ms_per_rank']}; exchange wait {d['refresh_wait_ms_per_rank']}; before passes {d.get('before_passes_ms_per_rank')}")

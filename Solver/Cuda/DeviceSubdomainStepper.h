@@ -20,9 +20,10 @@
 //      filled by the kept particles beyond the kept count while the host exchanges them,
 //      point-to-point, the lengths known), the arrivals copied in behind. (The CPU stepper
 //      migrates by x and then again by x*; one migration by x* ends with the same owners.)
-//   3. ghosts: the particles of this slab's first and last columns go to the neighbours (one
-//      wait for their bytes, then the exchange with the neighbours only), and theirs are
-//      appended.
+//   3. ghosts: the predicted positions (only: a ghost's id is never read) of this slab's first
+//      and last columns go to the neighbours (one wait for their bytes, then the exchange with
+//      the neighbours only, from and into page-locked memory where the Communicator exchanges
+//      in place), and theirs are appended.
 //   (PBF_CUDA_SUBDOMAIN_COUNT_DRAINS=1, for A/B runs: the waits for the counts, the holes
 //   filled before the exchange and the lengths agreed by all ranks, as before.)
 //   4. one stable radix sort by cell of owned + ghosts (StepSchedule's sortAndGather). Then the
@@ -40,8 +41,8 @@
 //      The border launches and the packing run on the policy's border stream (forkBorder,
 //      joinBorder), beside the interior launch. The refreshes' messages go from and into the
 //      page-locked staging directly where the Communicator exchanges in place (MPI;
-//      PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1 copies them through byte vectors, as for a
-//      Communicator without it). Density pass, refresh density+lambda (one round); the
+//      PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1 copies them, and the ghosts' seeds, through byte
+//      vectors, as for a Communicator without it). Density pass, refresh density+lambda (one round); the
 //      fused correction, refresh positions (and velocities after the last one); vorticity+XSPH,
 //      refresh omega; confinement; then the owned particles are gathered back, in cell order.
 //      Ghosts are not computed (nothing reads their own results; interior particles never read
@@ -853,8 +854,8 @@ private:
     }
     using Seed = subdomain::GhostSeed<Real>;
     auto* packed = reinterpret_cast<Seed*>(packBuffer((sendLeft_ + sendRight_) * sizeof(Seed)));
-    subdomain::packSeeds(exec, sendLeft_, sendList_, vec_[r.p], id_, packed);
-    subdomain::packSeeds(exec, sendRight_, ghostList_, vec_[r.p], id_, packed + sendLeft_);
+    subdomain::packSeeds(exec, sendLeft_, sendList_, vec_[r.p], packed);
+    subdomain::packSeeds(exec, sendRight_, ghostList_, vec_[r.p], packed + sendLeft_);
     const std::size_t sendBytes = (sendLeft_ + sendRight_) * sizeof(Seed);
     unsigned char* staging = hostBuffer(hostPack_, sendBytes);
     if (sendBytes > 0)
@@ -863,6 +864,46 @@ private:
     }
     device_->synchronize();
     checkSetupCounts(ranks + 1, 2, sent, "ghosts sent to side");
+    const std::uint32_t ghosts = ghostLeft_ + ghostRight_;
+    reserve(std::size_t(n) + ghosts, n);
+    unsigned char* recv = recvBuffer(ghosts * sizeof(Seed));
+    if (inPlace_ && !countDrains_)
+    {
+      // From the page-locked seeds to the neighbours and from theirs into the page-locked
+      // staging of the upload, no host copy (~1 ms of a 32M step on 4 GPUs went to copying the
+      // seeds through byte vectors, the device idle). The synchronize above finished the last
+      // upload from that staging (the migration's).
+      unsigned char* staging = hostBuffer(hostRecv_, ghosts * sizeof(Seed));
+      exchangeWithNeighborsInPlace(sendLeft_ * sizeof(Seed), sendRight_ * sizeof(Seed), staging,
+        ghostLeft_ * sizeof(Seed), ghostRight_ * sizeof(Seed));
+      if (ghosts > 0)
+      {
+        device_->upload(recv, staging, ghosts * sizeof(Seed));
+      }
+    }
+    else
+    {
+      exchangeSeedsCopied(staging);
+      uploadMessages(recv, messages_);
+    }
+    exec = device_->executor();
+    subdomain::unpackSeeds(exec, n, ghosts, reinterpret_cast<const Seed*>(recv), vec_[r.x],
+      vec_[r.p], vec_[r.v], id_);
+    total_ = std::size_t(n) + ghosts;
+    exchange_.ghosts = ghosts;
+    exchange_.ghostMilliseconds += since(start);
+    return r;
+  }
+
+  // receiveGhosts' exchange through the Communicator's byte vectors (a Communicator that does
+  // not exchange in place, or the A/B switches): the seeds copied out of the page-locked staging
+  // and the neighbours' listed in messages_ for uploadMessages.
+  void exchangeSeedsCopied(const unsigned char* staging)
+  {
+    using Seed = subdomain::GhostSeed<Real>;
+    const int me = communicator_.rank();
+    const int last = communicator_.size() - 1;
+    const std::size_t sendBytes = (sendLeft_ + sendRight_) * sizeof(Seed);
     for (auto& b : out_)
     {
       b.clear();
@@ -906,9 +947,6 @@ private:
           std::to_string(in_[from].size()) + " bytes, expected " + std::to_string(expected));
       }
     }
-    const std::uint32_t ghosts = ghostLeft_ + ghostRight_;
-    reserve(std::size_t(n) + ghosts, n);
-    unsigned char* recv = recvBuffer(ghosts * sizeof(Seed));
     messages_.clear();
     if (me > 0)
     {
@@ -918,14 +956,6 @@ private:
     {
       messages_.emplace_back(me + 1, ghostRight_ * sizeof(Seed));
     }
-    uploadMessages(recv, messages_);
-    exec = device_->executor();
-    subdomain::unpackSeeds(exec, n, ghosts, reinterpret_cast<const Seed*>(recv), vec_[r.x],
-      vec_[r.p], vec_[r.v], id_);
-    total_ = std::size_t(n) + ghosts;
-    exchange_.ghosts = ghosts;
-    exchange_.ghostMilliseconds += since(start);
-    return r;
   }
 
   // 4. The cell sort of owned + ghosts, and the lists. Returns the sorted keys; afterwards
@@ -1035,28 +1065,9 @@ private:
       // page-locked staging of the upload: no host copy (the last upload from that staging was
       // queued on the copy stream before the download just waited for, so it is done).
       unsigned char* staging = hostBuffer(hostRecv_, leftBytes + rightBytes);
-      std::fill(sendSizes_.begin(), sendSizes_.end(), std::size_t(0));
-      std::fill(inSizes_.begin(), inSizes_.end(), std::size_t(0));
-      std::fill(sendAt_.begin(), sendAt_.end(), nullptr);
-      std::fill(receiveAt_.begin(), receiveAt_.end(), nullptr);
-      if (me > 0)
-      {
-        const auto left = static_cast<std::size_t>(me - 1);
-        sendAt_[left] = hostPack_.data;
-        sendSizes_[left] = sendLeft_ * record;
-        receiveAt_[left] = staging;
-        inSizes_[left] = leftBytes;
-      }
-      if (me < last)
-      {
-        const auto right = static_cast<std::size_t>(me + 1);
-        sendAt_[right] = hostPack_.data + sendLeft_ * record;
-        sendSizes_[right] = sendRight_ * record;
-        receiveAt_[right] = staging + leftBytes;
-        inSizes_[right] = rightBytes;
-      }
       const auto exchangeStart = Clock::now();
-      communicator_.exchangeKnownSizesInPlace(sendAt_, sendSizes_, receiveAt_, inSizes_);
+      exchangeWithNeighborsInPlace(sendLeft_ * record, sendRight_ * record, staging, leftBytes,
+        rightBytes);
       exchange_.refreshWaitMilliseconds += since(exchangeStart);
       if (leftBytes + rightBytes > 0)
       {
@@ -1071,6 +1082,37 @@ private:
     auto exec = device_->executor();
     subdomain::scatterFields(exec, ghostList_, ghostLeft_, ghostRight_, recv, a, b);
     exchange_.ghostMilliseconds += since(start);
+  }
+
+  // The neighbours' messages from the page-locked hostPack_ (this rank's left message, then its
+  // right one) straight into page-locked `receive` (the left neighbour's, then the right one's),
+  // over a Communicator that exchanges in place: no host copy. Both sides know every length.
+  void exchangeWithNeighborsInPlace(std::size_t sendLeftBytes, std::size_t sendRightBytes,
+    unsigned char* receive, std::size_t leftBytes, std::size_t rightBytes)
+  {
+    const int me = communicator_.rank();
+    const int last = communicator_.size() - 1;
+    std::fill(sendSizes_.begin(), sendSizes_.end(), std::size_t(0));
+    std::fill(inSizes_.begin(), inSizes_.end(), std::size_t(0));
+    std::fill(sendAt_.begin(), sendAt_.end(), nullptr);
+    std::fill(receiveAt_.begin(), receiveAt_.end(), nullptr);
+    if (me > 0)
+    {
+      const auto left = static_cast<std::size_t>(me - 1);
+      sendAt_[left] = hostPack_.data;
+      sendSizes_[left] = sendLeftBytes;
+      receiveAt_[left] = receive;
+      inSizes_[left] = leftBytes;
+    }
+    if (me < last)
+    {
+      const auto right = static_cast<std::size_t>(me + 1);
+      sendAt_[right] = hostPack_.data + sendLeftBytes;
+      sendSizes_[right] = sendRightBytes;
+      receiveAt_[right] = receive + leftBytes;
+      inSizes_[right] = rightBytes;
+    }
+    communicator_.exchangeKnownSizesInPlace(sendAt_, sendSizes_, receiveAt_, inSizes_);
   }
 
   // receiveRefresh's exchange through the Communicator's byte vectors (a Communicator that does
