@@ -132,8 +132,7 @@ public:
     const auto ranks = static_cast<std::size_t>(communicator_.size());
     out_.resize(ranks);
     hostFirst_.resize(ranks + 1);
-    hostCounts_.resize(std::max<std::size_t>(
-      { 2 * static_cast<std::size_t>(constants_.geometry.nx), ranks + 1, std::size_t(8) }));
+    hostCounts_.resize(2 * static_cast<std::size_t>(constants_.geometry.nx) * subdomain::kCounterCopies);
     ownerExpected_.resize(ranks + 1);
     in_.resize(ranks);
     inSizes_.resize(ranks);
@@ -380,14 +379,15 @@ private:
       static_cast<std::size_t>(std::max(constants_.iterations, 1)));
     maskBuilds_ = allocateFixed<unsigned long long>(1);
     borderMaskBuilds_ = allocateFixed<unsigned long long>(1);
-    columnCounts_ =
-      allocateFixed<std::uint32_t>(2 * static_cast<std::size_t>(constants_.geometry.nx));
-    ownerCounts_ = allocateFixed<std::uint32_t>(ranks + 1);
+    columnCounts_ = allocateFixed<std::uint32_t>(
+      2 * static_cast<std::size_t>(constants_.geometry.nx) * subdomain::kCounterCopies);
+    ownerCounts_ = allocateFixed<std::uint32_t>((ranks + 1) * subdomain::kCounterCopies);
     slabFirst_ = allocateFixed<int>(ranks + 1);
     selected_ = allocateFixed<std::uint32_t>(8);
     listCounts_ = static_cast<std::uint32_t*>(device_->allocateHost(8 * sizeof(std::uint32_t)));
-    setupCounts_ =
-      static_cast<std::uint32_t*>(device_->allocateHost((ranks + 3) * sizeof(std::uint32_t)));
+    // The owner counts' copies, then the ghosts sent to each side.
+    setupCounts_ = static_cast<std::uint32_t*>(
+      device_->allocateHost(((ranks + 1) * subdomain::kCounterCopies + 2) * sizeof(std::uint32_t)));
     auto exec = device_->executor();
     exec.fillZero(maskBuilds_, sizeof(unsigned long long));
     exec.fillZero(borderMaskBuilds_, sizeof(unsigned long long));
@@ -587,22 +587,23 @@ private:
     const auto nx = static_cast<std::size_t>(constants_.geometry.nx);
     const std::size_t histograms = predicted >= 0 ? 2 : 1;
     auto exec = device_->executor();
-    exec.fillZero(columnCounts_, histograms * nx * sizeof(std::uint32_t));
+    const std::size_t copies = nx * subdomain::kCounterCopies; // one histogram's counters
+    exec.fillZero(columnCounts_, histograms * copies * sizeof(std::uint32_t));
     subdomain::countColumns(exec, constants_.geometry, count(n_), vec_[from], columnCounts_);
     if (predicted >= 0)
     {
       subdomain::countColumns(
-        exec, constants_.geometry, count(n_), vec_[predicted], columnCounts_ + nx);
+        exec, constants_.geometry, count(n_), vec_[predicted], columnCounts_ + copies);
     }
-    device_->download(hostCounts_.data(), columnCounts_, histograms * nx * sizeof(std::uint32_t));
+    device_->download(hostCounts_.data(), columnCounts_, histograms * copies * sizeof(std::uint32_t));
     device_->synchronize();
     std::vector<double>& mine = columnsMine_;
     mine.resize(2 * nx);
     predictedMine_.resize(nx);
     for (std::size_t c = 0; c < nx; ++c)
     {
-      mine[c] = static_cast<double>(hostCounts_[c]);
-      predictedMine_[c] = hostCounts_[(histograms - 1) * nx + c];
+      mine[c] = static_cast<double>(subdomain::sumOfCopies(hostCounts_.data(), c));
+      predictedMine_[c] = subdomain::sumOfCopies(hostCounts_.data(), (histograms - 1) * nx + c);
       mine[nx + c] = static_cast<double>(predictedMine_[c]);
     }
     std::vector<std::uint64_t>& perColumn = columnsAll_;
@@ -673,19 +674,33 @@ private:
   }
 
   // The counts the host derived against the device's own (page-locked, copied after the
-  // kernels that counted them; called after a wait for the device that follows the copy).
-  void checkSetupCounts(std::size_t first, std::size_t n, const std::uint32_t* expected,
-    const char* what)
+  // kernels that counted them; called after a wait for the device that follows the copy):
+  // the owner counts, in kCounterCopies copies each, or the ghosts sent to each side.
+  void checkOwnerCounts(const std::uint32_t* expected)
   {
-    for (std::size_t i = 0; i < n; ++i)
+    const auto ranks = static_cast<std::size_t>(communicator_.size());
+    for (std::size_t i = 0; i < ranks + 1; ++i)
     {
-      if (setupCounts_[first + i] != expected[i])
-      {
-        throw std::logic_error(std::string("decomposed CUDA step: ") + what + " " +
-          std::to_string(i) + " is " + std::to_string(setupCounts_[first + i]) +
-          " on the device, expected " + std::to_string(expected[i]) +
-          " from the column counts");
-      }
+      failUnlessExpected(subdomain::sumOfCopies(setupCounts_, i), expected[i], i,
+        "leavers to rank key");
+    }
+  }
+  void checkGhostCounts(const std::uint32_t* expected)
+  {
+    const auto at = (static_cast<std::size_t>(communicator_.size()) + 1) * subdomain::kCounterCopies;
+    for (std::size_t i = 0; i < 2; ++i)
+    {
+      failUnlessExpected(setupCounts_[at + i], expected[i], i, "ghosts sent to side");
+    }
+  }
+  static void failUnlessExpected(
+    std::uint32_t got, std::uint32_t expected, std::size_t i, const char* what)
+  {
+    if (got != expected)
+    {
+      throw std::logic_error(std::string("decomposed CUDA step: ") + what + " " +
+        std::to_string(i) + " is " + std::to_string(got) + " on the device, expected " +
+        std::to_string(expected) + " from the column counts");
     }
   }
 
@@ -700,7 +715,7 @@ private:
     const auto ranks = static_cast<std::size_t>(communicator_.size());
     const std::uint32_t n = count(n_);
     auto exec = device_->executor();
-    exec.fillZero(ownerCounts_, (ranks + 1) * sizeof(std::uint32_t));
+    exec.fillZero(ownerCounts_, (ranks + 1) * subdomain::kCounterCopies * sizeof(std::uint32_t));
     auto* order = reinterpret_cast<std::uint32_t*>(lambda_); // unused identity
     subdomain::ownerKeys(
       exec, constants_.geometry, slabView(), n, vec_[r.p], keys_[0], order, ownerCounts_);
@@ -713,11 +728,12 @@ private:
       const int o = ownerOf(static_cast<int>(c));
       owners[o == me ? 0 : static_cast<std::size_t>(o) + 1] += predictedMine_[c];
     }
-    device_->download(setupCounts_, ownerCounts_, (ranks + 1) * sizeof(std::uint32_t));
+    device_->download(
+      setupCounts_, ownerCounts_, (ranks + 1) * subdomain::kCounterCopies * sizeof(std::uint32_t));
     if (countDrains_)
     {
       device_->synchronize(); // A/B: the wait these counts used to take
-      checkSetupCounts(0, ranks + 1, owners.data(), "leavers to rank key");
+      checkOwnerCounts(owners.data());
     }
     if (owners[0] > n)
     {
@@ -763,7 +779,7 @@ private:
       device_->synchronize(); // A/B: as before, the holes filled before the exchange
     }
     device_->waitEvent();
-    checkSetupCounts(0, ranks + 1, owners.data(), "leavers to rank key");
+    checkOwnerCounts(owners.data());
     std::size_t offset = 0;
     for (std::size_t to = 0; to < ranks; ++to)
     {
@@ -842,11 +858,12 @@ private:
     ghostLeft_ = me > 0 ? ghostsSentRight(me - 1) : 0u;
     ghostRight_ = me < last ? ghostsSentLeft(me + 1) : 0u;
     const std::uint32_t sent[2] = { sendLeft_, sendRight_ };
-    device_->download(setupCounts_ + ranks + 1, selected_, 2 * sizeof(std::uint32_t));
+    device_->download(
+      setupCounts_ + (ranks + 1) * subdomain::kCounterCopies, selected_, 2 * sizeof(std::uint32_t));
     if (countDrains_)
     {
       device_->synchronize(); // A/B: the wait these counts used to take
-      checkSetupCounts(ranks + 1, 2, sent, "ghosts sent to side");
+      checkGhostCounts(sent);
     }
     if (sendLeft_ > n || sendRight_ > n) // one column may go both ways (a slab one column wide)
     {
@@ -863,7 +880,7 @@ private:
       device_->download(staging, packed, sendBytes);
     }
     device_->synchronize();
-    checkSetupCounts(ranks + 1, 2, sent, "ghosts sent to side");
+    checkGhostCounts(sent);
     const std::uint32_t ghosts = ghostLeft_ + ghostRight_;
     reserve(std::size_t(n) + ghosts, n);
     unsigned char* recv = recvBuffer(ghosts * sizeof(Seed));
