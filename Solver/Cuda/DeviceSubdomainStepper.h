@@ -42,9 +42,10 @@
 //      joinBorder), beside the interior launch. The refreshes' messages go from and into the
 //      page-locked staging directly where the Communicator exchanges in place (MPI;
 //      PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1 copies them, and the ghosts' seeds, through byte
-//      vectors, as for a Communicator without it). Density pass, refresh density+lambda (one round); the
-//      fused correction, refresh positions (and velocities after the last one); vorticity+XSPH,
-//      refresh omega; confinement; then the owned particles are gathered back, in cell order.
+//      vectors, as for a Communicator without it). Density pass, refresh density+lambda (one
+//      round); the fused correction, refresh positions (and velocities after the last one);
+//      vorticity+XSPH, refresh omega; confinement; then the owned particles are gathered back,
+//      in cell order.
 //      Ghosts are not computed (nothing reads their own results; interior particles never read
 //      ghosts, so the scatter cannot race the interior pass).
 //
@@ -132,7 +133,8 @@ public:
     const auto ranks = static_cast<std::size_t>(communicator_.size());
     out_.resize(ranks);
     hostFirst_.resize(ranks + 1);
-    hostCounts_.resize(2 * static_cast<std::size_t>(constants_.geometry.nx) * subdomain::kCounterCopies);
+    hostCounts_.resize(
+      2 * static_cast<std::size_t>(constants_.geometry.nx) * subdomain::kCounterCopies);
     ownerExpected_.resize(ranks + 1);
     in_.resize(ranks);
     inSizes_.resize(ranks);
@@ -595,7 +597,8 @@ private:
       subdomain::countColumns(
         exec, constants_.geometry, count(n_), vec_[predicted], columnCounts_ + copies);
     }
-    device_->download(hostCounts_.data(), columnCounts_, histograms * copies * sizeof(std::uint32_t));
+    device_->download(
+      hostCounts_.data(), columnCounts_, histograms * copies * sizeof(std::uint32_t));
     device_->synchronize();
     std::vector<double>& mine = columnsMine_;
     mine.resize(2 * nx);
@@ -687,7 +690,8 @@ private:
   }
   void checkGhostCounts(const std::uint32_t* expected)
   {
-    const auto at = (static_cast<std::size_t>(communicator_.size()) + 1) * subdomain::kCounterCopies;
+    const auto at =
+      (static_cast<std::size_t>(communicator_.size()) + 1) * subdomain::kCounterCopies;
     for (std::size_t i = 0; i < 2; ++i)
     {
       failUnlessExpected(setupCounts_[at + i], expected[i], i, "ghosts sent to side");
@@ -890,12 +894,12 @@ private:
       // staging of the upload, no host copy (~1 ms of a 32M step on 4 GPUs went to copying the
       // seeds through byte vectors, the device idle). The synchronize above finished the last
       // upload from that staging (the migration's).
-      unsigned char* staging = hostBuffer(hostRecv_, ghosts * sizeof(Seed));
-      exchangeWithNeighborsInPlace(sendLeft_ * sizeof(Seed), sendRight_ * sizeof(Seed), staging,
+      unsigned char* landing = hostBuffer(hostRecv_, ghosts * sizeof(Seed));
+      exchangeWithNeighborsInPlace(sendLeft_ * sizeof(Seed), sendRight_ * sizeof(Seed), landing,
         ghostLeft_ * sizeof(Seed), ghostRight_ * sizeof(Seed));
       if (ghosts > 0)
       {
-        device_->upload(recv, staging, ghosts * sizeof(Seed));
+        device_->upload(recv, landing, ghosts * sizeof(Seed));
       }
     }
     else
