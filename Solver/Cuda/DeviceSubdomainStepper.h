@@ -1217,11 +1217,8 @@ private:
     const StepBuffers<Real>& be = edgeBuffers;
     for (int iteration = 0; iteration < k.iterations; ++iteration)
     {
-      FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
-      f.x = x;
-      f.v = v;
-      f.p = positions[iteration & 1];
-      f.scratch = positions[(iteration + 1) & 1];
+      const FluidView<Real, MaskedNeighbors<Real>> f =
+        detail::iterationView(b, k, sortedKeys, x, v, positions, iteration);
       exec = device_->executor();
       auto edge = device_->borderExecutor();
       device_->forkBorder();
@@ -1242,13 +1239,8 @@ private:
       device_->joinBorder();
       receiveRefresh<Vec3<Real>>(f.scratch, last ? v : nullptr);
     }
-    Vec3<Real>* const corrected = positions[k.iterations & 1];
-    Vec3<Real>* const spare = positions[(k.iterations + 1) & 1];
-    FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
-    f.p = corrected;
-    f.v = v;
-    f.omega = x; // x is no longer needed
-    f.scratch = spare;
+    const FluidView<Real, MaskedNeighbors<Real>> f =
+      detail::afterIterationsView(b, k, sortedKeys, x, v, positions);
     exec = device_->executor();
     {
       auto edge = device_->borderExecutor();
@@ -1263,11 +1255,11 @@ private:
     receiveRefresh<Vec3<Real>>(x, nullptr);
     exec = device_->executor();
     FluidView<Real, MaskedNeighbors<Real>> confine = f;
-    confine.v = spare;
+    confine.v = f.scratch;
     subdomain::confine<Real>(exec, n, ownedList_, confine);
-    // Line 23 and the ghosts dropped: x = the corrected positions, v = spare, owned only, into
+    // Line 23 and the ghosts dropped: x = the corrected positions, v = f.scratch, owned only, into
     // the buffers that held v and omega.
-    keepOwned(corrected, spare, r.v, r.x);
+    keepOwned(f.p, f.scratch, r.v, r.x);
   }
 
   // The owned particles (ownedList_) of positions and velocities into vec[toX], vec[toV], and

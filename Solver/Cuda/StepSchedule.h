@@ -191,6 +191,38 @@ FluidView<Real, MaskedNeighbors<Real>> solverView(const StepBuffers<Real>& b,
   return f;
 }
 
+// Jacobi iteration `iteration` reads x and v and corrects the predicted positions, which
+// alternate between two buffers: it reads positions[iteration & 1] and writes the other one
+// (scratch), which the next iteration reads.
+template <class Real>
+FluidView<Real, MaskedNeighbors<Real>> iterationView(const StepBuffers<Real>& b,
+  const StepConstants<Real>& k, const CellKey* sortedKeys, Vec3<Real>* x, Vec3<Real>* v,
+  Vec3<Real>* const (&positions)[2], int iteration)
+{
+  FluidView<Real, MaskedNeighbors<Real>> f = solverView(b, k, sortedKeys);
+  f.x = x;
+  f.v = v;
+  f.p = positions[iteration & 1];
+  f.scratch = positions[(iteration + 1) & 1];
+  return f;
+}
+
+// After the iterations (vorticity, XSPH, confinement): the corrected positions are
+// positions[k.iterations & 1], the other buffer is free for the XSPH velocity, and omega goes
+// into x's buffer, which the step no longer needs.
+template <class Real>
+FluidView<Real, MaskedNeighbors<Real>> afterIterationsView(const StepBuffers<Real>& b,
+  const StepConstants<Real>& k, const CellKey* sortedKeys, Vec3<Real>* x, Vec3<Real>* v,
+  Vec3<Real>* const (&positions)[2])
+{
+  FluidView<Real, MaskedNeighbors<Real>> f = solverView(b, k, sortedKeys);
+  f.p = positions[k.iterations & 1];
+  f.v = v;
+  f.omega = x;
+  f.scratch = positions[(k.iterations + 1) & 1];
+  return f;
+}
+
 // A neighbour pass that is the first to see new positions: rebuild the masks first if the
 // particles may have moved too far since they were built.
 // Which particles a pass visits: all n (AllParticles, the single-GPU step), or those of a list
@@ -335,11 +367,8 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
   }
   for (int iteration = 0; iteration < k.iterations; ++iteration)
   {
-    FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
-    f.x = D;
-    f.v = C;
-    f.p = positions[iteration & 1];
-    f.scratch = positions[(iteration + 1) & 1];
+    const FluidView<Real, MaskedNeighbors<Real>> f =
+      detail::iterationView(b, k, sortedKeys, D, C, positions, iteration);
     detail::firstPassOnPositions(
       exec, DensityStage{}, b, k, n, f, iteration, adaptive, detail::DensityPass{});
     if (adaptive)
@@ -352,26 +381,21 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
   }
 
   // Lines 22-23 (vorticity confinement and XSPH) on the corrected positions.
-  Vec3<Real>* const corrected = positions[k.iterations & 1];
-  Vec3<Real>* const spare = positions[(k.iterations + 1) & 1];
-  FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
-  f.p = corrected;
-  f.v = C;
-  f.omega = D; // x is no longer needed
-  f.scratch = spare;
+  const FluidView<Real, MaskedNeighbors<Real>> f =
+    detail::afterIterationsView(b, k, sortedKeys, D, C, positions);
   detail::firstPassOnPositions(
     exec, VorticityStage{}, b, k, n, f, k.iterations, false, detail::VorticityPass{});
   // The confined velocity overwrites the XSPH velocity in place: each particle reads only its
-  // own, and spare becomes v.
+  // own, and f.scratch becomes v.
   FluidView<Real, MaskedNeighbors<Real>> confine = f;
-  confine.v = spare;
+  confine.v = f.scratch;
   exec.forEach(ConfinementStage{}, n,
     [=] PBF_HD(std::uint32_t i) { vorticityConfinement(i, confine); });
 
   // Line 23, x_i = x*_i: the corrected positions' buffer becomes x.
   Roles next;
-  next.x = corrected == A ? roles.x : roles.v;
-  next.v = corrected == A ? roles.v : roles.x;
+  next.x = f.p == A ? roles.x : roles.v;
+  next.v = f.p == A ? roles.v : roles.x;
   return next;
 }
 

@@ -5,7 +5,6 @@ the diagnostics hold whole frames only, and the next request resumes from where 
 stopped and is bit-identical to a straight run."""
 import os
 import sys
-import time
 
 import numpy
 
@@ -36,20 +35,8 @@ expect(len(steps) >= 7 and steps == sorted(steps) and progress[-1] == 1.0,
 rows_before = T.diagnostics(source)
 
 # Abort the jump to frame 500 after 1% of it; the observer plays the Cancel button.
-progress = []
-
-
-def cancel(caller, event):
-    progress.append(caller.GetProgress())
-    if 0.0 < caller.GetProgress() < 1.0 and caller.GetProgress() >= 0.01:
-        caller.SetAbortExecute(1)
-
-
-observer = algorithm.AddObserver("ProgressEvent", cancel)
-start = time.time()
-aborted = T.output_at(source, TARGET * INTERVAL)
-elapsed = time.time() - start
-algorithm.RemoveObserver(observer)
+aborted, progress, elapsed = T.cancelled_request(
+    algorithm, lambda: T.output_at(source, TARGET * INTERVAL))
 expect(algorithm.GetAbortExecute() == 1, "AbortExecute was cleared by the algorithm")
 
 # Promptly: the steps before the abort, not the 992 of the jump.

@@ -8,7 +8,6 @@ to a straight run of the same source.
 Run with: mpiexec -n 2 pvbatch pbf_mpi_abort.py --plugin PATH"""
 import os
 import sys
-import time
 
 import numpy
 
@@ -50,20 +49,7 @@ before = fetched(owners, 4)
 expect(before[2] == {0, 1}, "frame 4 came from ranks %s" % sorted(before[2]))
 
 algorithm = aborting.GetClientSideObject()  # rank 0's: pvbatch's script runs on rank 0 only
-progress = []
-
-
-def cancel(caller, event):
-    progress.append(caller.GetProgress())
-    if 0.0 < caller.GetProgress() < 1.0 and caller.GetProgress() >= 0.01:
-        caller.SetAbortExecute(1)
-
-
-observer = algorithm.AddObserver("ProgressEvent", cancel)
-start = time.time()
-after_abort = fetched(owners, TARGET)
-elapsed = time.time() - start
-algorithm.RemoveObserver(observer)
+after_abort, progress, elapsed = T.cancelled_request(algorithm, lambda: fetched(owners, TARGET))
 stepped = [p for p in progress if 0.0 < p < 1.0]
 print("abort on rank 0 after %d steps; the request returned in %.2f s" % (len(stepped), elapsed))
 expect(len(stepped) <= 12, "the abort took %d steps to be honoured" % len(stepped))

@@ -5,6 +5,7 @@ this process: frames are read from it directly, at exactly the time that was ask
 """
 import os
 import sys
+import time
 
 import numpy
 from paraview import simple
@@ -25,6 +26,26 @@ def expect(condition, message):
     """An assertion that survives python -O and says what was expected."""
     if not condition:
         raise TestFailure(message)
+
+
+def cancelled_request(algorithm, request, after=0.01):
+    """Runs request() while an observer plays the Cancel button: it sets AbortExecute once the
+    algorithm's progress reaches `after`. Returns the result, the progress values the observer saw
+    and the seconds the request took."""
+    progress = []
+
+    def cancel(caller, event):
+        progress.append(caller.GetProgress())
+        if 0.0 < caller.GetProgress() < 1.0 and caller.GetProgress() >= after:
+            caller.SetAbortExecute(1)
+
+    observer = algorithm.AddObserver("ProgressEvent", cancel)
+    start = time.time()
+    try:
+        result = request()
+    finally:
+        algorithm.RemoveObserver(observer)
+    return result, progress, time.time() - start
 
 
 def plugin_path():
