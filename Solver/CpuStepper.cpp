@@ -65,7 +65,7 @@ void CpuStepper<Real>::forEachParticle(Stage&& stage)
 template <class Real>
 FluidView<Real> CpuStepper<Real>::view()
 {
-  FluidView<Real> f;
+  FluidView<Real> f{};
   f.x = x_.data();
   f.p = p_.data();
   f.v = v_.data();

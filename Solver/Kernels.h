@@ -37,6 +37,13 @@ struct Kernels
     {
       return Real(0);
     }
+    return poly6Within(r2);
+  }
+
+  // poly6 for r2 < h2, which the neighbour loops test before they call it: the same value without
+  // a second test (on a GPU, a test and a select in every pair of every pass).
+  PBF_HD PBF_INLINE Real poly6Within(Real r2) const
+  {
     const Real d = h2 - r2;
     return poly6Scale * d * d * d;
   }
@@ -56,19 +63,32 @@ struct Kernels
   // grad_i W_spiky(p_i - p_j, h); r = p_i - p_j. Zero at r = 0, where the direction is undefined.
   PBF_HD PBF_INLINE Vec3<Real> spikyGradient(const Vec3<Real>& r, Real r2) const
   {
-    if (r2 >= h2 || r2 <= Real(0))
+    if (r2 >= h2)
     {
       return { Real(0), Real(0), Real(0) };
     }
+    return spikyGradientWithin(r, r2);
+  }
+
+  // spikyGradient for r2 < h2, which the neighbour loops test before they call it.
+  PBF_HD PBF_INLINE Vec3<Real> spikyGradientWithin(const Vec3<Real>& r, Real r2) const
+  {
 #if defined(__CUDA_ARCH__) && !defined(PBF_CUDA_IEEE_GRADIENT)
     // On the GPU: 1/r from one reciprocal square root (CUDA's rsqrtf: 2 ulp, rsqrt: 1 ulp)
     // instead of a correctly rounded square root and division, which the neighbour passes pay for
     // every pair. The CPU backends do not compile this; the GPU already rounds differently from
     // them (FMA), and this adds a few ulps to the gradient (Testing/Benchmarks/README.md).
-    const Real inverse = reciprocalSquareRoot(r2);
+    // No branch: r2 is raised to the smallest normal number first, so r = 0 (a particle and
+    // itself) gives r times a finite number, zero, and the hardware's reciprocal square root needs
+    // no subnormal handling (for any larger r2 it returns the same bits as rsqrtf).
+    const Real inverse = reciprocalSquareRootOfNormal(r2);
     const Real d = h - r2 * inverse;
     return r * (spikyGradScale * d * d * inverse);
 #else
+    if (r2 <= Real(0))
+    {
+      return { Real(0), Real(0), Real(0) };
+    }
     const Real rl = squareRoot(r2);
     const Real d = h - rl;
     return r * (spikyGradScale * d * d / rl);

@@ -28,6 +28,18 @@ __device__ __forceinline__ double reciprocalSquareRoot(double a)
 {
   return rsqrt(a);
 }
+// 1 / sqrt(max(a, smallest normal)): for a normal a the bits of reciprocalSquareRoot(a), for a
+// subnormal a or 0 a finite 2^63 (float) or 2^511 (double), and no branch to scale subnormals.
+__device__ __forceinline__ float reciprocalSquareRootOfNormal(float a)
+{
+  float r;
+  asm("rsqrt.approx.ftz.f32 %0, %1;" : "=f"(r) : "f"(fmaxf(a, 1.17549435e-38f)));
+  return r;
+}
+__device__ __forceinline__ double reciprocalSquareRootOfNormal(double a)
+{
+  return rsqrt(fmax(a, 2.2250738585072014e-308));
+}
 #endif
 // s_corr (eq. 13) raises to n = 4 for every neighbour pair in every solver iteration. On a GPU the
 // general pow costs ~60 instructions there, most of the pass; a small integer exponent by
@@ -42,6 +54,13 @@ PBF_HD PBF_INLINE bool isSmallIntegerExponent(Real b)
 template <class Real>
 PBF_HD PBF_INLINE Real integerPower(Real a, int n)
 {
+  if (n == 4)
+  {
+    // The default exponent, unrolled: the same two squarings the loop makes (its final product
+    // with 1 is exact), without the loop's bookkeeping in every neighbour pair on a GPU.
+    const Real a2 = a * a;
+    return a2 * a2;
+  }
   Real result = Real(1);
   for (; n > 0; n >>= 1)
   {

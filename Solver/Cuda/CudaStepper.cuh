@@ -235,7 +235,7 @@ private:
 template <class Real>
 std::size_t CudaStepper<Real>::particleBytes(bool masks)
 {
-  return 4 * sizeof(Vec3<Real>) + 2 * sizeof(Real) + sizeof(std::int64_t) + 2 * sizeof(CellKey) +
+  return 4 * sizeof(Vec3<Real>) + 4 * sizeof(Real) + sizeof(std::int64_t) + 2 * sizeof(CellKey) +
     (masks ? kNeighborRows * sizeof(std::uint32_t) : 0);
 }
 
@@ -354,6 +354,8 @@ void CudaStepper<Real>::allocate(std::size_t capacity, std::size_t particles)
   }
   const std::size_t densityAt = place(capacity * sizeof(Real));
   const std::size_t lambdaAt = place(capacity * sizeof(Real));
+  const std::size_t volumeAt = place(capacity * sizeof(Real));
+  const std::size_t omegaLengthAt = place(capacity * sizeof(Real));
   const std::size_t idAt = place(capacity * sizeof(std::int64_t));
   const std::size_t keysAt[2] = { place(capacity * sizeof(CellKey)),
     place(capacity * sizeof(CellKey)) };
@@ -406,6 +408,8 @@ void CudaStepper<Real>::allocate(std::size_t capacity, std::size_t particles)
   }
   b.density = reinterpret_cast<Real*>(base + densityAt);
   b.lambda = reinterpret_cast<Real*>(base + lambdaAt);
+  b.volume = reinterpret_cast<Real*>(base + volumeAt);
+  b.omegaLength = reinterpret_cast<Real*>(base + omegaLengthAt);
   b.id = reinterpret_cast<std::int64_t*>(base + idAt);
   b.keys[0] = reinterpret_cast<CellKey*>(base + keysAt[0]);
   b.keys[1] = reinterpret_cast<CellKey*>(base + keysAt[1]);

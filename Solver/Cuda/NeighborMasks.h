@@ -28,6 +28,7 @@ namespace pbf
 constexpr int kNeighborRows = 9;  // (z, y) rows of 3 cells along x
 constexpr int kMaskWidth = 32;    // candidates per row covered by a mask
 constexpr int kMaskBlock = 128;   // most threads per block of a pass that walks the masks (GPU)
+constexpr int kMaskWords = 12;    // (base, mask) words a GPU lane stages (forEachNeighbor)
 
 template <class Real>
 struct MaskedNeighbors
@@ -124,11 +125,14 @@ PBF_HD PBF_INLINE void buildNeighborMasks(std::uint32_t i, const GridView<Real>&
 // rows, so a lane that runs out of candidates in a row moves on instead of idling while the rest
 // of its warp finishes that row, and the visit body is inlined once.
 //
-// On the GPU the rows are first staged in shared memory, all lanes together: the row ranges and
-// masks of particle i, the rows with nothing to visit left out. Fetching the next row inside the
-// loop then costs three shared loads. Fetched from the grid there instead (as on the host), the
-// fetch ran at different iterations in different lanes, 3 lanes active on average, and took 27% of
-// the density pass's instructions and 38% of the correction pass's (ncu, 1M particles).
+// On the GPU each lane first stages its visits in shared memory as a list of (base, mask) words,
+// in visit order: one per row with a marked candidate, then one per 32 candidates of a row's tail
+// (all of their bits set, as the tail is visited unconditionally). The loop then refills with one
+// shared load when a word runs out. Lanes refill at different iterations, so the warp pays a
+// refill in nearly every iteration: fetched from the grid (ncu, 1M particles, 9 rows with a
+// separate tail case) it took 27% of the density pass's instructions and 38% of the correction
+// pass's; staged rows with the tail decided in the loop still took 23 instructions an iteration,
+// 9% and 13% of those passes.
 template <class Real, class Visit>
 PBF_HD PBF_INLINE void forEachNeighbor(
   const MaskedNeighbors<Real>& neighbors, std::uint32_t i, Visit&& visit)
@@ -139,15 +143,14 @@ PBF_HD PBF_INLINE void forEachNeighbor(
     return;
   }
 #if defined(__CUDA_ARCH__)
-  // Each thread uses its own column only: no barrier, no sharing between threads. Shared memory
-  // holds each row's begin and mask (72 bytes a thread: more cost the passes L1 hits); one
-  // register says which rows have something to visit (bits 0-8) and which of those have
-  // candidates past the 32nd (bits 16-24). Such a tail (rare: a row of 3 cells holds ~24
-  // particles) finds its end in the grid again when reached.
-  __shared__ std::uint32_t rowBegin[kNeighborRows][kMaskBlock];
-  __shared__ std::uint32_t rowMask[kNeighborRows][kMaskBlock];
-  const unsigned t = threadIdx.x;
-  std::uint32_t rows = 0;
+  // Each thread uses its own column only: no barrier, no sharing between threads. 96 bytes a
+  // thread: shared memory comes out of L1, which holds the passes' neighbour reads. A row of 3
+  // cells holds ~24 particles, so tails are rare and 12 words hold the 9 rows and 3 tail words; a
+  // lane that needs more (a strongly compressed neighbourhood) walks its 27 cells instead, which
+  // visits the same candidates within h in the same order.
+  __shared__ uint2 words[kMaskWords][kMaskBlock];
+  uint2* word = &words[0][threadIdx.x];
+  int count = 0;
   {
     const detail::RowFrame frame = detail::rowFrame(neighbors.cells, i);
 #pragma unroll
@@ -158,45 +161,49 @@ PBF_HD PBF_INLINE void forEachNeighbor(
       {
         const std::uint32_t mask =
           neighbors.masks[static_cast<std::size_t>(r) * neighbors.stride + i];
-        rowBegin[r][t] = begin;
-        rowMask[r][t] = mask;
-        const bool tail = end - begin > kMaskWidth;
-        rows |= (mask != 0 || tail ? std::uint32_t(1) << r : 0u) |
-          (tail ? std::uint32_t(1) << (16 + r) : 0u);
+        if (mask != 0)
+        {
+          if (count < kMaskWords)
+          {
+            word[count * kMaskBlock] = make_uint2(begin, mask);
+          }
+          ++count;
+        }
+        for (std::uint32_t b = begin + kMaskWidth; b < end; b += kMaskWidth)
+        {
+          const std::uint32_t left = end - b;
+          if (count < kMaskWords)
+          {
+            word[count * kMaskBlock] =
+              make_uint2(b, left >= kMaskWidth ? ~0u : (std::uint32_t(1) << left) - 1u);
+          }
+          ++count;
+        }
       }
     }
   }
-  std::uint32_t mask = 0, base = 0, tail = 0, tailEnd = 0;
+  if (count > kMaskWords)
+  {
+    forEachNeighbor(neighbors.cells, i, visit);
+    return;
+  }
+  const uint2* const last = word + count * kMaskBlock;
+  std::uint32_t mask = 0, base = 0;
   for (;;)
   {
-    if (mask == 0 && tail == tailEnd)
+    if (mask == 0)
     {
-      if ((rows & 0xffffu) == 0)
+      if (word == last)
       {
         break;
       }
-      const int r = detail::lowestSetBit(rows);
-      rows &= rows - 1;
-      base = rowBegin[r][t];
-      mask = rowMask[r][t];
-      tail = tailEnd = 0;
-      if (rows & (std::uint32_t(1) << (16 + r)))
-      {
-        std::uint32_t begin = 0;
-        detail::rowRange(neighbors.cells, detail::rowFrame(neighbors.cells, i), r, begin, tailEnd);
-        tail = begin + kMaskWidth;
-      }
+      const uint2 w = *word;
+      word += kMaskBlock;
+      base = w.x;
+      mask = w.y;
     }
-    std::uint32_t j;
-    if (mask != 0)
-    {
-      j = base + static_cast<std::uint32_t>(detail::lowestSetBit(mask));
-      mask &= mask - 1;
-    }
-    else
-    {
-      j = tail++;
-    }
+    const std::uint32_t j = base + static_cast<std::uint32_t>(detail::lowestSetBit(mask));
+    mask &= mask - 1;
     visit(j);
   }
 #else

@@ -68,6 +68,8 @@ struct StepBuffers
   Vec3<Real>* vec[4];
   Real* density;
   Real* lambda;            // also the sort's values (the permutation) until density is evaluated
+  Real* volume;            // m / rho_i for the vorticity passes; may be null (FluidView::volume)
+  Real* omegaLength;       // |omega_i| for the confinement; may be null
   std::int64_t* id;
   CellKey* keys[2];        // cell keys and the sort's alternate buffer
   std::uint32_t* masks;    // kNeighborRows * stride entries; null when masks are off
@@ -204,6 +206,7 @@ FluidView<Real, MaskedNeighbors<Real>> iterationView(const StepBuffers<Real>& b,
   f.v = v;
   f.p = positions[iteration & 1];
   f.scratch = positions[(iteration + 1) & 1];
+  f.volume = b.volume; // written by the last iteration's updateVelocity
   return f;
 }
 
@@ -220,6 +223,8 @@ FluidView<Real, MaskedNeighbors<Real>> afterIterationsView(const StepBuffers<Rea
   f.v = v;
   f.omega = x;
   f.scratch = positions[(k.iterations + 1) & 1];
+  f.volume = b.volume;
+  f.omegaLength = b.omegaLength;
   return f;
 }
 

@@ -154,7 +154,7 @@ void SubdomainStepper<Real>::forOwned(Stage&& stage)
 template <class Real>
 FluidView<Real> SubdomainStepper<Real>::view()
 {
-  FluidView<Real> f;
+  FluidView<Real> f{};
   f.x = x_.data();
   f.p = p_.data();
   f.v = v_.data();

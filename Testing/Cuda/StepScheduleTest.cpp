@@ -52,6 +52,8 @@ public:
     }
     density_.resize(n_);
     lambda_.resize(n_);
+    volume_.resize(n_);
+    omegaLength_.resize(n_);
     id_ = initial.id;
     keys_[0].resize(n_);
     keys_[1].resize(n_);
@@ -65,6 +67,10 @@ public:
     }
     b.density = density_.data();
     b.lambda = lambda_.data();
+    // Stored volumes and |omega| as the CUDA backend keeps them: the serial backend computes them
+    // for every pair, and the results must not differ by a bit.
+    b.volume = volume_.data();
+    b.omegaLength = omegaLength_.data();
     b.id = id_.data();
     b.keys[0] = keys_[0].data();
     b.keys[1] = keys_[1].data();
@@ -116,7 +122,7 @@ private:
   const CellKey* sortedKeys_ = nullptr;
   // Vec3 buffers double as 64-bit id scratch: allocated by new, so 16-byte aligned.
   std::vector<Vec3<Real>> vec_[4];
-  std::vector<Real> density_, lambda_;
+  std::vector<Real> density_, lambda_, volume_, omegaLength_;
   std::vector<std::int64_t> id_;
   std::vector<CellKey> keys_[2];
   std::vector<std::uint32_t> masks_, offsets_;
