@@ -163,27 +163,28 @@ template <class Real, class Visit>
 PBF_HD PBF_INLINE void forEachImage(const WallMirrors<Real>& m, const Vec3<Real> q, Visit&& visit)
 {
   const int images = m.count[0] * m.count[1] * m.count[2];
+  Vec3<Real> image = q;
   int ix = 0, iy = 0, iz = 0;
-  for (int k = 0; k < images; ++k)
+  for (int k = 0;;)
   {
-    Vec3<Real> image = q;
-    if (k != 0)
-    {
-      // The next (ix, iy, iz), z fastest.
-      if (++iz == m.count[2])
-      {
-        iz = 0;
-        if (++iy == m.count[1])
-        {
-          iy = 0;
-          ++ix;
-        }
-      }
-      image.x = ix == 0 ? q.x : Real(2) * (ix == 1 ? m.wall[0][0] : m.wall[0][1]) - q.x;
-      image.y = iy == 0 ? q.y : Real(2) * (iy == 1 ? m.wall[1][0] : m.wall[1][1]) - q.y;
-      image.z = iz == 0 ? q.z : Real(2) * (iz == 1 ? m.wall[2][0] : m.wall[2][1]) - q.z;
-    }
     visit(image, k == 0);
+    if (++k == images)
+    {
+      return;
+    }
+    // The next (ix, iy, iz), z fastest.
+    if (++iz == m.count[2])
+    {
+      iz = 0;
+      if (++iy == m.count[1])
+      {
+        iy = 0;
+        ++ix;
+      }
+    }
+    image.x = ix == 0 ? q.x : Real(2) * (ix == 1 ? m.wall[0][0] : m.wall[0][1]) - q.x;
+    image.y = iy == 0 ? q.y : Real(2) * (iy == 1 ? m.wall[1][0] : m.wall[1][1]) - q.y;
+    image.z = iz == 0 ? q.z : Real(2) * (iz == 1 ? m.wall[2][0] : m.wall[2][1]) - q.z;
   }
 }
 
