@@ -81,7 +81,7 @@ bench cuda_double 60 --backend cuda --precision double --sweep 16000,64000,25600
   --warmup 20 --steps 100
 bench cuda_walk 60 --backend cuda --neighbors walk --sweep 64000,256000,1000000,4000000 --warmup 20 \
   --steps 50
-for skin in 0.05 0.1; do
+for skin in 0.02 0.1; do
   bench "cuda_skin_$skin" 20 --backend cuda --skin "$skin" --particles 1000000 --warmup 20 --steps 100
 done
 # What the mirror walls (Equations.h) cost: the same run without them.

@@ -245,7 +245,7 @@ int main(int argc, char** argv)
     { "steps", "timed steps per run (default 100)" },
     { "warmup", "untimed steps before timing (default 20)" },
     { "neighbors", "CUDA neighbour search: masks | walk (default masks)" },
-    { "skin", "CUDA mask reach beyond h, fraction of h (default 0.02)" },
+    { "skin", "CUDA mask reach beyond h, fraction of h (default 0.002)" },
     { "graphs", "CUDA: 1 replays a step as one graph, 0 launches kernels (default 1)" },
     { "block", "CUDA: threads per block of the neighbour passes (default 128)" },
     { "json", "write the results to this JSON file" },
@@ -267,7 +267,7 @@ int main(int argc, char** argv)
     {
       throw InvalidInput("--neighbors = \"" + neighbors + "\": must be masks or walk");
     }
-    const double skin = std::stod(extra("skin", "0.02"));
+    const double skin = std::stod(extra("skin", "0.002"));
     const bool graphs = extra("graphs", "1") != "0";
     const int block = std::stoi(extra("block", "128"));
     if (steps < 1 || warmup < 0)

@@ -7,7 +7,7 @@
 #   PBF_PROBE_IEEE=1        also build B: PBF_PROBE_B_FLAGS (CMake flags; default
 #                           -DPBF_CUDA_IEEE_GRADIENT=ON) and/or PBF_PROBE_B_MASKS (a file that
 #                           replaces Solver/Cuda/NeighborMasks.h), timed in the same session
-#   PBF_PROBE_SKINS="..."   mask skins for A (default 0.02); PBF_PROBE_A_ARGS: one more A run
+#   PBF_PROBE_SKINS="..."   mask skins for A (default 0.002, the default); PBF_PROBE_A_ARGS: one more A run
 #   PBF_PROBE_10M=1         10M particles too; PBF_PROBE_REPEAT=1: the 1M runs again
 #   PBF_PROBE_TESTS=filter  gtest filter of pbf_cuda_tests, or none; PBF_PROBE_NCU=0: no ncu,
 #   PBF_PROBE_NCU_ALL=1     the vorticity and confinement passes profiled too
@@ -50,7 +50,7 @@ bench() { # BUILD LABEL ARGS...
   echo "== $label: $*"
   timeout 60 "$b/Solver/Tools/pbf_bench" --backend cuda "$@" 2>&1 | tail -n 2
 }
-for skin in ${PBF_PROBE_SKINS:-0.02}; do
+for skin in ${PBF_PROBE_SKINS:-0.002}; do
   bench $A "A f32 skin $skin" --particles 1000000 --warmup 20 --steps 100 --skin "$skin"
 done
 bench $A "A f64" --precision double --particles 1000000 --warmup 20 --steps 100
