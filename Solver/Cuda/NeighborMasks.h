@@ -51,6 +51,19 @@ PBF_HD PBF_INLINE int lowestSetBit(std::uint32_t mask)
 #endif
 }
 
+PBF_HD PBF_INLINE std::uint32_t reverseBits(std::uint32_t v)
+{
+#if defined(__CUDA_ARCH__)
+  return __brev(v);
+#else
+  v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
+  v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
+  v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
+  v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
+  return (v >> 16) | (v << 16);
+#endif
+}
+
 // The cell of sorted particle i and the x range of its rows, as forEachNeighbor computes them.
 struct RowFrame
 {
@@ -105,15 +118,19 @@ PBF_HD PBF_INLINE void buildNeighborMasks(std::uint32_t i, const GridView<Real>&
     std::uint32_t begin = 0, end = 0, mask = 0;
     if (detail::rowRange(grid, frame, r, begin, end))
     {
-      const std::uint32_t limit = end - begin > kMaskWidth ? begin + kMaskWidth : end;
-      for (std::uint32_t j = begin; j < limit; ++j)
+      // The first candidate is shifted in first and ends in the highest of `count` bits; one
+      // bit reversal at the end puts candidate k at bit k. A shift and an add a candidate,
+      // instead of a shift by k, an or and the index arithmetic (on a GPU the build is a third
+      // of the density pass).
+      const std::uint32_t count = end - begin > kMaskWidth ? kMaskWidth : end - begin;
+      const Vec3<Real>* q = p + begin;
+      std::uint32_t reversed = 0;
+      for (std::uint32_t k = 0; k < count; ++k)
       {
-        const Vec3<Real> d = pi - p[j];
-        if (dot(d, d) < reach2)
-        {
-          mask |= std::uint32_t(1) << (j - begin);
-        }
+        const Vec3<Real> d = pi - q[k];
+        reversed = (reversed << 1) | (dot(d, d) < reach2 ? 1u : 0u);
       }
+      mask = count == 0 ? 0u : detail::reverseBits(reversed) >> (kMaskWidth - count);
     }
     masks[static_cast<std::size_t>(r) * stride + i] = mask;
   }
