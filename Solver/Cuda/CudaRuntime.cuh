@@ -1,6 +1,7 @@
 // CUDA error handling and the kernel executor that runs StepSchedule.h on a stream.
 #pragma once
 
+#include "CudaBackend.h"
 #include "DeviceFault.h"
 #include "StepSchedule.h"
 
@@ -84,6 +85,21 @@ struct Launch<ConfinementStage>
 };
 constexpr int kMaxBlock = 128;
 static_assert(kMaxBlock <= kMaskBlock, "forEachNeighbor's shared rows hold kMaskBlock threads");
+
+// The checks of Options that every CUDA stepper makes before it touches the device.
+inline void validateOptions(const Options& options)
+{
+  if (!(options.skin > 0.0 && options.skin <= 1.0))
+  {
+    throw InvalidInput("CUDA skin = " + std::to_string(options.skin) +
+      ": must lie in (0, 1] (a fraction of h)");
+  }
+  if (options.block < 32 || options.block > kMaxBlock || options.block % 32 != 0)
+  {
+    throw InvalidInput("CUDA block = " + std::to_string(options.block) +
+      ": must be a multiple of 32 up to " + std::to_string(kMaxBlock));
+  }
+}
 
 template <class Stage, class F>
 __global__ void __launch_bounds__(kMaxBlock) stageKernel(Stage, std::uint32_t n, F f)

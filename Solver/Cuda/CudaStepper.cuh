@@ -247,16 +247,7 @@ CudaStepper<Real>::CudaStepper(
 {
   parameters_.validate();
   checkBatch(parameters_, initial);
-  if (!(options_.skin > 0.0 && options_.skin <= 1.0))
-  {
-    throw InvalidInput("CUDA skin = " + std::to_string(options_.skin) +
-      ": must lie in (0, 1] (a fraction of h)");
-  }
-  if (options_.block < 32 || options_.block > kMaxBlock || options_.block % 32 != 0)
-  {
-    throw InvalidInput("CUDA block = " + std::to_string(options_.block) +
-      ": must be a multiple of 32 up to " + std::to_string(kMaxBlock));
-  }
+  validateOptions(options_);
   std::string why;
   if (!cudaDevicePresent(&why))
   {

@@ -251,16 +251,7 @@ std::unique_ptr<distributed::DecomposedStepper> makeCudaSubdomainStepperOf(
   distributed::Communicator& communicator, const Parameters& parameters,
   const ParticleBatch& everything, int device, const Options& options)
 {
-  if (!(options.skin > 0.0 && options.skin <= 1.0))
-  {
-    throw InvalidInput("CUDA skin = " + std::to_string(options.skin) +
-      ": must lie in (0, 1] (a fraction of h)");
-  }
-  if (options.block < 32 || options.block > kMaxBlock || options.block % 32 != 0)
-  {
-    throw InvalidInput("CUDA block = " + std::to_string(options.block) +
-      ": must be a multiple of 32 up to " + std::to_string(kMaxBlock));
-  }
+  validateOptions(options);
   return std::make_unique<DeviceSubdomainStepper<Real, CudaDevicePolicy<Real>>>(communicator,
     parameters, everything, std::make_unique<CudaDevicePolicy<Real>>(device, options.block),
     options.skin,
