@@ -89,13 +89,15 @@ if [[ ${PBF_PROBE_NCU:-1} == 1 ]]; then
   python3 - /tmp/times.csv <<'PY' || true
 import csv, sys, re
 rows = [r for r in csv.reader(open(sys.argv[1])) if len(r) > 5]
+# pbf_bench prints its own lines before ncu's CSV: the header is the row that names the kernels.
+rows = rows[next(k for k, r in enumerate(rows) if "Kernel Name" in r):]
 head = rows[0]
 ki, ti = head.index("Kernel Name"), head.index("gpu__time_duration.sum")
 total = 0
 for r in rows[2:]:
     name = r[ki]
     m = re.search(r"(\w+Stage)", name)
-    t = float(r[ti]) / 1000.0
+    t = float(r[ti].replace(",", "")) / 1000.0  # ncu groups thousands with commas
     total += t
     print("%9.1f us  %s" % (t, m.group(1) if m else name[:60]))
 print("%9.1f us  total" % total)
