@@ -10,7 +10,11 @@
 #   PBF_PROBE_SKINS="..."   mask skins for A (default 0.002, the default); PBF_PROBE_A_ARGS: one more A run
 #   PBF_PROBE_10M=1         10M particles too; PBF_PROBE_REPEAT=1: the 1M runs again
 #   PBF_PROBE_TESTS=filter  gtest filter of pbf_cuda_tests, or none; PBF_PROBE_NCU=0: no ncu,
+#                           PBF_PROBE_NCU=times: only the per-kernel times of one step
 #   PBF_PROBE_NCU_ALL=1     the vorticity and confinement passes profiled too
+#   PBF_PROBE_VARIANTS="name:FLAGS;name2:FLAGS2"   more builds of the same tree with other CMake
+#                           flags (e.g. -DCMAKE_CUDA_FLAGS=-DX=1), each timed at 1M in single
+#                           precision with its per-kernel times, after A
 set -uo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 out=${OUT:-$root/output/probe}
@@ -41,7 +45,21 @@ if [[ ${PBF_PROBE_IEEE:-0} == 1 ]]; then
   pb=$!
   wait $pb || { tail -30 $B.build.log; }
 fi
+variants=()
+pids=()
+IFS=';' read -ra variants <<<"${PBF_PROBE_VARIANTS:-}"
+for v in "${variants[@]}"; do
+  name=${v%%:*}
+  # shellcheck disable=SC2086 # the flags are words
+  configure /tmp/probe-$name ${v#*:} && cmake --build /tmp/probe-$name -j 16 --target pbf_bench \
+    >/tmp/probe-$name.build.log 2>&1 &
+  pids+=($!)
+done
 wait $pa || { tail -40 $A.build.log; exit 1; }
+# Not a bare wait: that would also wait for the tee above, which never ends.
+for p in "${pids[@]}"; do
+  wait "$p" || echo "a variant failed to build (see /tmp/probe-*.build.log)"
+done
 grep -i "spill" $A.build.log | sed 's/_ZN3pbf4cuda[^ ]*\(Stage\)[^ ]*/<\1>/' | head
 echo "[$((SECONDS - t0)) s] built"
 bench() { # BUILD LABEL ARGS...
@@ -61,11 +79,15 @@ bench $A "A f64" --precision double --particles 1000000 --warmup 20 --steps 100
 [[ ${PBF_PROBE_10M:-0} == 1 && -n ${B:-} ]] && bench $B "B f32 10M" --particles 10000000 --warmup 10 --steps 50
 [[ ${PBF_PROBE_REPEAT:-0} == 1 ]] && bench $A "A f32 again" --particles 1000000 --warmup 20 --steps 100
 [[ ${PBF_PROBE_REPEAT:-0} == 1 && -n ${B:-} ]] && bench $B "B f32 again" --particles 1000000 --warmup 20 --steps 100
+for v in "${variants[@]}"; do
+  bench /tmp/probe-${v%%:*} "${v%%:*} f32" --particles 1000000 --warmup 20 --steps 100
+done
+[[ ${#variants[@]} -gt 0 ]] && bench $A "A f32 again" --particles 1000000 --warmup 20 --steps 100
 echo "[$((SECONDS - t0)) s] benched"
 [[ ${PBF_PROBE_TESTS:-} != none ]] && timeout 150 $A/Testing/Cuda/pbf_cuda_tests --gtest_filter="${PBF_PROBE_TESTS:-*OneStep*:*TwoRuns*:*NeighborMasks*:*Statistics*}" 2>&1 |
   grep -E "^\[ +(OK|FAILED|PASSED|SKIPPED) |Failure|Expected|Which is|actual|error" | head -40
 echo "[$((SECONDS - t0)) s] tested"
-if [[ ${PBF_PROBE_NCU:-1} == 1 ]]; then
+if [[ ${PBF_PROBE_NCU:-1} != 0 ]]; then
   prof() { # NAME REGEX SKIP
     timeout 90 ncu --clock-control none --kernel-name-base demangled -k "regex:$2" --launch-skip "$3" \
       --launch-count 1 --section SpeedOfLight --section SchedulerStats --section WarpStateStats \
@@ -77,16 +99,19 @@ if [[ ${PBF_PROBE_NCU:-1} == 1 ]]; then
     ncu -i "/tmp/$1.ncu-rep" --page source --csv --print-source sass >"/tmp/$1.sass.csv" 2>&1
     grep -E "Duration|Issue Slots Busy|Executed Ipc A|Registers Per|Achieved Occupancy|No Eligible|thread_inst_executed_per|inst_executed.sum|Branch Efficiency|Avg. Divergent" "/tmp/$1.details.txt" | head -14
   }
-  echo "== ncu density (iteration 1)"; prof density DensityStage 242
-  echo "== ncu correction (iteration 1)"; prof correction CorrectionStage 241
+  if [[ ${PBF_PROBE_NCU:-1} != times ]]; then
+    echo "== ncu density (iteration 1)"; prof density DensityStage 242
+    echo "== ncu correction (iteration 1)"; prof correction CorrectionStage 241
+  fi
   if [[ ${PBF_PROBE_NCU_ALL:-0} == 1 ]]; then
     echo "== ncu vorticity"; prof vorticity VorticityStage 60
     echo "== ncu confinement"; prof confinement ConfinementStage 60
   fi
-  timeout 60 ncu --clock-control none --metrics gpu__time_duration.sum --csv --page raw \
-    --launch-skip $((13 + 60 * 22)) --launch-count 22 \
-    $A/Solver/Tools/pbf_bench --backend cuda --particles 1000000 --warmup 60 --steps 1 >/tmp/times.csv 2>&1
-  python3 - /tmp/times.csv <<'PY' || true
+  times() { # BUILD: per-kernel times of one step at 1M
+    timeout 60 ncu --clock-control none --metrics gpu__time_duration.sum --csv --page raw \
+      --launch-skip $((13 + 60 * 22)) --launch-count 22 \
+      $1/Solver/Tools/pbf_bench --backend cuda --particles 1000000 --warmup 60 --steps 1 >/tmp/times.csv 2>&1
+    python3 - /tmp/times.csv <<'PY' || true
 import csv, sys, re
 rows = [r for r in csv.reader(open(sys.argv[1])) if len(r) > 5]
 # pbf_bench prints its own lines before ncu's CSV: the header is the row that names the kernels.
@@ -102,6 +127,11 @@ for r in rows[2:]:
     print("%9.1f us  %s" % (t, m.group(1) if m else name[:60]))
 print("%9.1f us  total" % total)
 PY
+  }
+  echo "== per-kernel times, A"; times $A
+  for v in "${variants[@]}"; do
+    echo "== per-kernel times, ${v%%:*}"; times /tmp/probe-${v%%:*}
+  done
 fi
 (cd /tmp && tar czf "$out/probe.tgz" ./*.ncu-rep ./*.details.txt ./*.sass.csv ./*.ncu.log ./times.csv \
   ./probe-a.build.log 2>/dev/null)
