@@ -58,30 +58,44 @@ inline void check(cudaError_t error, const char* what)
 // Launch shapes per stage: the neighbour passes take their block size from Options::block (128 by
 // default; 64, 128 and 256 measured the same on the H200), the others run 128 threads a block.
 // A launch bound of 256 made ptxas cap the correction pass at 48 registers and spill.
+//
+// minBlocks: blocks of kMaxBlock threads that each multiprocessor must hold, which caps the
+// registers a thread (65536 / (minBlocks * 128), rounded down to 8). The caps below bind only in
+// double precision, where ptxas otherwise took 78 (density), 98 (correction), 74 (vorticity) and
+// 72 (confinement) registers, and the correction pass ran at 4 blocks. Measured at 1M particles
+// on the H200 (probe.sh variants, one session): 5.09 -> 4.54 ms a step in double, single
+// unchanged (2.858 / 2.851 ms: its kernels take 40-54 registers, under every cap). A cap of 7
+// blocks for the correction pass (72 registers, 164 bytes of spills) gave 4.77 ms, 8 for the
+// others 4.79; in single precision 12 blocks (40 registers) gained nothing (Benchmarks/README.md).
 template <class Stage>
 struct Launch
 {
   static constexpr bool neighborPass = false;
+  static constexpr int minBlocks = 1;
 };
 template <>
 struct Launch<DensityStage>
 {
   static constexpr bool neighborPass = true;
+  static constexpr int minBlocks = 7; // <= 72 registers
 };
 template <>
 struct Launch<CorrectionStage>
 {
   static constexpr bool neighborPass = true;
+  static constexpr int minBlocks = 6; // <= 80 registers (88 bytes of spills in double)
 };
 template <>
 struct Launch<VorticityStage>
 {
   static constexpr bool neighborPass = true;
+  static constexpr int minBlocks = 7;
 };
 template <>
 struct Launch<ConfinementStage>
 {
   static constexpr bool neighborPass = true;
+  static constexpr int minBlocks = 7;
 };
 constexpr int kMaxBlock = 128;
 static_assert(kMaxBlock <= kMaskBlock, "forEachNeighbor's shared rows hold kMaskBlock threads");
@@ -102,7 +116,7 @@ inline void validateOptions(const Options& options)
 }
 
 template <class Stage, class F>
-__global__ void __launch_bounds__(kMaxBlock) stageKernel(Stage, std::uint32_t n, F f)
+__global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageKernel(Stage, std::uint32_t n, F f)
 {
   const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < n)
@@ -114,7 +128,7 @@ __global__ void __launch_bounds__(kMaxBlock) stageKernel(Stage, std::uint32_t n,
 // As stageKernel, and the max of f's non-negative results: a warp max, then one integer atomic
 // per warp. The max is the same in any order, so this stays deterministic.
 template <class Stage, class F>
-__global__ void __launch_bounds__(kMaxBlock) stageMaxKernel(
+__global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageMaxKernel(
   Stage, std::uint32_t n, unsigned long long* maxBits, F f)
 {
   const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;

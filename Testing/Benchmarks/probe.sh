@@ -15,6 +15,7 @@
 #   PBF_PROBE_VARIANTS="name:FLAGS;name2:FLAGS2"   more builds of the same tree with other CMake
 #                           flags (e.g. -DCMAKE_CUDA_FLAGS=-DX=1), each timed at 1M in single
 #                           precision with its per-kernel times, after A
+#                           (PBF_PROBE_VARIANT_F64=1: in double precision too)
 set -uo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 out=${OUT:-$root/output/probe}
@@ -81,8 +82,12 @@ bench $A "A f64" --precision double --particles 1000000 --warmup 20 --steps 100
 [[ ${PBF_PROBE_REPEAT:-0} == 1 && -n ${B:-} ]] && bench $B "B f32 again" --particles 1000000 --warmup 20 --steps 100
 for v in "${variants[@]}"; do
   bench /tmp/probe-${v%%:*} "${v%%:*} f32" --particles 1000000 --warmup 20 --steps 100
+  [[ ${PBF_PROBE_VARIANT_F64:-0} == 1 ]] &&
+    bench /tmp/probe-${v%%:*} "${v%%:*} f64" --precision double --particles 1000000 --warmup 20 --steps 100
 done
 [[ ${#variants[@]} -gt 0 ]] && bench $A "A f32 again" --particles 1000000 --warmup 20 --steps 100
+[[ ${#variants[@]} -gt 0 && ${PBF_PROBE_VARIANT_F64:-0} == 1 ]] &&
+  bench $A "A f64 again" --precision double --particles 1000000 --warmup 20 --steps 100
 echo "[$((SECONDS - t0)) s] benched"
 [[ ${PBF_PROBE_TESTS:-} != none ]] && timeout 150 $A/Testing/Cuda/pbf_cuda_tests --gtest_filter="${PBF_PROBE_TESTS:-*OneStep*:*TwoRuns*:*NeighborMasks*:*Statistics*}" 2>&1 |
   grep -E "^\[ +(OK|FAILED|PASSED|SKIPPED) |Failure|Expected|Which is|actual|error" | head -40
