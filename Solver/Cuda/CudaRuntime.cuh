@@ -64,7 +64,7 @@ inline void check(cudaError_t error, const char* what)
 // double precision, where ptxas otherwise took 78 (density), 98 (correction), 74 (vorticity) and
 // 72 (confinement) registers, and the correction pass ran at 4 blocks. Measured at 1M particles
 // on the H200 (probe.sh variants, one session): 5.09 -> 4.54 ms a step in double, single
-// unchanged (2.858 / 2.851 ms: its kernels take 40-54 registers, under every cap). A cap of 7
+// unchanged (2.858 / 2.851 ms: its kernels take 45-55 registers, under every cap). A cap of 7
 // blocks for the correction pass (72 registers, 164 bytes of spills) gave 4.77 ms, 8 for the
 // others 4.79; in single precision 12 blocks (40 registers) gained nothing (Benchmarks/README.md).
 template <class Stage>
@@ -116,7 +116,8 @@ inline void validateOptions(const Options& options)
 }
 
 template <class Stage, class F>
-__global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageKernel(Stage, std::uint32_t n, F f)
+__global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageKernel(
+  Stage, std::uint32_t n, F f)
 {
   const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < n)

@@ -112,7 +112,7 @@ if [[ ${PBF_PROBE_NCU:-1} != 0 ]]; then
     echo "== ncu vorticity"; prof vorticity VorticityStage 60
     echo "== ncu confinement"; prof confinement ConfinementStage 60
   fi
-  times() { # BUILD: per-kernel times of one step at 1M
+  kernelTimes() { # BUILD: per-kernel times of one step at 1M
     timeout 60 ncu --clock-control none --metrics gpu__time_duration.sum --csv --page raw \
       --launch-skip $((13 + 60 * 22)) --launch-count 22 \
       $1/Solver/Tools/pbf_bench --backend cuda --particles 1000000 --warmup 60 --steps 1 >/tmp/times.csv 2>&1
@@ -133,9 +133,9 @@ for r in rows[2:]:
 print("%9.1f us  total" % total)
 PY
   }
-  echo "== per-kernel times, A"; times $A
+  echo "== per-kernel times, A"; kernelTimes $A
   for v in "${variants[@]}"; do
-    echo "== per-kernel times, ${v%%:*}"; times /tmp/probe-${v%%:*}
+    echo "== per-kernel times, ${v%%:*}"; kernelTimes /tmp/probe-${v%%:*}
   done
 fi
 (cd /tmp && tar czf "$out/probe.tgz" ./*.ncu-rep ./*.details.txt ./*.sass.csv ./*.ncu.log ./times.csv \
