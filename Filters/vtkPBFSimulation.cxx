@@ -85,10 +85,11 @@ bool SameParameters(const pbf::Parameters& a, const pbf::Parameters& b)
     a.smoothingRatio == b.smoothingRatio && a.solverIterations == b.solverIterations &&
     a.densityErrorTolerance == b.densityErrorTolerance && a.relaxation == b.relaxation &&
     a.sCorrK == b.sCorrK && a.sCorrN == b.sCorrN && a.sCorrDeltaQ == b.sCorrDeltaQ &&
-    a.xsphC == b.xsphC && a.vorticityEpsilon == b.vorticityEpsilon &&
+    a.xsphViscosity == b.xsphViscosity && a.vorticityEpsilon == b.vorticityEpsilon &&
     a.unilateral == b.unilateral && a.mirrorWalls == b.mirrorWalls && a.gravity.x == b.gravity.x &&
     a.gravity.y == b.gravity.y && a.gravity.z == b.gravity.z && a.timeStep == b.timeStep &&
-    SameBox(a.domain, b.domain);
+    a.timeStepping == b.timeStepping && a.cflNumber == b.cflNumber &&
+    a.sceneSpeedHint == b.sceneSpeedHint && SameBox(a.domain, b.domain);
 }
 
 bool operator==(const Configuration& a, const Configuration& b)
@@ -309,7 +310,8 @@ vtkSmartPointer<vtkFieldData> FrameFieldData(
   AddValue(fieldData, "SCorrK", p.sCorrK);
   AddValue(fieldData, "SCorrN", p.sCorrN);
   AddValue(fieldData, "SCorrDeltaQ", p.sCorrDeltaQ);
-  AddValue(fieldData, "XSPHViscosity", p.xsphC);
+  AddValue(fieldData, "XSPHViscosity", p.xsphViscosity);
+  AddValue(fieldData, "XSPHKinematicViscosity", p.xsphNu());
   AddValue(fieldData, "VorticityEpsilon", p.vorticityEpsilon);
   AddInteger(fieldData, "Unilateral", p.unilateral ? 1 : 0);
   AddInteger(fieldData, "MirrorWalls", p.mirrorWalls ? 1 : 0);
@@ -325,7 +327,11 @@ vtkSmartPointer<vtkFieldData> FrameFieldData(
     p.domain.min.z, p.domain.max.z };
   domain->InsertNextTuple(bounds);
   fieldData->AddArray(domain);
-  AddValue(fieldData, "TimeStep", p.timeStep);
+  const bool automatic = p.timeStepping == pbf::TimeStepping::Automatic;
+  AddText(fieldData, "TimeStepping", automatic ? "Automatic" : "Fixed");
+  AddValue(fieldData, "TimeStep", automatic ? simulation.stepper().timeStep() : p.timeStep);
+  AddValue(fieldData, "MaxTimeStep", p.timeStep);
+  AddValue(fieldData, "CFLNumber", p.cflNumber);
   AddValue(fieldData, "FrameInterval", frameInterval);
   AddInteger(fieldData, "SubstepsPerFrame", substeps);
   AddInteger(fieldData, "Frame", frame);
@@ -373,6 +379,9 @@ struct FrameRow
   double AverageNeighbors = 0;
   double SolverIterations = NaN;    // per step, averaged over the frame's substeps
   double MillisecondsPerStep = NaN; // likewise
+  double Substeps = NaN;            // the frame's solver steps
+  double MinTimeStep = NaN;         // the smallest and largest of their dt [s]
+  double MaxTimeStep = NaN;
   double MaxSpeed = 0;
   double KineticEnergy = 0;
   vtkIdType Particles = 0;
@@ -398,6 +407,8 @@ public:
   long PendingIterations = 0;
   double PendingMilliseconds = 0;
   int PendingSteps = 0;
+  double PendingMinTimeStep = 0;
+  double PendingMaxTimeStep = 0;
 
   // Checkpoints by frame, and the interval new ones are taken at (CheckpointInterval, doubled
   // each time the budget forced a thinning).
@@ -493,6 +504,24 @@ public:
     this->PendingIterations = 0;
     this->PendingMilliseconds = 0;
     this->PendingSteps = 0;
+    this->PendingMinTimeStep = 0;
+    this->PendingMaxTimeStep = 0;
+  }
+
+  // Counts the steps of `report` towards the next frame's row.
+  void AddPending(const pbf::AdvanceReport& report)
+  {
+    if (report.steps == 0)
+    {
+      return;
+    }
+    this->PendingMinTimeStep = this->PendingSteps == 0
+      ? report.minTimeStep
+      : std::min(this->PendingMinTimeStep, report.minTimeStep);
+    this->PendingMaxTimeStep = std::max(this->PendingMaxTimeStep, report.maxTimeStep);
+    this->PendingIterations += report.iterations;
+    this->PendingMilliseconds += report.milliseconds;
+    this->PendingSteps += static_cast<int>(report.steps);
   }
 
   // Applies CheckpointInterval and CheckpointMemoryMB; checkpoints already taken stay valid.
@@ -571,6 +600,9 @@ public:
     {
       row.SolverIterations = static_cast<double>(this->PendingIterations) / this->PendingSteps;
       row.MillisecondsPerStep = this->PendingMilliseconds / this->PendingSteps;
+      row.Substeps = this->PendingSteps;
+      row.MinTimeStep = this->PendingMinTimeStep;
+      row.MaxTimeStep = this->PendingMaxTimeStep;
     }
     row.MaxSpeed = statistics.maxSpeed;
     row.KineticEnergy = statistics.kineticEnergy;
@@ -613,6 +645,9 @@ public:
     auto neighbors = NewArray<vtkDoubleArray>("AverageNeighbors", 1, rows);
     auto iterations = NewArray<vtkDoubleArray>("SolverIterations", 1, rows);
     auto milliseconds = NewArray<vtkDoubleArray>("MillisecondsPerStep", 1, rows);
+    auto substeps = NewArray<vtkDoubleArray>("Substeps", 1, rows);
+    auto minTimeStep = NewArray<vtkDoubleArray>("MinTimeStep", 1, rows);
+    auto maxTimeStep = NewArray<vtkDoubleArray>("MaxTimeStep", 1, rows);
     auto maxSpeed = NewArray<vtkDoubleArray>("MaxSpeed", 1, rows);
     auto kinetic = NewArray<vtkDoubleArray>("KineticEnergy", 1, rows);
     auto particles = NewArray<vtkIdTypeArray>("Particles", 1, rows);
@@ -630,6 +665,9 @@ public:
       neighbors->SetValue(r, row.AverageNeighbors);
       iterations->SetValue(r, row.SolverIterations);
       milliseconds->SetValue(r, row.MillisecondsPerStep);
+      substeps->SetValue(r, row.Substeps);
+      minTimeStep->SetValue(r, row.MinTimeStep);
+      maxTimeStep->SetValue(r, row.MaxTimeStep);
       maxSpeed->SetValue(r, row.MaxSpeed);
       kinetic->SetValue(r, row.KineticEnergy);
       particles->SetValue(r, row.Particles);
@@ -639,7 +677,8 @@ public:
     this->Table = vtkSmartPointer<vtkTable>::New();
     for (vtkAbstractArray* column :
       std::initializer_list<vtkAbstractArray*>{ time, frame, averageError, maxError, neighbors,
-        iterations, milliseconds, maxSpeed, kinetic, particles, backend })
+        iterations, milliseconds, substeps, minTimeStep, maxTimeStep, maxSpeed, kinetic,
+        particles, backend })
     {
       this->Table->AddColumn(column);
     }
@@ -676,20 +715,23 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->SCorrK = defaults.sCorrK;
   this->SCorrN = defaults.sCorrN;
   this->SCorrDeltaQ = defaults.sCorrDeltaQ;
-  this->XSPHViscosity = defaults.xsphC;
+  this->XSPHViscosity = defaults.xsphViscosity;
   this->VorticityEpsilon = defaults.vorticityEpsilon;
   this->Unilateral = defaults.unilateral;
   this->MirrorWalls = defaults.mirrorWalls;
   this->Gravity[0] = defaults.gravity.x;
   this->Gravity[1] = defaults.gravity.y;
   this->Gravity[2] = defaults.gravity.z;
-  // The solver's default is the fixed count (densityErrorTolerance 0); the tolerance shown when
-  // adaptive iterations are switched on is a tenth of a percent.
+  // The solver's default is adaptive (its tolerance, with SolverIterations as the cap).
   this->AdaptiveIterations = defaults.densityErrorTolerance > 0;
   this->DensityErrorTolerance =
-    defaults.densityErrorTolerance > 0 ? defaults.densityErrorTolerance : 0.1;
+    defaults.densityErrorTolerance > 0 ? defaults.densityErrorTolerance : 0.2;
   this->FrameInterval = 1.0 / 60.0;
   this->SubstepsPerFrame = 4;
+  this->TimeStepping =
+    defaults.timeStepping == pbf::TimeStepping::Automatic ? TIME_STEPPING_AUTOMATIC : TIME_STEPPING_FIXED;
+  this->CFLNumber = defaults.cflNumber;
+  this->MaxTimeStep = defaults.timeStep;
   this->NumberOfFrames = 120;
   this->CheckpointInterval = 10;
   this->CheckpointMemoryMB = 1024.0;
@@ -929,14 +971,19 @@ int vtkPBFSimulation::RequestData(
     p.sCorrK = this->SCorrK;
     p.sCorrN = this->SCorrN;
     p.sCorrDeltaQ = this->SCorrDeltaQ;
-    p.xsphC = this->XSPHViscosity;
+    p.xsphViscosity = this->XSPHViscosity;
     p.vorticityEpsilon = this->VorticityEpsilon;
     p.unilateral = this->Unilateral;
     p.mirrorWalls = this->MirrorWalls;
     p.gravity = pbf::Vec3d{ this->Gravity[0], this->Gravity[1], this->Gravity[2] };
-    p.timeStep = this->FrameInterval / this->SubstepsPerFrame;
+    // Fixed: SubstepsPerFrame equal steps per frame. Automatic: steps chosen from the state, at
+    // most MaxTimeStep, landing on every frame; SubstepsPerFrame then changes nothing.
+    const bool automatic = this->TimeStepping == TIME_STEPPING_AUTOMATIC;
+    p.timeStepping = automatic ? pbf::TimeStepping::Automatic : pbf::TimeStepping::Fixed;
+    p.timeStep = automatic ? this->MaxTimeStep : this->FrameInterval / this->SubstepsPerFrame;
+    p.cflNumber = automatic ? this->CFLNumber : pbf::Parameters().cflNumber;
     configuration.FrameInterval = this->FrameInterval;
-    configuration.Substeps = this->SubstepsPerFrame;
+    configuration.Substeps = automatic ? 0 : this->SubstepsPerFrame;
 
     configuration.Precision =
       this->Precision == PRECISION_DOUBLE ? pbf::Precision::Double : pbf::Precision::Single;
@@ -1035,8 +1082,9 @@ int vtkPBFSimulation::RequestData(
       fieldData->ShallowCopy(internals.LastOutput->GetFieldData());
       AddInteger(fieldData, "RequestSteps", 0);
       AddText(fieldData, "ResumedFrom", "output");
+      vtkDataArray* steps = internals.LastOutput->GetFieldData()->GetArray("StepCount");
       AddInteger(fieldData, "ResumedFromStep",
-        static_cast<vtkIdType>(frame) * static_cast<vtkIdType>(substeps));
+        steps ? static_cast<vtkIdType>(steps->GetTuple1(0)) : vtkIdType(0));
       output->SetFieldData(fieldData);
       output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frameTime);
       table->ShallowCopy(internals.DiagnosticsTable());
@@ -1044,8 +1092,9 @@ int vtkPBFSimulation::RequestData(
       return 1;
     }
 
-    const std::uint64_t targetStep =
-      static_cast<std::uint64_t>(frame) * static_cast<std::uint64_t>(substeps);
+    // Frame k is at k * FrameInterval exactly: the simulation lands on it (Simulation::advanceTo).
+    const double interval = this->FrameInterval;
+    const double targetTime = static_cast<double>(frame) * interval;
 
     // Builds the live simulation at step 0 (the scene and the input are read only then).
     auto build = [&]()
@@ -1124,8 +1173,8 @@ int vtkPBFSimulation::RequestData(
         {
           checkpoint = &std::prev(after)->second;
         }
-        const bool liveUsable = internals.Live && internals.Live->stepCount() <= targetStep;
-        if (!(liveUsable && (!checkpoint || checkpoint->steps <= internals.Live->stepCount())))
+        const bool liveUsable = internals.Live && internals.Live->time() <= targetTime;
+        if (!(liveUsable && (!checkpoint || checkpoint->time <= internals.Live->time())))
         {
           if (checkpoint)
           {
@@ -1145,30 +1194,44 @@ int vtkPBFSimulation::RequestData(
         }
         pbf::Simulation& simulation = *internals.Live;
         const std::uint64_t resumedFromStep = simulation.stepCount();
-
-        // Step to the frame, one solver step at a time: progress and abort are checked after each.
-        const double total = static_cast<double>(targetStep - resumedFromStep);
-        bool aborted = false;
-        while (simulation.stepCount() < targetStep)
+        const double resumedFromTime = simulation.time();
+        // The next frame the live simulation lands on: it is on frame k (time k * interval
+        // exactly) or between k and k + 1 after an abort.
+        int next = static_cast<int>(std::floor(resumedFromTime / interval));
+        while (static_cast<double>(next + 1) * interval <= resumedFromTime)
         {
-          const pbf::AdvanceReport report = simulation.advance(1);
-          internals.PendingIterations += report.iterations;
-          internals.PendingMilliseconds += report.milliseconds;
-          internals.PendingSteps += static_cast<int>(report.steps);
+          ++next;
+        }
+        while (next > 0 && static_cast<double>(next) * interval > resumedFromTime)
+        {
+          --next;
+        }
+        ++next;
+
+        // Step to the frame, frame by frame (the steps of a frame depend only on the state at its
+        // start, so every way of reaching a frame takes the same steps), one solver step at a
+        // time: progress and abort are checked after each.
+        const double total = targetTime - resumedFromTime;
+        bool aborted = false;
+        while (simulation.time() < targetTime)
+        {
+          pbf::AdvanceReport report;
+          const bool landed =
+            simulation.stepToward(static_cast<double>(next) * interval, report);
+          internals.AddPending(report);
           internals.SimulationMilliseconds += report.milliseconds;
           internals.RequestSteps += static_cast<vtkIdType>(report.steps);
-          if (simulation.stepCount() % static_cast<std::uint64_t>(substeps) == 0)
+          if (landed)
           {
-            const int reached = static_cast<int>(simulation.stepCount() / substeps);
-            internals.RecordFrame(reached);
-            internals.TakeCheckpoint(reached, budget);
+            internals.RecordFrame(next);
+            internals.TakeCheckpoint(next, budget);
+            ++next;
           }
-          this->UpdateProgress(
-            static_cast<double>(simulation.stepCount() - resumedFromStep) / total);
+          this->UpdateProgress((simulation.time() - resumedFromTime) / total);
           // AbortExecute stays set, as VTK has it: whoever set it clears it (SetAbortExecute(0)
           // also marks this algorithm modified, so that the same time asked again re-executes).
-          bool stop = this->GetAbortExecute() && simulation.stepCount() < targetStep;
-          if (configuration.Ranks > 1 && simulation.stepCount() < targetStep)
+          bool stop = this->GetAbortExecute() && simulation.time() < targetTime;
+          if (configuration.Ranks > 1 && simulation.time() < targetTime)
           {
             // A rank that left alone would leave the others waiting for it in the next step's
             // exchange: the ranks agree after every step, and any rank's abort stops them all at
@@ -1185,8 +1248,9 @@ int vtkPBFSimulation::RequestData(
         {
           std::ostringstream text;
           text << this->GetClassName() << " (" << this << "): aborted at step "
-               << simulation.stepCount() << " on the way to frame " << frame << " (step "
-               << targetStep << "); the previous output stays.\n";
+               << simulation.stepCount() << " (t = " << simulation.time()
+               << " s) on the way to frame " << frame << " (t = " << targetTime
+               << " s); the previous output stays.\n";
           vtkOutputWindowDisplayText(text.str().c_str());
           deliverPrevious();
           return 1;
@@ -1299,6 +1363,10 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
      << this->Gravity[2] << ")\n";
   os << indent << "FrameInterval: " << this->FrameInterval << "\n";
   os << indent << "SubstepsPerFrame: " << this->SubstepsPerFrame << "\n";
+  os << indent << "TimeStepping: "
+     << (this->TimeStepping == TIME_STEPPING_AUTOMATIC ? "Automatic" : "Fixed") << "\n";
+  os << indent << "CFLNumber: " << this->CFLNumber << "\n";
+  os << indent << "MaxTimeStep: " << this->MaxTimeStep << "\n";
   os << indent << "NumberOfFrames: " << this->NumberOfFrames << "\n";
   os << indent << "CheckpointInterval: " << this->CheckpointInterval << "\n";
   os << indent << "CheckpointMemoryMB: " << this->CheckpointMemoryMB << "\n";

@@ -19,9 +19,13 @@
  * that one scene can be seeded with different shapes; a point farther than one ParticleSpacing
  * outside the domain is an error naming the point. The input is read at its first time step.
  *
- * Time: frame k is at time k * FrameInterval, for k = 0..NumberOfFrames, and is
- * k * SubstepsPerFrame solver steps of FrameInterval / SubstepsPerFrame from the initial state. A
- * request is answered with the nearest frame. Any frame, asked in any order, is bit-identical to
+ * Time: frame k is at time k * FrameInterval exactly, for k = 0..NumberOfFrames. With
+ * TimeStepping Automatic (the default) the solver's steps follow the CFL condition
+ * (pbf::Simulation::nextTimeStep: CFLNumber spacings per step at the fastest particle or the
+ * scene's fall speed, at most MaxTimeStep), and each frame takes a whole number of them, chosen
+ * from the state at each step, so that it ends on its time; with Fixed, every frame is
+ * SubstepsPerFrame steps of FrameInterval / SubstepsPerFrame. A request is answered with the
+ * nearest frame. Any frame, asked in any order, is bit-identical to
  * a run straight to it, whichever way it is reached: the frame just delivered is handed out again
  * without stepping or copying; a later frame steps the live simulation on; an earlier one resumes
  * from the latest checkpoint at or before it (see CheckpointInterval), or from the initial state
@@ -43,9 +47,10 @@
  * the physics change): Time, Frame, AverageDensityError and MaxDensityError [%] (mean and
  * maximum of max(rho_i / rho_0 - 1, 0)), AverageNeighbors, SolverIterations (constraint
  * projections per step, averaged over the frame's substeps), MillisecondsPerStep (wall time of
- * the frame's solver steps per step, queued GPU work included), MaxSpeed [m/s], KineticEnergy
- * [J], Particles and Backend. Frame 0 took no step: its SolverIterations and MillisecondsPerStep
- * are NaN.
+ * the frame's solver steps per step, queued GPU work included), Substeps (the frame's solver
+ * steps), MinTimeStep and MaxTimeStep [s] (the smallest and largest of their dt), MaxSpeed [m/s],
+ * KineticEnergy [J], Particles and Backend. Frame 0 took no step: its SolverIterations,
+ * MillisecondsPerStep, Substeps and time steps are NaN.
  *
  * Parallel runs (mpiexec pvbatch, pvserver with N ranks): with DecomposeAcrossRanks on (the
  * default) and one piece per rank of the global vtkMultiProcessController, each rank simulates a
@@ -97,6 +102,12 @@ public:
     BACKEND_SERIAL = 3
   };
 
+  enum TimeSteppings
+  {
+    TIME_STEPPING_FIXED = 0,     // SubstepsPerFrame equal steps per frame
+    TIME_STEPPING_AUTOMATIC = 1, // CFL-limited steps, at most MaxTimeStep, landing on each frame
+  };
+
   enum Precisions
   {
     PRECISION_SINGLE = 0,
@@ -139,9 +150,11 @@ public:
 
   ///@{
   /**
-   * Solver: constraint projections per step, epsilon of eq. 11 (relaxation), k, n and delta_q
-   * (a fraction of h) of the artificial pressure s_corr (eq. 13), c of the XSPH viscosity
-   * (eq. 17), epsilon of the vorticity confinement (eq. 16) [m/s], whether the density constraint
+   * Solver: constraint projections per step (the cap when AdaptiveIterations is on), epsilon of
+   * eq. 11 (relaxation), k (in units of standard gravity: the tensile term's push on a flat free
+   * surface), n and delta_q (a fraction of h) of the artificial pressure s_corr (eq. 13), alpha of
+   * the XSPH viscosity (eq. 17; nu = alpha h v_scene), epsilon of the vorticity confinement
+   * (eq. 16) [m/s], whether the density constraint
    * is unilateral (C_i clamped at 0, so a free surface is not pulled together), whether the
    * domain walls mirror the fluid near them (so that fluid at rest against a wall reads rho_0)
    * and gravity [m/s^2]. Meanings and units are those of pbf::Parameters.
@@ -172,10 +185,19 @@ public:
 
   ///@{
   /**
-   * Time: the interval between animation frames [s] (default 1/60), the solver steps per frame
-   * (default 4, so the solver's time step is FrameInterval / SubstepsPerFrame) and the number of
-   * frames after the initial one (default 120).
+   * Time: the interval between animation frames [s] (default 1/60), how the solver's step is
+   * chosen (TimeStepping: TIME_STEPPING_AUTOMATIC, the default, or TIME_STEPPING_FIXED), for
+   * Automatic the CFL number (default 0.4: the fastest particle moves at most that many spacings
+   * per step) and the largest step MaxTimeStep [s] (default 1/240), for Fixed the solver steps
+   * per frame (default 4, so the solver's time step is FrameInterval / SubstepsPerFrame), and the
+   * number of frames after the initial one (default 120).
    */
+  vtkSetClampMacro(TimeStepping, int, TIME_STEPPING_FIXED, TIME_STEPPING_AUTOMATIC);
+  vtkGetMacro(TimeStepping, int);
+  vtkSetClampMacro(CFLNumber, double, 0.01, 1.0);
+  vtkGetMacro(CFLNumber, double);
+  vtkSetClampMacro(MaxTimeStep, double, 1e-7, 10.0);
+  vtkGetMacro(MaxTimeStep, double);
   vtkSetClampMacro(FrameInterval, double, 1e-6, 10.0);
   vtkGetMacro(FrameInterval, double);
   vtkSetClampMacro(SubstepsPerFrame, int, 1, 10000);
@@ -188,8 +210,8 @@ public:
   /**
    * Adaptive iterations: when on, a solver step stops projecting the density constraint as soon
    * as the mean compression max(rho_i / rho_0 - 1, 0) is at or below DensityErrorTolerance
-   * [percent] (default 0.1), and SolverIterations becomes the most it may take. Off (the
-   * default): always SolverIterations projections per step.
+   * [percent] (default 0.2) after the first projection, and SolverIterations becomes the most it
+   * may take. On by default; off: always SolverIterations projections per step.
    */
   vtkSetMacro(AdaptiveIterations, bool);
   vtkGetMacro(AdaptiveIterations, bool);
@@ -302,6 +324,9 @@ protected:
 
   double FrameInterval;
   int SubstepsPerFrame;
+  int TimeStepping;
+  double CFLNumber;
+  double MaxTimeStep;
   int NumberOfFrames;
 
   int CheckpointInterval;

@@ -25,6 +25,8 @@ CpuStepper<Real>::CpuStepper(bool parallel, const Parameters& parameters,
   parameters_.validate();
   checkBatch(parameters_, initial);
   coefficients_ = Coefficients<Real>::make(parameters_);
+  lattice_ = calibrateLattice(parameters_);
+  setTimeStep(parameters_.timeStep);
   geometry_ = makeGridGeometry<Real>(parameters_.domain, parameters_.smoothingLength());
   cellOffsets_.assign(std::size_t(geometry_.cellCount()) + 1, 0);
   append(initial);
@@ -63,7 +65,15 @@ void CpuStepper<Real>::forEachParticle(Stage&& stage)
 }
 
 template <class Real>
-FluidView<Real> CpuStepper<Real>::view()
+void CpuStepper<Real>::setTimeStep(double dt)
+{
+  checkTimeStep(dt);
+  dt_ = dt;
+  time_ = StepTime<Real>::make(parameters_, lattice_, dt);
+}
+
+template <class Real>
+FluidView<Real> CpuStepper<Real>::view(bool tensile)
 {
   FluidView<Real> f{};
   f.x = x_.data();
@@ -75,6 +85,8 @@ FluidView<Real> CpuStepper<Real>::view()
   f.omega = omega_.data();
   f.grid = GridView<Real>{ geometry_, cellOffsets_.data(), keys_.data() };
   f.c = coefficients_;
+  f.time = &time_;
+  f.tensile = tensile;
   return f;
 }
 
@@ -122,6 +134,7 @@ void CpuStepper<Real>::step()
   // Neighbours are found once per step, on the predicted positions (Algorithm 1, line 7).
   sortByCell();
   const FluidView<Real> f = view();
+  const FluidView<Real> first = view(true); // the first projection adds s_corr
   const double tolerance = parameters_.densityErrorTolerance / 100.0;
   report_ = StepReport{};
   for (int iteration = 0; iteration < parameters_.solverIterations; ++iteration)
@@ -129,14 +142,16 @@ void CpuStepper<Real>::step()
     forEachParticle([&](std::uint32_t i) { densityAndLambda(i, f); });
     if (tolerance > 0)
     {
-      // Adaptive mode: the constraint already holds well enough, no need to project again.
+      // Adaptive mode: the constraint already holds well enough, no need to project again. The
+      // first projection always runs: it carries the step's tensile push.
       report_.densityError = meanDensityError();
-      if (report_.densityError <= tolerance)
+      if (iteration > 0 && report_.densityError <= tolerance)
       {
         break;
       }
     }
-    forEachParticle([&](std::uint32_t i) { positionCorrection(i, f); });
+    const FluidView<Real>& pass = iteration == 0 ? first : f;
+    forEachParticle([&](std::uint32_t i) { positionCorrection(i, pass); });
     forEachParticle([&](std::uint32_t i) { applyCorrection(i, f); });
     ++report_.iterations;
   }

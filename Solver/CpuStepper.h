@@ -20,6 +20,8 @@ public:
 
   void step() override;
   void append(const ParticleBatch& batch) override;
+  void setTimeStep(double dt) override;
+  double timeStep() const override { return dt_; }
 
   std::size_t size() const override { return x_.size(); }
   Backend backend() const override { return parallel_ ? Backend::OpenMP : Backend::Serial; }
@@ -43,7 +45,7 @@ private:
   double meanDensityError();     // of density_, summed in fixed blocks: thread-count independent
   template <class Stage>
   void forEachParticle(Stage&& stage);
-  FluidView<Real> view();
+  FluidView<Real> view(bool tensile = false);
   HostParticles<Real> particles() { return { x_, v_, density_, lambda_, id_ }; }
   ConstHostParticles<Real> particles() const { return { x_, v_, density_, lambda_, id_ }; }
   void sortByCell();             // keys from p_, counting sort, gather every array
@@ -52,6 +54,9 @@ private:
   bool parallel_;
   Parameters parameters_;
   Coefficients<Real> coefficients_;
+  LatticeCalibration lattice_;
+  double dt_ = 0;
+  StepTime<Real> time_{};
   GridGeometry<Real> geometry_;
 
   std::vector<Vec3<Real>> x_, p_, v_, scratch_, omega_;

@@ -9,6 +9,7 @@
 #include "Parameters.h"
 #include "Vec3.h"
 
+#include <algorithm>
 #include <cstdint>
 
 namespace pbf
@@ -23,11 +24,10 @@ struct Coefficients
   Real inverseRestDensity;  // 1 / rho_0
   Real massOverRho0;        // m / rho_0: scales the constraint gradient (eq. 8)
   Real relaxation;          // epsilon (eq. 11) times the bulk denominator
-  Real sCorrK, sCorrN;      // k (eq. 13) in units of lambda: k / bulk denominator
+  Real jacobiRelaxation;    // omega on lambda (LatticeCalibration::jacobiRelaxation)
+  Real sCorrN;              // n (eq. 13)
   Real inverseWDeltaQ;      // 1 / W(delta_q) (eq. 13)
-  Real xsphC;
   Real vorticityEpsilon;
-  Real dt;
   Vec3<Real> gravity;
   Vec3<Real> boxMin, boxMax;
   bool unilateral;
@@ -46,20 +46,46 @@ struct Coefficients
     c.inverseRestDensity = static_cast<Real>(1.0 / p.restDensity);
     c.massOverRho0 = static_cast<Real>(m / p.restDensity);
     c.relaxation = static_cast<Real>(p.relaxation * lattice.gradientSum);
-    c.sCorrK = static_cast<Real>(p.sCorrK / lattice.gradientSum);
+    c.jacobiRelaxation = static_cast<Real>(lattice.jacobiRelaxation);
     c.sCorrN = static_cast<Real>(p.sCorrN);
     const auto k64 = Kernels<double>::make(h);
     const double dq = p.sCorrDeltaQ * h;
     c.inverseWDeltaQ = static_cast<Real>(1.0 / k64.poly6(dq * dq));
-    c.xsphC = static_cast<Real>(p.xsphC);
     c.vorticityEpsilon = static_cast<Real>(p.vorticityEpsilon);
-    c.dt = static_cast<Real>(p.timeStep);
     c.gravity = Vec3<Real>::from(p.gravity);
     c.boxMin = Vec3<Real>::from(p.domain.min);
     c.boxMax = Vec3<Real>::from(p.domain.max);
     c.unilateral = p.unilateral;
     c.mirrorWalls = p.mirrorWalls;
     return c;
+  }
+};
+
+// What depends on the step's size dt, which the automatic time stepping changes from step to step.
+// The stages read it through a pointer (FluidView::time), so that a GPU step captured once as a
+// graph reads the current values from device memory.
+template <class Real>
+struct StepTime
+{
+  Real dt;        // [s]
+  Real inverseDt; // 1 / dt
+  // s_corr's coefficient for this step (eq. 13 as an acceleration): k g0 dt^2 over the lattice's
+  // surface push, so that a flat free surface is pushed by k g0 dt^2 in the step.
+  Real tensile;
+  Real xsph;      // XSPH blend c of eq. 17 for this step: nu dt / (beta h^2), Parameters::xsphNu
+
+  static StepTime make(const Parameters& p, const LatticeCalibration& lattice, double dt)
+  {
+    StepTime t;
+    t.dt = static_cast<Real>(dt);
+    t.inverseDt = static_cast<Real>(1.0 / dt);
+    t.tensile =
+      static_cast<Real>(p.sCorrK * kStandardGravity * dt * dt / lattice.tensileSurfacePush);
+    // At most kMaxXsphBlend: explicit smoothing beyond it is unstable. Automatic steps stay below
+    // (Simulation::nextTimeStep); a long fixed step is clamped there.
+    t.xsph = static_cast<Real>(
+      std::min(kMaxXsphBlend, p.xsphNu() * dt / lattice.xsphSecondMoment));
+    return t;
   }
 };
 
@@ -86,6 +112,10 @@ struct FluidView
   Real* omegaLength;
   Neighbors grid;
   Coefficients<Real> c;
+  const StepTime<Real>* time; // this step's dt and what follows from it
+  // The tensile term is a once-per-step push: positionCorrection adds it in the step's first
+  // projection only (so its displacement is k g0 dt^2 whatever the number of iterations).
+  bool tensile;
 };
 
 // Collision with the domain box: project the particle back inside (the paper's simple response).
@@ -192,9 +222,10 @@ PBF_HD PBF_INLINE void forEachImage(const WallMirrors<Real>& m, const Vec3<Real>
 template <class Real, class Neighbors>
 PBF_HD PBF_INLINE void predictPosition(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
-  const Vec3<Real> v = f.v[i] + f.c.gravity * f.c.dt;
+  const Real dt = f.time->dt;
+  const Vec3<Real> v = f.v[i] + f.c.gravity * dt;
   f.v[i] = v;
-  f.p[i] = collideWithBox(f.x[i] + v * f.c.dt, f.c);
+  f.p[i] = collideWithBox(f.x[i] + v * dt, f.c);
 }
 
 // Eq. 2 (poly6 density), eq. 1 (C_i = rho_i / rho_0 - 1), eq. 8 (spiky constraint gradients) and
@@ -227,16 +258,18 @@ PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real, N
     C = Real(0);
   }
   f.density[i] = rho;
-  f.lambda[i] = -C / (sumGradJ2 + dot(gradI, gradI) + f.c.relaxation);
+  f.lambda[i] = -C * f.c.jacobiRelaxation / (sumGradJ2 + dot(gradI, gradI) + f.c.relaxation);
 }
 
-// Eq. 13 (s_corr, the artificial pressure against clustering) and eq. 14 (delta p_i).
+// Eq. 13 (s_corr, the artificial pressure against clustering) and eq. 14 (delta p_i). s_corr
+// enters in the step's first projection only, with this step's coefficient (StepTime::tensile).
 template <class Real, class Neighbors>
 PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
   const Vec3<Real> pi = f.p[i];
   const WallMirrors<Real> mirrors = nearWalls(pi, f.c);
   const Real lambdaI = f.lambda[i];
+  const Real tensile = f.tensile ? f.time->tensile : Real(0);
   Vec3<Real> delta{ Real(0), Real(0), Real(0) };
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
     const Real lambdaJ = f.lambda[j];
@@ -246,7 +279,7 @@ PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real,
       if (r2 < f.c.kernels.h2 && !(original && j == i))
       {
         const Real ratio = f.c.kernels.poly6Within(r2) * f.c.inverseWDeltaQ;
-        const Real sCorr = -f.c.sCorrK * power(ratio, f.c.sCorrN);
+        const Real sCorr = tensile == Real(0) ? Real(0) : -tensile * power(ratio, f.c.sCorrN);
         delta += f.c.kernels.spikyGradientWithin(r, r2) * (lambdaI + lambdaJ + sCorr);
       }
     });
@@ -266,7 +299,7 @@ PBF_HD PBF_INLINE void applyCorrection(std::uint32_t i, const FluidView<Real, Ne
 template <class Real, class Neighbors>
 PBF_HD PBF_INLINE void updateVelocity(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
-  f.v[i] = (f.p[i] - f.x[i]) * (Real(1) / f.c.dt);
+  f.v[i] = (f.p[i] - f.x[i]) * f.time->inverseDt;
   if (f.volume)
   {
     f.volume[i] = f.c.mass / f.density[i];
@@ -312,7 +345,7 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   {
     f.omegaLength[i] = length(omega);
   }
-  f.scratch[i] = vi + smoothing * f.c.xsphC;
+  f.scratch[i] = vi + smoothing * f.time->xsph;
 }
 
 // Eq. 16: f_i = epsilon (N x omega_i), N = eta / |eta|, eta = grad |omega|_i (SPH difference
@@ -339,7 +372,7 @@ PBF_HD PBF_INLINE void vorticityConfinement(std::uint32_t i, const FluidView<Rea
   if (etaLength * f.c.kernels.h > Real(1e-4) * magI && etaLength > Real(0))
   {
     const Vec3<Real> N = eta * (Real(1) / etaLength);
-    v += cross(N, omegaI) * (f.c.vorticityEpsilon * f.c.dt);
+    v += cross(N, omegaI) * (f.c.vorticityEpsilon * f.time->dt);
   }
   f.v[i] = v;
 }

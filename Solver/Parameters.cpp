@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <vector>
 
 namespace pbf
 {
@@ -80,7 +81,94 @@ void requireFits(const std::string& field, double fieldValue, const std::string&
   reject(field, fieldValue, rule.str());
 }
 
+// max_k |G(k)|^2 / D on the lattice (LatticeCalibration::jacobiGain). |G|^2 is even in k and the
+// lattice is cubic, so k_x >= k_y >= k_z >= 0 in [0, pi / s] covers every case: a coarse grid,
+// then a finer one around its best point.
+double jacobiGain(double s, double h)
+{
+  const auto kernels = Kernels<double>::make(h);
+  const int reach = static_cast<int>(std::ceil(h / s));
+  std::vector<Vec3d> r, g;
+  double D = 0.0;
+  for (int i = -reach; i <= reach; ++i)
+  {
+    for (int j = -reach; j <= reach; ++j)
+    {
+      for (int k = -reach; k <= reach; ++k)
+      {
+        const Vec3d q{ i * s, j * s, k * s };
+        const double q2 = dot(q, q);
+        if (q2 > 0.0 && q2 < kernels.h2)
+        {
+          r.push_back(q);
+          g.push_back(kernels.spikyGradient(q, q2));
+          D += dot(g.back(), g.back());
+        }
+      }
+    }
+  }
+  const auto gain = [&](const Vec3d& k) {
+    Vec3d G{ 0, 0, 0 };
+    for (std::size_t m = 0; m < r.size(); ++m)
+    {
+      G += g[m] * std::sin(dot(k, r[m]));
+    }
+    return dot(G, G) / D;
+  };
+  const double pi = 3.14159265358979323846;
+  const int coarse = 12;
+  const double step = pi / s / coarse;
+  double best = 0.0;
+  Vec3d at{ 0, 0, 0 };
+  for (int a = 0; a <= coarse; ++a)
+  {
+    for (int b = 0; b <= a; ++b)
+    {
+      for (int c = 0; c <= b; ++c)
+      {
+        const Vec3d k{ a * step, b * step, c * step };
+        const double value = gain(k);
+        if (value > best)
+        {
+          best = value;
+          at = k;
+        }
+      }
+    }
+  }
+  const Vec3d centre = at;
+  for (int a = -4; a <= 4; ++a)
+  {
+    for (int b = -4; b <= 4; ++b)
+    {
+      for (int c = -4; c <= 4; ++c)
+      {
+        const Vec3d k = centre + Vec3d{ a * step / 8, b * step / 8, c * step / 8 };
+        best = std::max(best, gain(k));
+      }
+    }
+  }
+  return best;
+}
+
 } // namespace
+
+double Parameters::sceneSpeed() const
+{
+  if (sceneSpeedHint > 0)
+  {
+    return sceneSpeedHint;
+  }
+  const double g = length(gravity);
+  if (!(g > 0))
+  {
+    return 0.0;
+  }
+  const Vec3d u = gravity * (1.0 / g);
+  const double extent = std::abs(u.x) * (domain.max.x - domain.min.x) +
+    std::abs(u.y) * (domain.max.y - domain.min.y) + std::abs(u.z) * (domain.max.z - domain.min.z);
+  return std::sqrt(2.0 * g * extent);
+}
 
 void Parameters::validate() const
 {
@@ -113,16 +201,28 @@ void Parameters::validate() const
   {
     reject("sCorrDeltaQ", sCorrDeltaQ, "must lie in (0, 1) (a fraction of h)");
   }
-  requireFinite("xsphC", xsphC);
-  if (xsphC < 0.0 || xsphC > 1.0)
+  requireNonNegative("xsphViscosity", xsphViscosity);
+  if (xsphViscosity > 1.0)
   {
-    reject("xsphC", xsphC, "must lie in [0, 1]");
+    reject("xsphViscosity", xsphViscosity,
+      "must lie in [0, 1] (the artificial viscosity alpha of nu = alpha h v_scene)");
   }
+  requireNonNegative("sceneSpeedHint", sceneSpeedHint);
   requireNonNegative("vorticityEpsilon", vorticityEpsilon);
   requireFinite("gravity.x", gravity.x);
   requireFinite("gravity.y", gravity.y);
   requireFinite("gravity.z", gravity.z);
   requirePositive("timeStep", timeStep);
+  if (timeStepping != TimeStepping::Fixed && timeStepping != TimeStepping::Automatic)
+  {
+    reject("timeStepping", static_cast<double>(timeStepping), "must be Fixed (0) or Automatic (1)");
+  }
+  requireFinite("cflNumber", cflNumber);
+  if (cflNumber <= 0.0 || cflNumber > 1.0)
+  {
+    reject("cflNumber", cflNumber,
+      "must lie in (0, 1]: a particle may move at most that fraction of a spacing per step");
+  }
   const char* axis[3] = { "x", "y", "z" };
   const double lo[3] = { domain.min.x, domain.min.y, domain.min.z };
   const double hi[3] = { domain.max.x, domain.max.y, domain.max.z };
@@ -159,15 +259,15 @@ void validatePrecision(const Parameters& p)
   requireFits<Real>("particleSpacing", s, "mass / restDensity [m^3]", lattice.mass / p.restDensity);
   requireFits<Real>("relaxation", p.relaxation, "epsilon times the bulk denominator of eq. 11",
     p.relaxation * lattice.gradientSum);
-  requireFits<Real>("sCorrK", p.sCorrK, "k over the bulk denominator of eq. 11",
-    p.sCorrK / lattice.gradientSum, true);
   const double dq = p.sCorrDeltaQ * h;
   const double wDeltaQ = kernels.poly6(dq * dq);
   requireFits<Real>("sCorrDeltaQ", p.sCorrDeltaQ, "1 / W(delta_q)", 1.0 / wDeltaQ);
   // s_corr is largest for coincident particles: k (W(0) / W(delta_q))^n.
-  requireFits<Real>("sCorrN", p.sCorrN, "the largest s_corr, k (W(0) / W(delta_q))^n",
-    p.sCorrK / lattice.gradientSum * std::pow(kernels.poly6(0.0) / wDeltaQ, p.sCorrN), true);
-  requireFits<Real>("xsphC", p.xsphC, "xsphC", p.xsphC, true);
+  requireFits<Real>("sCorrN", p.sCorrN, "the largest s_corr factor (W(0) / W(delta_q))^n",
+    std::pow(kernels.poly6(0.0) / wDeltaQ, p.sCorrN), true);
+  requireFits<Real>("sCorrK", p.sCorrK, "k g0 over the tensile term's surface push",
+    p.sCorrK * kStandardGravity / lattice.tensileSurfacePush, true);
+  requireFits<Real>("xsphViscosity", p.xsphViscosity, "xsphViscosity", p.xsphViscosity, true);
   requireFits<Real>("vorticityEpsilon", p.vorticityEpsilon, "vorticityEpsilon",
     p.vorticityEpsilon, true);
   requireFits<Real>("timeStep", p.timeStep, "timeStep", p.timeStep);
@@ -204,31 +304,46 @@ template void validatePrecision<double>(const Parameters& p);
 
 LatticeCalibration calibrateLattice(const Parameters& p)
 {
-  // Sum poly6 and the squared spiky gradients over every lattice site within h of a site.
+  // Sums over every lattice site within h of a site at the origin.
   const double s = p.particleSpacing;
   const double h = p.smoothingLength();
   const auto kernels = Kernels<double>::make(h);
   const int reach = static_cast<int>(std::ceil(h / s));
+  const double dq = p.sCorrDeltaQ * h;
+  const double wDeltaQ = kernels.poly6(dq * dq);
   double sum = 0.0;
   double gradient2 = 0.0;
+  double tensile = 0.0;     // below a surface site: sites with j <= 0, pushing along +y
+  double secondMoment = 0.0;
   for (int i = -reach; i <= reach; ++i)
   {
     for (int j = -reach; j <= reach; ++j)
     {
       for (int k = -reach; k <= reach; ++k)
       {
-        const Vec3d r{ i * s, j * s, k * s };
+        // r = p_origin - p_site
+        const Vec3d r{ -i * s, -j * s, -k * s };
         const double r2 = dot(r, r);
-        sum += kernels.poly6(r2);
+        const double w = kernels.poly6(r2);
+        sum += w;
         const Vec3d g = kernels.spikyGradient(r, r2);
         gradient2 += dot(g, g);
+        secondMoment += w * r2;
+        if (j <= 0 && r2 < kernels.h2 && r2 > 0.0)
+        {
+          tensile += std::pow(w / wDeltaQ, p.sCorrN) * -g.y;
+        }
       }
     }
   }
   LatticeCalibration c;
+  c.jacobiGain = jacobiGain(s, h);
+  c.jacobiRelaxation = std::min(1.0, kJacobiGainTarget / c.jacobiGain);
   c.mass = p.restDensity / sum;
   const double massOverRho0 = c.mass / p.restDensity;
   c.gradientSum = massOverRho0 * massOverRho0 * gradient2;
+  c.tensileSurfacePush = massOverRho0 * tensile;
+  c.xsphSecondMoment = massOverRho0 * secondMoment / 6.0;
   return c;
 }
 
@@ -239,8 +354,11 @@ std::string describe(const Parameters& p)
       << " m=" << calibratedParticleMass(p) << " iterations=" << p.solverIterations
       << (p.densityErrorTolerance > 0 ? " (adaptive to " + std::to_string(p.densityErrorTolerance) + "%)" : "")
       << " epsilon=" << p.relaxation << " k=" << p.sCorrK << " n=" << p.sCorrN
-      << " dq=" << p.sCorrDeltaQ << " c=" << p.xsphC << " vorticity=" << p.vorticityEpsilon
-      << " dt=" << p.timeStep;
+      << " dq=" << p.sCorrDeltaQ << " xsph=" << p.xsphViscosity << " (nu " << p.xsphNu() << ")" << " vorticity=" << p.vorticityEpsilon
+      << (p.timeStepping == TimeStepping::Automatic
+             ? " dt=auto (CFL " + std::to_string(p.cflNumber) + ", at most " +
+               std::to_string(p.timeStep) + ")"
+             : " dt=" + std::to_string(p.timeStep));
   return out.str();
 }
 

@@ -16,10 +16,27 @@ public:
   using std::runtime_error::runtime_error;
 };
 
+// Standard gravity [m/s^2]: the unit of the tensile term's strength (Parameters::sCorrK).
+constexpr double kStandardGravity = 9.80665;
+// The Jacobi gain (LatticeCalibration::jacobiGain) that the relaxation of lambda brings every
+// smoothing ratio down to: 2, where the most amplified pattern no longer grows. Measured on a
+// 120-layer column at rest (0.2 s): 2.8 (omega = 1 at h = 2 s) boils at 1.5 m/s, 2.0 at 0.7, 1.0
+// at 0.4 for twice the iterations; h = 3 s blows up within 24 steps with omega = 1.
+constexpr double kJacobiGainTarget = 2.0;
+// The largest XSPH blend per step (nu dt / (beta h^2)) that explicit smoothing keeps stable.
+constexpr double kMaxXsphBlend = 0.5;
+
 struct Box
 {
   Vec3d min{ 0, 0, 0 };
   Vec3d max{ 1, 1, 1 };
+};
+
+// How the solver's step is chosen (Simulation.h).
+enum class TimeStepping
+{
+  Fixed,     // every step is timeStep
+  Automatic, // each step follows the CFL condition, at most timeStep (Simulation::nextTimeStep)
 };
 
 struct Parameters
@@ -30,31 +47,59 @@ struct Parameters
   double smoothingRatio = 2.0;    // h / s; the support radius h of poly6 and spiky
 
   // Solver (Macklin & Mueller 2013)
-  int solverIterations = 4;     // constraint projections per step (paper: 2-4); the most when
-                                // adaptive
-  // Adaptive mode when > 0: iterate until the mean compression max(rho_i / rho_0 - 1, 0) is at or
-  // below this many percent, or solverIterations are done. 0: always solverIterations.
-  double densityErrorTolerance = 0.0;
-  // epsilon of eq. 11 and k of eq. 13 are in units of the bulk denominator of eq. 11 (see
-  // LatticeCalibration): the paper's values assume its own unit system, these stay meaningful in SI
-  // at any h. epsilon = 0.01 softens the bulk constraint by 1%; k = 0.1 makes a pair at delta_q
-  // push apart like a 10% compression.
+  int solverIterations = 40;    // constraint projections per step: the most when adaptive (the
+                                // default), every step's count when densityErrorTolerance is 0
+  // Adaptive mode when > 0: after the first projection, iterate until the mean compression
+  // max(rho_i / rho_0 - 1, 0) is at or below this many percent, or solverIterations are done.
+  // 0: always solverIterations (the paper's fixed count).
+  double densityErrorTolerance = 0.2;
+  // epsilon of eq. 11 is in units of the bulk denominator of eq. 11 (see LatticeCalibration): it
+  // softens the constraint by that fraction at any h, s and rho_0 (the paper's value assumes its
+  // own unit system). It is a regularisation for particles with few neighbours, not a stiffness:
+  // a relative softening per projection has the same effect at any time step.
   double relaxation = 0.01;     // epsilon of eq. 11
-  double sCorrK = 0.1;          // k of eq. 13 (paper: 0.1)
+  // The tensile term s_corr (eq. 13) as an artificial-pressure acceleration: once per step, in the
+  // first projection, each pair closer than h pushes apart by k g0 (W / W(delta_q))^n scaled so
+  // that a particle on the flat free surface of the rest lattice is pushed outward by sCorrK x
+  // standard gravity g0 = 9.80665 m/s^2 (LatticeCalibration::tensileSurfacePush). A displacement
+  // of a dt^2, not a fixed push per iteration: the same acceleration at any dt, s, h / s and
+  // number of iterations. Below 1 it cannot lift a surface against gravity.
+  double sCorrK = 0.1;          // k of eq. 13, in units of g0
   double sCorrN = 4.0;          // n of eq. 13 (paper: 4)
   double sCorrDeltaQ = 0.2;     // delta_q of eq. 13 as a fraction of h (paper: 0.1..0.3)
-  double xsphC = 0.01;          // c of eq. 17 (paper: 0.01); the sum is weighted by m/rho_j
+  // XSPH (eq. 17) as an artificial viscosity alpha: nu = alpha h v_scene [m^2/s] (xsphNu()), the
+  // form of SPH's artificial viscosity (alpha h c), and each step blends c = nu dt / (beta h^2)
+  // of the neighbours' velocity (LatticeCalibration::xsphSecondMoment: the blend whose smoothing
+  // approximates nu laplace(v)). So halving dt halves the blend per step and keeps the smoothing
+  // per second; at the CFL step the blend per step is the same at every spacing and h / s (about
+  // 4 alpha), while nu itself vanishes as h does, so finer runs converge. It damps the
+  // particle-scale velocity noise of the Jacobi projections: 0.05 keeps a 120-layer column at
+  // rest, where 0.001 (the paper's c = 0.01 at 240 steps/s) lets it boil at 1-2 m/s.
+  double xsphViscosity = 0.05;
   double vorticityEpsilon = 0.01; // epsilon of eq. 16 [m/s]: confinement acceleration per |omega|
   bool unilateral = true;       // clamp C_i at 0: a free surface is not pulled together
   bool mirrorWalls = true;      // walls mirror the fluid near them (Equations.h, WallMirrors)
   Vec3d gravity{ 0.0, -9.81, 0.0 };
 
   // Time
-  double timeStep = 1.0 / 240.0; // one solver step dt [s]
+  TimeStepping timeStepping = TimeStepping::Automatic;
+  // Fixed: every solver step dt [s]. Automatic: the largest step (MaxTimeStep in the plugin).
+  double timeStep = 1.0 / 240.0;
+  // Automatic: dt = cflNumber s / v, v the larger of the fastest particle's speed and the scene's
+  // fall speed (Simulation::nextTimeStep says why); also dt <= cflNumber sqrt(s / |g|) and the
+  // XSPH diffusion limit.
+  double cflNumber = 0.4;
 
   Box domain;
 
+  // The scene's speed scale v_scene = sqrt(v0^2 + 2 |g| L) [m/s], v0 the fastest initial or
+  // emitted speed and L the domain's extent along gravity. Simulation fills it in from the scene;
+  // 0 means sqrt(2 |g| L) from the domain alone (sceneSpeed()).
+  double sceneSpeedHint = 0;
+
   double smoothingLength() const { return smoothingRatio * particleSpacing; }
+  double sceneSpeed() const;
+  double xsphNu() const { return xsphViscosity * smoothingLength() * sceneSpeed(); } // [m^2/s]
 
   // Throws InvalidInput naming the first bad field and its value.
   void validate() const;
@@ -74,8 +119,23 @@ struct LatticeCalibration
   // h = 2 s reads about 1% high with m = rho_0 s^3.
   double mass = 0;
   // sum_j |grad_{p_j} C_i|^2 at rest [1/m^2]: the denominator of eq. 11 in the bulk. Its inverse
-  // is the natural unit of lambda, used to make epsilon and s_corr independent of h and rho_0.
+  // is the natural unit of lambda, used to make epsilon independent of h and rho_0.
   double gradientSum = 0;
+  // sum_j (m / rho_0) (W_ij / W(delta_q))^n (-grad W_ij) . n over the sites below a particle on a
+  // flat free surface of the lattice (n its outward normal) [1/m]: the tensile term's push there
+  // per unit of s_corr's coefficient. k g0 dt^2 over it makes the push k g0 dt^2.
+  double tensileSurfacePush = 0;
+  // beta h^2 = (1/6) sum_j (m / rho_0) W_ij |r_ij|^2 [m^2]: the XSPH sum of a smooth velocity
+  // field is beta h^2 laplace(v), so a blend c per step is a viscosity c beta h^2 / dt.
+  double xsphSecondMoment = 0;
+  // The Jacobi projection's largest gain on the lattice, max over wave vectors k of
+  // |G(k)|^2 / D, G(k) = sum_j grad W_ij sin(k . r_ij), D = sum_j |grad W_ij|^2: a correction
+  // pattern of wave vector k is multiplied by 1 - omega |G(k)|^2 / D per projection, so omega
+  // times this must stay below 2. It grows with the neighbours: 2.8 at h = 2 s, 6.7 at h = 3 s.
+  double jacobiGain = 0;
+  // omega, the factor on lambda (eq. 11): kJacobiGainTarget / jacobiGain, at most 1, so that
+  // every smoothing ratio has the same margin against the projection's overshoot.
+  double jacobiRelaxation = 1;
 };
 LatticeCalibration calibrateLattice(const Parameters& p);
 

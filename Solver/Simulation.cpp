@@ -63,22 +63,40 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
     throw InvalidInput("particle count = 0: the fluid is empty");
   }
   checkEmitters(initial.position.size());
-  stepper_ = communicator
-    ? distributed::makeSubdomainStepper(*communicator, backend, precision, parameters_, initial)
-    : makeStepper(backend, precision, parameters_, initial);
-  nextId_ = static_cast<std::int64_t>(initial.position.size());
-
-  // The divergence limits, from the initial state and the scene.
-  checkInterval_ = backend == Backend::CUDA ? 0 : 1;
-  const Health start = stepper_->health();
-  double v0 = start.maxSpeed;
+  // The scene's speed scale, from the initial velocities and the emitters: the floor of the
+  // automatic step and the scale of XSPH's viscosity (Parameters::sceneSpeedHint).
+  double v0 = 0.0;
+  for (const Vec3d& v : initial.velocity)
+  {
+    v0 = std::max(v0, length(v)); // a NaN velocity is rejected by the stepper below
+  }
   for (const Emitter& e : scene_.emitters)
   {
     v0 = std::max(v0, e.speed);
   }
   const double g = length(parameters_.gravity);
   const double fall = g > 0 ? extentAlong(scene_.domain, parameters_.gravity * (1.0 / g)) : 0.0;
-  limits_.sceneSpeed = std::sqrt(v0 * v0 + 2.0 * g * fall);
+  const double sceneSpeed = std::sqrt(v0 * v0 + 2.0 * g * fall);
+  if (parameters_.sceneSpeedHint == 0.0 && std::isfinite(sceneSpeed))
+  {
+    parameters_.sceneSpeedHint = sceneSpeed;
+  }
+  stepper_ = communicator
+    ? distributed::makeSubdomainStepper(*communicator, backend, precision, parameters_, initial)
+    : makeStepper(backend, precision, parameters_, initial);
+  nextId_ = static_cast<std::int64_t>(initial.position.size());
+
+  // The divergence limits, from the initial state and the scene.
+  const bool automatic = parameters_.timeStepping == TimeStepping::Automatic;
+  checkInterval_ = backend == Backend::CUDA && !automatic ? 0 : 1;
+  const LatticeCalibration lattice = calibrateLattice(parameters_);
+  xsphStepLimit_ = parameters_.xsphNu() > 0
+    ? kMaxXsphBlend * lattice.xsphSecondMoment / parameters_.xsphNu()
+    : std::numeric_limits<double>::infinity();
+  const Health start = stepper_->health();
+  health_ = start;
+  healthValid_ = true;
+  limits_.sceneSpeed = sceneSpeed;
   limits_.maxSpeed = std::max(
     20.0 * limits_.sceneSpeed, 2.0 * parameters_.smoothingLength() / parameters_.timeStep);
   limits_.maxDensityError = 3.0 * std::max(1.0, 1.0 + start.maxDensityError) - 1.0;
@@ -126,6 +144,8 @@ void Simulation::checkEmitters(std::size_t initialParticles) const
 void Simulation::checkDivergence()
 {
   const Health health = stepper_->health();
+  health_ = health;
+  healthValid_ = true;
   std::vector<std::string> found;
   const auto which = [&](std::size_t count, const std::string& what) {
     std::string text = std::to_string(count) + (count == 1 ? " particle " : " particles ") + what;
@@ -182,8 +202,9 @@ std::string Simulation::likelyCause() const
 {
   const Parameters& p = parameters_;
   const double h = p.smoothingLength();
-  const double cfl = lastGoodSpeed_ * p.timeStep / h;
-  const double fall = length(p.gravity) * p.timeStep * p.timeStep / p.particleSpacing;
+  const double dt = stepper_->timeStep();
+  const double cfl = lastGoodSpeed_ * dt / h;
+  const double fall = length(p.gravity) * dt * dt / p.particleSpacing;
   std::vector<std::string> causes;
   if (!p.unilateral)
   {
@@ -204,8 +225,10 @@ std::string Simulation::likelyCause() const
       why += (why.empty() ? "" : ", and ") + std::string("gravity alone moves a particle ") +
         number(fall) + " spacings per step (|g| dt^2 / s)";
     }
-    causes.push_back("the time step dt = " + number(p.timeStep) + " s is too large: " + why +
-      "; lower timeStep (more substeps per frame)");
+    causes.push_back("the time step dt = " + number(dt) + " s is too large: " + why +
+      (p.timeStepping == TimeStepping::Fixed
+          ? "; lower timeStep (more substeps per frame) or use automatic time stepping"
+          : "; lower cflNumber or the largest time step"));
   }
   if (p.solverIterations < 3)
   {
@@ -232,27 +255,126 @@ std::string Simulation::likelyCause() const
   return text;
 }
 
+void AdvanceReport::add(const AdvanceReport& more)
+{
+  if (more.steps == 0)
+  {
+    return;
+  }
+  minTimeStep = steps == 0 ? more.minTimeStep : std::min(minTimeStep, more.minTimeStep);
+  maxTimeStep = std::max(maxTimeStep, more.maxTimeStep);
+  steps += more.steps;
+  iterations += more.iterations;
+  densityError = more.densityError;
+  milliseconds += more.milliseconds;
+}
+
+double Simulation::nextTimeStep() const
+{
+  const Parameters& p = parameters_;
+  if (p.timeStepping == TimeStepping::Fixed)
+  {
+    return p.timeStep;
+  }
+  const double s = p.particleSpacing;
+  const double v = std::max(healthValid_ ? health_.maxSpeed : 0.0, limits_.sceneSpeed);
+  double dt = std::min(p.timeStep, xsphStepLimit_);
+  if (v > 0)
+  {
+    dt = std::min(dt, p.cflNumber * s / v);
+  }
+  const double g = length(p.gravity);
+  if (g > 0)
+  {
+    dt = std::min(dt, p.cflNumber * std::sqrt(s / g));
+  }
+  return dt;
+}
+
+void Simulation::stepOnce(double dt, AdvanceReport& report)
+{
+  if (dt != stepper_->timeStep())
+  {
+    stepper_->setTimeStep(dt);
+  }
+  stepper_->step();
+  ++steps_;
+  healthValid_ = false;
+  const StepReport step = stepper_->lastStep();
+  report.iterations += step.iterations;
+  report.densityError = step.densityError;
+  report.minTimeStep = report.steps == 0 ? dt : std::min(report.minTimeStep, dt);
+  report.maxTimeStep = std::max(report.maxTimeStep, dt);
+  ++report.steps;
+}
+
 AdvanceReport Simulation::advance(std::uint64_t steps)
 {
   AdvanceReport report;
   const auto start = std::chrono::steady_clock::now();
+  const bool automatic = parameters_.timeStepping == TimeStepping::Automatic;
   for (std::uint64_t k = 0; k < steps; ++k)
   {
-    stepper_->step();
-    ++steps_;
-    if (checkInterval_ > 0 && steps_ % checkInterval_ == 0)
+    if (automatic && !healthValid_)
+    {
+      checkDivergence(); // the fastest particle, and the check for free
+    }
+    const double dt = nextTimeStep();
+    stepOnce(dt, report);
+    time_ += dt;
+    if (automatic || (checkInterval_ > 0 && steps_ % checkInterval_ == 0))
     {
       checkDivergence();
     }
     emit();
-    const StepReport step = stepper_->lastStep();
-    report.iterations += step.iterations;
-    report.densityError = step.densityError;
   }
   stepper_->synchronize();
-  report.steps = steps;
   report.milliseconds =
     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+bool Simulation::stepToward(double until, AdvanceReport& report)
+{
+  if (!(time_ < until))
+  {
+    return true;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const bool automatic = parameters_.timeStepping == TimeStepping::Automatic;
+  if (automatic && !healthValid_)
+  {
+    checkDivergence();
+  }
+  // A whole number of steps of at most nextTimeStep() to `until`; the relative slack keeps a
+  // remaining time that is a multiple of a fixed step in rounding from costing one more step.
+  const double remaining = until - time_;
+  const double largest = nextTimeStep();
+  const double count = std::max(1.0, std::ceil(remaining / largest * (1.0 - 1e-9)));
+  const bool fixedFits = !automatic && count * largest <= remaining * (1.0 + 1e-9);
+  // Fixed steps stay exactly timeStep; only a remainder that is no multiple of it is shortened.
+  const double dt = fixedFits || count == 1.0 ? (count == 1.0 ? remaining : largest)
+                                              : remaining / count;
+  stepOnce(dt, report);
+  const bool landed = count == 1.0;
+  time_ = landed ? until : time_ + dt;
+  if (automatic || landed || (checkInterval_ > 0 && steps_ % checkInterval_ == 0))
+  {
+    checkDivergence();
+  }
+  emit();
+  report.milliseconds +=
+    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return landed;
+}
+
+AdvanceReport Simulation::advanceTo(double until)
+{
+  AdvanceReport report;
+  while (!stepToward(until, report))
+  {
+  }
+  stepper_->synchronize();
   return report;
 }
 
@@ -271,6 +393,7 @@ SimulationCheckpoint Simulation::checkpoint() const
 {
   SimulationCheckpoint c;
   c.steps = steps_;
+  c.time = time_;
   c.nextId = nextId_;
   c.layersEmitted = layersEmitted_;
   if (stepper_->precision() == Precision::Single)
@@ -297,11 +420,23 @@ void Simulation::restore(const SimulationCheckpoint& c)
   }
   std::visit([this](const auto& s) { stepper_->load(s); }, c.state);
   steps_ = c.steps;
+  time_ = c.time;
   nextId_ = c.nextId;
   layersEmitted_ = c.layersEmitted;
   lastGoodStep_ = steps_;
-  lastGoodSpeed_ = checkInterval_ > 0 ? stepper_->health().maxSpeed
-                                      : std::numeric_limits<double>::quiet_NaN();
+  // The next automatic step needs the fastest particle, which a fresh scan gives exactly as the
+  // straight run had it (the scan reads only the restored state).
+  healthValid_ = false;
+  if (checkInterval_ > 0 || parameters_.timeStepping == TimeStepping::Automatic)
+  {
+    health_ = stepper_->health();
+    healthValid_ = true;
+    lastGoodSpeed_ = health_.maxSpeed;
+  }
+  else
+  {
+    lastGoodSpeed_ = std::numeric_limits<double>::quiet_NaN();
+  }
 }
 
 // Each emitter releases one disk of lattice sites every s / speed seconds. A layer released
@@ -350,6 +485,9 @@ void Simulation::emit()
   if (!batch.position.empty())
   {
     stepper_->append(batch);
+    // The new particles (and the densities evaluated again at rest) are not in the last scan; a
+    // run resumed from a checkpoint taken now scans them too, so the straight run does the same.
+    healthValid_ = false;
   }
 }
 

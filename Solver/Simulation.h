@@ -67,6 +67,7 @@ struct DivergenceLimits
 struct SimulationCheckpoint
 {
   std::uint64_t steps = 0;
+  double time = 0; // [s]
   std::int64_t nextId = 0;
   std::vector<std::int64_t> layersEmitted;
   std::variant<Snapshot<float>, Snapshot<double>> state;
@@ -81,6 +82,10 @@ struct AdvanceReport
   long iterations = 0;       // constraint projections, summed over the steps
   double densityError = 0;   // adaptive mode: at the end of the last step; NaN in fixed mode
   double milliseconds = 0;   // wall time, the queued GPU work included
+  double minTimeStep = 0;    // the smallest and largest dt of the steps [s]; 0 when none
+  double maxTimeStep = 0;
+
+  void add(const AdvanceReport& more); // the steps of `more` after these
 };
 
 class Simulation
@@ -102,15 +107,37 @@ public:
   // Throws SimulationDiverged from the divergence check; InvalidInput when emitted particles no
   // longer fit in the device's memory (the stepper keeps the particles it had); DeviceFault for a
   // GPU that fails. After any of them, restore a checkpoint (or start again) before stepping on.
+  // `steps` solver steps of the size nextTimeStep() chooses, landing on no particular time.
   AdvanceReport advance(std::uint64_t steps);
 
+  // Steps until time() is `until` exactly (the time of an output frame): each step is the one
+  // nextTimeStep() chooses, shortened so that a whole number of them ends on `until`. The sizes
+  // follow from the state alone, so a run frame by frame is the same bit for bit however it is
+  // split into calls, resumed or repeated. Nothing happens when time() >= until.
+  AdvanceReport advanceTo(double until);
+  // One step of advanceTo(until); returns true when time() has reached `until`. For callers that
+  // must be able to stop within a frame (the VTK filter's abort).
+  bool stepToward(double until, AdvanceReport& report);
+
+  // The size of the next step [s] when nothing has to be landed on: Parameters::timeStep when
+  // fixed; when automatic, the smallest of
+  //   timeStep (the largest step),
+  //   cflNumber s / max(v_max, v_scene): no particle moves more than cflNumber spacings. v_scene
+  //     = sqrt(v0^2 + 2 |g| L), the speed of a fall across the domain (DivergenceLimits), is a
+  //     floor, as weakly compressible SPH bounds its step by a speed of sound: PBF's compression
+  //     in a column of depth H after k projections grows as |g| dt^2 H / (k s^2), and with dt
+  //     proportional to s / v_scene it is the same at every spacing and depth,
+  //   cflNumber sqrt(s / |g|): gravity moves a resting particle at most cflNumber^2 spacings,
+  //   kMaxXsphBlend beta h^2 / nu: explicit XSPH smoothing stays stable.
+  double nextTimeStep() const;
+
   // The divergence check runs after every `steps`-th step, counted from step 0, so it falls on
-  // the same steps however advance() is called; it scans the particles (Stepper::health) and
-  // throws SimulationDiverged at the first step that breaks a limit. 0 turns it off. Default:
-  // every step on the CPU backends (a scan of positions, velocities and densities, well under
-  // 1% of a step); off on CUDA, where health() is statistics(), a device reduction with a copy
-  // back that would stall the queued steps: a caller that delivers frames sets it to the steps
-  // per frame there.
+  // the same steps however advance() is called, and at the end of every advanceTo(); it scans the
+  // particles (Stepper::health) and throws SimulationDiverged at the first step that breaks a
+  // limit. 0 leaves only the check at the end of advanceTo. Default: every step, except for
+  // CUDA with fixed time steps, where the scan's copy back would stall the queued steps (it still
+  // runs when advanceTo lands, once per frame for the VTK filter). With automatic time steps the
+  // scan runs every step anyway: it gives the fastest particle.
   void setDivergenceCheckInterval(std::uint64_t steps) { checkInterval_ = steps; }
   std::uint64_t divergenceCheckInterval() const { return checkInterval_; }
   const DivergenceLimits& divergenceLimits() const { return limits_; }
@@ -125,13 +152,14 @@ public:
   std::uint64_t stepCount() const { return steps_; }
   // Ids run 0..idCount()-1: the initial particles and every one an emitter has released.
   std::int64_t idCount() const { return nextId_; }
-  double time() const { return static_cast<double>(steps_) * parameters_.timeStep; }
+  double time() const { return time_; }
   const Parameters& parameters() const { return parameters_; }
   const Scene& scene() const { return scene_; }
   Stepper& stepper() { return *stepper_; }
   const Stepper& stepper() const { return *stepper_; }
 
 private:
+  void stepOnce(double dt, AdvanceReport& report);
   void emit();
   void checkEmitters(std::size_t initialParticles) const;
   std::string likelyCause() const;
@@ -140,6 +168,12 @@ private:
   Parameters parameters_;
   std::unique_ptr<Stepper> stepper_;
   std::uint64_t steps_ = 0;
+  double time_ = 0;
+  // The health scan of the current state (Stepper::health): the fastest particle for the next
+  // automatic step. Valid when healthValid_.
+  Health health_;
+  bool healthValid_ = false;
+  double xsphStepLimit_ = 0; // kMaxXsphBlend beta h^2 / nu [s]; infinity without XSPH
   std::int64_t nextId_ = 0;
   std::vector<std::int64_t> layersEmitted_; // per emitter
   DivergenceLimits limits_;

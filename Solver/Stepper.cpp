@@ -3,6 +3,7 @@
 #include "CpuStepper.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace pbf
@@ -58,6 +59,14 @@ void Stepper::readInto(const SnapshotView<float>& out) const
 void Stepper::readInto(const SnapshotView<double>& out) const
 {
   readThroughSnapshot(*this, out);
+}
+
+void checkTimeStep(double dt)
+{
+  if (!(dt > 0.0) || !std::isfinite(dt))
+  {
+    throw InvalidInput("time step = " + std::to_string(dt) + ": must be a positive finite number");
+  }
 }
 
 Health Stepper::health() const

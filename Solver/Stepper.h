@@ -98,8 +98,13 @@ class Stepper
 public:
   virtual ~Stepper() = default;
 
-  virtual void step() = 0; // one solver step of Parameters::timeStep
+  virtual void step() = 0; // one solver step of the current time step (setTimeStep)
   virtual void append(const ParticleBatch& batch) = 0;
+
+  // The size of the steps that follow [s]; Parameters::timeStep until set. Simulation sets it
+  // before every step when the time stepping is automatic. Throws InvalidInput for dt <= 0.
+  virtual void setTimeStep(double dt) = 0;
+  virtual double timeStep() const = 0;
 
   virtual std::size_t size() const = 0;
   virtual Backend backend() const = 0;
@@ -134,6 +139,9 @@ public:
   virtual void load(const Snapshot<float>& state) = 0;
   virtual void load(const Snapshot<double>& state) = 0;
 };
+
+// Throws InvalidInput naming the step when dt is not a positive finite number.
+void checkTimeStep(double dt);
 
 // Throws InvalidInput for bad parameters or positions, std::runtime_error when the backend is
 // not available (no CUDA device, or built without CUDA).

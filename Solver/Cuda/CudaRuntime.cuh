@@ -283,7 +283,7 @@ public:
 
   template <class Real>
   void reduceCompression(const Real* density, std::uint32_t n, AdaptiveState* state,
-    double* blockSums, const StepConstants<Real>& k)
+    double* blockSums, const StepConstants<Real>& k, double tolerance)
   {
     const std::uint32_t blocks = (n + kCompressionBlock - 1) / kCompressionBlock;
     if (blocks > 0)
@@ -293,7 +293,7 @@ public:
       check(cudaGetLastError(), "kernel launch (compression)");
     }
     compressionFinalKernel<Real><<<1, kReduceThreads, 0, stream_>>>(
-      blocks, n, k.tolerance, state, blockSums);
+      blocks, n, tolerance, state, blockSums);
     check(cudaGetLastError(), "kernel launch (compression)");
   }
 

@@ -143,6 +143,69 @@ __global__ void __launch_bounds__(kStatisticsThreads) statisticsFinalKernel(
   reduceBlock(shared, acc, result);
 }
 
+// health(): the divergence check's scan and the automatic time step's fastest particle, every
+// step, so it is three maxima over particles and nothing else: the largest speed^2, the largest
+// rho_i / rho_0 - 1 and whether anything is not finite. Maxima do not depend on the order.
+constexpr int kHealthValues = 3;
+constexpr int kHealthBlocks = 264; // two per SM of an H100 or H200
+
+template <class Real>
+__global__ void __launch_bounds__(kStatisticsThreads) healthKernel(const Vec3<Real>* x,
+  const Vec3<Real>* v, const Real* density, std::uint32_t n, double inverseRestDensity,
+  double* partials)
+{
+  __shared__ double shared[kHealthValues][kStatisticsThreads];
+  double acc[kHealthValues] = { 0.0, -1.0, 0.0 };
+  for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < n; i += gridDim.x * blockDim.x)
+  {
+    const Vec3d vi = Vec3d::from(v[i]);
+    const Vec3d xi = Vec3d::from(x[i]);
+    const double speed2 = dot(vi, vi);
+    const bool finite = isfinite(xi.x + xi.y + xi.z + vi.x + vi.y + vi.z);
+    acc[0] = finite ? fmax(acc[0], speed2) : acc[0];
+    acc[1] = fmax(acc[1], double(density[i]) * inverseRestDensity - 1.0);
+    acc[2] = finite ? acc[2] : 1.0;
+  }
+  const int t = threadIdx.x;
+  for (int k = 0; k < kHealthValues; ++k)
+  {
+    shared[k][t] = acc[k];
+  }
+  __syncthreads();
+  for (int width = kStatisticsThreads / 2; width > 0; width >>= 1)
+  {
+    if (t < width)
+    {
+      for (int k = 0; k < kHealthValues; ++k)
+      {
+        shared[k][t] = fmax(shared[k][t], shared[k][t + width]);
+      }
+    }
+    __syncthreads();
+  }
+  if (t < kHealthValues)
+  {
+    partials[blockIdx.x * kHealthValues + t] = shared[t][0];
+  }
+}
+
+// One thread: the blocks' maxima in order.
+__global__ inline void healthFinalKernel(const double* partials, int blocks, double* result)
+{
+  double acc[kHealthValues] = { 0.0, -1.0, 0.0 };
+  for (int b = 0; b < blocks; ++b)
+  {
+    for (int k = 0; k < kHealthValues; ++k)
+    {
+      acc[k] = fmax(acc[k], partials[b * kHealthValues + k]);
+    }
+  }
+  for (int k = 0; k < kHealthValues; ++k)
+  {
+    result[k] = acc[k];
+  }
+}
+
 template <class Real>
 class CudaStepper final : public CudaStepperInterface
 {
@@ -154,6 +217,8 @@ public:
 
   void step() override;
   void append(const ParticleBatch& batch) override;
+  void setTimeStep(double dt) override;
+  double timeStep() const override { return dt_; }
 
   std::size_t size() const override { return n_; }
   Backend backend() const override { return Backend::CUDA; }
@@ -168,6 +233,9 @@ public:
   void readInto(const SnapshotView<float>& out) const override { copyInto(out); }
   void readInto(const SnapshotView<double>& out) const override { copyInto(out); }
   Statistics statistics() const override;
+  // Three maxima on the device and 24 bytes back: cheap enough for every step (nonFinite is 0 or
+  // 1, outside 0: the collision step keeps finite positions in the box).
+  Health health() const override;
   StepReport lastStep() const override;
   void load(const Snapshot<float>& state) override { loadState(state); }
   void load(const Snapshot<double>& state) override { loadState(state); }
@@ -209,6 +277,9 @@ private:
   Parameters parameters_;
   Options options_;
   StepConstants<Real> constants_{};
+  LatticeCalibration lattice_;
+  double dt_ = 0;
+  StepTime<Real>* deviceTime_ = nullptr; // constants_.time: its own allocation, whatever the arena
   int device_ = 0;
   std::string deviceName_;
   cudaStream_t stream_ = nullptr;
@@ -261,15 +332,21 @@ CudaStepper<Real>::CudaStepper(
   constants_ = makeStepConstants<Real>(
     parameters_, options_.skin, options_.search == NeighborSearch::RowMasks);
 
+  lattice_ = calibrateLattice(parameters_);
+
   check(cudaStreamCreate(&stream_), "cudaStreamCreate");
   try
   {
+    check(cudaMalloc(&deviceTime_, sizeof(StepTime<Real>)), "cudaMalloc");
+    constants_.time = deviceTime_;
+    setTimeStep(parameters_.timeStep);
     allocate(std::max<std::size_t>(initial.position.size(), 1024), initial.position.size());
     append(initial);
   }
   catch (...)
   {
     release();
+    cudaFree(deviceTime_);
     cudaStreamDestroy(stream_);
     throw;
   }
@@ -281,7 +358,21 @@ CudaStepper<Real>::~CudaStepper()
   cudaSetDevice(device_);
   cudaStreamSynchronize(stream_);
   release();
+  cudaFree(deviceTime_);
   cudaStreamDestroy(stream_);
+}
+
+template <class Real>
+void CudaStepper<Real>::setTimeStep(double dt)
+{
+  checkTimeStep(dt);
+  selectDevice();
+  const StepTime<Real> time = StepTime<Real>::make(parameters_, lattice_, dt);
+  // Ordered before the next step on the stream; from pageable memory the copy is staged before
+  // the call returns, so `time` may go.
+  check(cudaMemcpyAsync(deviceTime_, &time, sizeof time, cudaMemcpyHostToDevice, stream_),
+    "cudaMemcpyAsync (time step)");
+  dt_ = dt;
 }
 
 template <class Real>
@@ -747,6 +838,32 @@ Statistics CudaStepper<Real>::statistics() const
   s.momentum = Vec3d{ r[kMomentumX], r[kMomentumY], r[kMomentumZ] };
   s.finite = r[kNonFinite] == 0.0;
   return s;
+}
+
+template <class Real>
+Health CudaStepper<Real>::health() const
+{
+  Health h;
+  if (n_ == 0)
+  {
+    return h;
+  }
+  selectDevice();
+  const StepBuffers<Real>& b = buffers_;
+  healthKernel<Real><<<kHealthBlocks, kStatisticsThreads, 0, stream_>>>(b.vec[roles_.x],
+    b.vec[roles_.v], b.density, static_cast<std::uint32_t>(n_), 1.0 / parameters_.restDensity,
+    statisticsPartials_);
+  check(cudaGetLastError(), "kernel launch (health)");
+  healthFinalKernel<<<1, 1, 0, stream_>>>(statisticsPartials_, kHealthBlocks, statisticsResult_);
+  check(cudaGetLastError(), "kernel launch (health)");
+  double r[kHealthValues];
+  check(cudaMemcpyAsync(r, statisticsResult_, sizeof r, cudaMemcpyDeviceToHost, stream_),
+    "cudaMemcpyAsync");
+  check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
+  h.maxSpeed = std::sqrt(r[0]);
+  h.maxDensityError = r[1];
+  h.nonFinite = r[2] > 0.0 ? 1 : 0;
+  return h;
 }
 
 template <class Real>

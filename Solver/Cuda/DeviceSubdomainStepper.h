@@ -110,14 +110,8 @@ public:
   {
     parameters_.validate();
     checkBatch(parameters_, everything);
-    if (parameters_.densityErrorTolerance > 0)
-    {
-      throw InvalidInput("densityErrorTolerance = " +
-        std::to_string(parameters_.densityErrorTolerance) +
-        ": adaptive iterations are not available on the CUDA backend of a decomposed run; set it "
-        "to 0 or choose a CPU backend");
-    }
     constants_ = makeStepConstants<Real>(parameters_, skin, masks);
+    lattice_ = calibrateLattice(parameters_);
     {
       const char* drains = std::getenv("PBF_CUDA_SUBDOMAIN_COUNT_DRAINS");
       countDrains_ = drains && std::strcmp(drains, "1") == 0;
@@ -143,6 +137,7 @@ public:
     receiveAt_.resize(ranks);
     device_->activate();
     allocateFixed();
+    setTimeStep(parameters_.timeStep);
     // Every rank holds the whole initial fluid: the balanced cut follows from it on every rank
     // alike, so each keeps its share at once and nothing migrates (a cut from uniform slabs
     // would first gather most of a dam break on one rank and then move it: gigabytes at 64M).
@@ -214,9 +209,24 @@ public:
       // Now vec[r.x] = x, vec[r.p] = x*, vec[r.v] = v in cell order; vec[r.free] is free.
       solve(r, keys);
     }
-    report_.iterations = constants_.iterations;
-    report_.densityError = std::numeric_limits<double>::quiet_NaN();
+    if (constants_.tolerance <= 0)
+    {
+      report_.iterations = constants_.iterations;
+      report_.densityError = std::numeric_limits<double>::quiet_NaN();
+    }
   }
+
+  // Every rank sets the same dt (Simulation chooses it from reduced maxima).
+  void setTimeStep(double dt) override
+  {
+    checkTimeStep(dt);
+    device_->activate();
+    const StepTime<Real> time = StepTime<Real>::make(parameters_, lattice_, dt);
+    device_->upload(deviceTime_, &time, sizeof time);
+    device_->synchronize(); // `time` dies here
+    dt_ = dt;
+  }
+  double timeStep() const override { return dt_; }
 
   // Every rank passes the whole batch; each keeps the particles of its slab.
   void append(const ParticleBatch& batch) override
@@ -386,6 +396,9 @@ private:
     ownerCounts_ = allocateFixed<std::uint32_t>((ranks + 1) * subdomain::kCounterCopies);
     slabFirst_ = allocateFixed<int>(ranks + 1);
     selected_ = allocateFixed<std::uint32_t>(8);
+    deviceTime_ = allocateFixed<StepTime<Real>>(1);
+    constants_.time = deviceTime_;
+    adaptive_ = allocateFixed<AdaptiveState>(1);
     listCounts_ = static_cast<std::uint32_t*>(device_->allocateHost(8 * sizeof(std::uint32_t)));
     // The owner counts' copies, then the ghosts sent to each side.
     setupCounts_ = static_cast<std::uint32_t*>(
@@ -455,6 +468,9 @@ private:
     auto* ownedList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
     auto* borderList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
     auto* interiorList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
+    // Adaptive mode's partial sums: one per block of the reduction, a fraction of a byte per
+    // particle (whole bytes here, to keep make() per particle).
+    auto* blockSums = static_cast<double*>(make(1));
     device_->reserveTemp(count(capacity), std::size_t(constants_.cellCount) + 1, constants_.keyBits);
     auto exec = device_->executor();
     if (keep > 0)
@@ -491,6 +507,7 @@ private:
     ownedList_ = ownedList;
     borderList_ = borderList;
     interiorList_ = interiorList;
+    blockSums_ = blockSums;
     capacity_ = capacity;
   }
 
@@ -1215,6 +1232,13 @@ private:
     StepBuffers<Real> edgeBuffers = b;
     edgeBuffers.maskBuilds = borderMaskBuilds_;
     const StepBuffers<Real>& be = edgeBuffers;
+    // Adaptive mode: the mean compression over every rank's owned particles after each density
+    // pass, as SubdomainStepper::meanDensityError has it (per rank in fixed blocks, then the
+    // ranks in order); after the first projection the loop ends once it is within the tolerance,
+    // and the velocities are then updated from the positions reached.
+    const bool adaptive = k.tolerance > 0;
+    int performed = 0;
+    bool converged = false;
     for (int iteration = 0; iteration < k.iterations; ++iteration)
     {
       const FluidView<Real, MaskedNeighbors<Real>> f =
@@ -1229,6 +1253,15 @@ private:
         detail::DensityPass{}, onInterior);
       device_->joinBorder();
       receiveRefresh<Real>(density_, lambda_);
+      if (adaptive)
+      {
+        report_.densityError = meanCompression(n);
+        if (iteration > 0 && report_.densityError <= k.tolerance)
+        {
+          converged = true;
+          break;
+        }
+      }
       const bool last = iteration + 1 == k.iterations;
       exec = device_->executor();
       device_->forkBorder();
@@ -1238,18 +1271,41 @@ private:
       detail::correctionPass(exec, b, interior, f, iteration, last, nullptr, onInterior);
       device_->joinBorder();
       receiveRefresh<Vec3<Real>>(f.scratch, last ? v : nullptr);
+      ++performed;
     }
+    if (adaptive)
+    {
+      report_.iterations = performed;
+    }
+    if (converged)
+    {
+      // The last correction did not know it was the last: line 21 for the positions reached,
+      // border particles first so that their velocities travel while the interior's are set.
+      FluidView<Real, MaskedNeighbors<Real>> apply =
+        detail::iterationView(b, k, sortedKeys, x, v, positions, performed);
+      exec = device_->executor();
+      auto edge = device_->borderExecutor();
+      device_->forkBorder();
+      subdomain::updateVelocities<Real>(edge, border, borderList_, apply);
+      sendRefresh<Vec3<Real>>(v, nullptr);
+      subdomain::updateVelocities<Real>(exec, interior, interiorList_, apply);
+      device_->joinBorder();
+      receiveRefresh<Vec3<Real>>(v, nullptr);
+    }
+    // The passes after the iterations read the positions the last projection wrote.
+    StepConstants<Real> after = k;
+    after.iterations = performed;
     const FluidView<Real, MaskedNeighbors<Real>> f =
-      detail::afterIterationsView(b, k, sortedKeys, x, v, positions);
+      detail::afterIterationsView(b, after, sortedKeys, x, v, positions);
     exec = device_->executor();
     {
       auto edge = device_->borderExecutor();
       device_->forkBorder();
-      detail::firstPassOnPositions(edge, VorticityStage{}, be, k, border, f, k.iterations, false,
+      detail::firstPassOnPositions(edge, VorticityStage{}, be, after, border, f, performed, false,
         detail::VorticityPass{}, onBorder);
     }
     sendRefresh<Vec3<Real>>(x, nullptr);
-    detail::firstPassOnPositions(exec, VorticityStage{}, b, k, interior, f, k.iterations, false,
+    detail::firstPassOnPositions(exec, VorticityStage{}, b, after, interior, f, performed, false,
       detail::VorticityPass{}, onInterior);
     device_->joinBorder();
     receiveRefresh<Vec3<Real>>(x, nullptr);
@@ -1260,6 +1316,28 @@ private:
     // Line 23 and the ghosts dropped: x = the corrected positions, v = f.scratch, owned only, into
     // the buffers that held v and omega.
     keepOwned(f.p, f.scratch, r.v, r.x);
+  }
+
+  // Adaptive mode: mean(max(rho_i / rho_0 - 1, 0)) over every rank's owned particles (collective).
+  // The owned densities are gathered into densityAlt_ (free until keepOwned) and reduced there.
+  double meanCompression(std::uint32_t n)
+  {
+    auto exec = device_->executor();
+    subdomain::gather<Real>(exec, n, ownedList_, density_, densityAlt_);
+    // A negative tolerance: the state only reports, the loop here decides.
+    exec.fillZero(adaptive_, sizeof(AdaptiveState));
+    exec.reduceCompression(densityAlt_, n, adaptive_, blockSums_, constants_, -1.0);
+    AdaptiveState state{};
+    device_->download(&state, adaptive_, sizeof state);
+    device_->synchronize();
+    double total = 0.0, count = 0.0;
+    for (const std::vector<double>& r : distributed::allGather(
+           communicator_, { state.densityError * double(n), double(n) }))
+    {
+      total += r[0];
+      count += r[1];
+    }
+    return count > 0 ? total / count : 0.0;
   }
 
   // The owned particles (ownedList_) of positions and velocities into vec[toX], vec[toV], and
@@ -1368,6 +1446,9 @@ private:
   Parameters parameters_;
   std::unique_ptr<Device> device_;
   StepConstants<Real> constants_{};
+  LatticeCalibration lattice_;
+  double dt_ = 0;
+  StepTime<Real>* deviceTime_ = nullptr; // constants_.time
   distributed::Slabs slabs_;
 
   // Per-particle device arrays (capacity_ each); owned particles in [0, n_) between steps, with
@@ -1379,6 +1460,8 @@ private:
   int x_ = 0, v_ = 1;
   Vec3<Real>* vec_[4] = {};
   Real *density_ = nullptr, *lambda_ = nullptr, *densityAlt_ = nullptr, *lambdaAlt_ = nullptr;
+  AdaptiveState* adaptive_ = nullptr; // adaptive mode: this rank's reduction
+  double* blockSums_ = nullptr;
   std::int64_t *id_ = nullptr, *idAlt_ = nullptr;
   CellKey* keys_[2] = {};
   std::uint32_t* masks_ = nullptr;

@@ -17,7 +17,8 @@
 //   sortByKey(keys, keysAlt, values, valuesAlt, n, keyBits) -> SortedPairs (stable radix sort)
 //   maxScan(data, count)                 inclusive max-scan in place
 //   fillZero(pointer, bytes), copy(destination, source, bytes)
-//   reduceCompression(density, n, state, blockSums, constants)   adaptive mode, see AdaptiveState
+//   reduceCompression(density, n, state, blockSums, constants, tolerance)   adaptive mode, see
+//                                        AdaptiveState; a negative tolerance never finishes
 #pragma once
 
 #include "Equations.h"
@@ -93,6 +94,9 @@ struct StepConstants
   MaskSchedule schedule;
   double tolerance;            // adaptive mode when > 0: densityErrorTolerance as a fraction
   double inverseRestDensity;   // 1 / rho_0 in double, for the compression of adaptive mode
+  // This step's dt and what follows from it, in the stepper's memory (device memory on a GPU):
+  // the stepper writes it before a step, so a captured step reads the current values.
+  const StepTime<Real>* time;
 };
 
 // The constants of a step for given parameters: skin is how far beyond h the masks reach, as a
@@ -142,6 +146,7 @@ FluidView<Real> plainView(const StepConstants<Real>& k)
   FluidView<Real> f{};
   f.grid = GridView<Real>{ k.geometry, nullptr, nullptr };
   f.c = k.c;
+  f.time = k.time;
   return f;
 }
 
@@ -190,6 +195,7 @@ FluidView<Real, MaskedNeighbors<Real>> solverView(const StepBuffers<Real>& b,
   f.grid = MaskedNeighbors<Real>{ GridView<Real>{ k.geometry, b.cellOffsets, sortedKeys }, b.masks,
     b.stride, k.schedule.enabled != 0 };
   f.c = k.c;
+  f.time = k.time;
   return f;
 }
 
@@ -207,6 +213,7 @@ FluidView<Real, MaskedNeighbors<Real>> iterationView(const StepBuffers<Real>& b,
   f.p = positions[iteration & 1];
   f.scratch = positions[(iteration + 1) & 1];
   f.volume = b.volume; // written by the last iteration's updateVelocity
+  f.tensile = iteration == 0; // s_corr once per step, in the first projection
   return f;
 }
 
@@ -378,7 +385,9 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
       exec, DensityStage{}, b, k, n, f, iteration, adaptive, detail::DensityPass{});
     if (adaptive)
     {
-      exec.reduceCompression(b.density, n, b.adaptive, b.blockSums, k);
+      // The first projection always runs: it carries the step's tensile push.
+      exec.reduceCompression(
+        b.density, n, b.adaptive, b.blockSums, k, iteration == 0 ? -1.0 : k.tolerance);
     }
 
     const bool last = iteration + 1 == k.iterations;

@@ -359,6 +359,16 @@ void confine(Exec& exec, std::uint32_t n, const std::uint32_t* list,
     ConfinementStage{}, n, [=] PBF_HD(std::uint32_t k) { vorticityConfinement(list[k], f); });
 }
 
+// Algorithm 1, line 21, for the particles of a list: v_i = (x*_i - x_i) / dt (adaptive mode, when
+// the projections stopped before the one that would have done it).
+template <class Real, class Exec>
+void updateVelocities(Exec& exec, std::uint32_t n, const std::uint32_t* list,
+  const FluidView<Real, MaskedNeighbors<Real>>& f)
+{
+  exec.forEach(
+    CorrectionStage{}, n, [=] PBF_HD(std::uint32_t k) { updateVelocity(list[k], f); });
+}
+
 // A ghost refresh's message layout, for one or two fields a (and b) of type T: to the left
 // neighbour [a of its nLeft][b of its nLeft], then to the right one [a][b] of nRight. The
 // receiver's ghosts from a side are in the order the sender lists them (DeviceSubdomainStepper.h

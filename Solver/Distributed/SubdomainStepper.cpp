@@ -65,6 +65,8 @@ SubdomainStepper<Real>::SubdomainStepper(Communicator& communicator, bool parall
   parameters_.validate();
   checkBatch(parameters_, everything);
   coefficients_ = Coefficients<Real>::make(parameters_);
+  lattice_ = calibrateLattice(parameters_);
+  setTimeStep(parameters_.timeStep);
   geometry_ = makeGridGeometry<Real>(parameters_.domain, parameters_.smoothingLength());
   cellOffsets_.assign(std::size_t(geometry_.cellCount()) + 1, 0);
   const auto ranks = static_cast<std::size_t>(communicator_.size());
@@ -152,7 +154,15 @@ void SubdomainStepper<Real>::forOwned(Stage&& stage)
 }
 
 template <class Real>
-FluidView<Real> SubdomainStepper<Real>::view()
+void SubdomainStepper<Real>::setTimeStep(double dt)
+{
+  checkTimeStep(dt);
+  dt_ = dt;
+  time_ = StepTime<Real>::make(parameters_, lattice_, dt);
+}
+
+template <class Real>
+FluidView<Real> SubdomainStepper<Real>::view(bool tensile)
 {
   FluidView<Real> f{};
   f.x = x_.data();
@@ -164,6 +174,8 @@ FluidView<Real> SubdomainStepper<Real>::view()
   f.omega = omega_.data();
   f.grid = GridView<Real>{ geometry_, cellOffsets_.data(), keys_.data() };
   f.c = coefficients_;
+  f.time = &time_;
+  f.tensile = tensile;
   return f;
 }
 
@@ -431,6 +443,7 @@ void SubdomainStepper<Real>::step()
   // Neighbours are found once per step, on the predicted positions (Algorithm 1, line 7).
   sortByCell();
   const FluidView<Real> f = view();
+  const FluidView<Real> first = view(true); // the first projection adds s_corr
   const double tolerance = parameters_.densityErrorTolerance / 100.0;
   for (int iteration = 0; iteration < parameters_.solverIterations; ++iteration)
   {
@@ -440,12 +453,13 @@ void SubdomainStepper<Real>::step()
     if (tolerance > 0)
     {
       report_.densityError = meanDensityError();
-      if (report_.densityError <= tolerance)
+      if (iteration > 0 && report_.densityError <= tolerance)
       {
         break;
       }
     }
-    forOwned([&](std::uint32_t i) { positionCorrection(i, f); });
+    const FluidView<Real>& pass = iteration == 0 ? first : f;
+    forOwned([&](std::uint32_t i) { positionCorrection(i, pass); });
     forOwned([&](std::uint32_t i) { applyCorrection(i, f); });
     refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return p_[i]; });
     ++report_.iterations;

@@ -86,6 +86,8 @@ public:
   // averageNeighbors is not computed across ranks (NaN).
   Statistics statistics() const override;
   Health health() const override;
+  void setTimeStep(double dt) override;
+  double timeStep() const override { return dt_; }
   StepReport lastStep() const override { return report_; }
   // This rank's particles as read() gave them, at a step where the ranks were as now.
   void load(const Snapshot<float>& state) override;
@@ -105,7 +107,7 @@ private:
   void loadState(const Snapshot<In>& state);
   template <class Stage>
   void forOwned(Stage&& stage);
-  FluidView<Real> view();
+  FluidView<Real> view(bool tensile = false);
   HostParticles<Real> particles() { return { x_, v_, density_, lambda_, id_ }; }
   ConstHostParticles<Real> particles() const { return { x_, v_, density_, lambda_, id_ }; }
   int column(const Vec3<Real>& q) const;
@@ -123,6 +125,9 @@ private:
   bool parallel_;
   Parameters parameters_;
   Coefficients<Real> coefficients_;
+  LatticeCalibration lattice_;
+  double dt_ = 0;
+  StepTime<Real> time_{};
   GridGeometry<Real> geometry_;
   Slabs slabs_;
 

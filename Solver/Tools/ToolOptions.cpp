@@ -57,9 +57,20 @@ std::map<std::string, std::pair<std::string, Setter>> parameterSetters()
     { "scorr-k", { "s_corr k", real(&Parameters::sCorrK) } },
     { "scorr-n", { "s_corr n", real(&Parameters::sCorrN) } },
     { "scorr-dq", { "s_corr delta_q / h", real(&Parameters::sCorrDeltaQ) } },
-    { "xsph", { "XSPH c", real(&Parameters::xsphC) } },
+    { "xsph", { "XSPH viscosity nu [m^2/s]", real(&Parameters::xsphViscosity) } },
     { "vorticity", { "vorticity epsilon [m/s]", real(&Parameters::vorticityEpsilon) } },
-    { "dt", { "time step [s]", real(&Parameters::timeStep) } },
+    { "dt", { "time step [s]: every step's when fixed, the largest when automatic",
+              real(&Parameters::timeStep) } },
+    { "cfl", { "CFL number of the automatic time step", real(&Parameters::cflNumber) } },
+    { "time-stepping",
+      { "auto | fixed",
+        [](ToolOptions& o, const std::string& v) {
+          if (v != "auto" && v != "fixed")
+          {
+            throw InvalidInput("must be auto or fixed");
+          }
+          o.parameters.timeStepping = v == "auto" ? TimeStepping::Automatic : TimeStepping::Fixed;
+        } } },
     { "unilateral",
       { "0 or 1: clamp C_i at 0",
         [](ToolOptions& o, const std::string& v) {

@@ -73,7 +73,7 @@ public:
   // (blocks of 4096 in order), so that the decisions match the serial backend bit for bit.
   template <class Real>
   void reduceCompression(const Real* density, std::uint32_t n, cuda::AdaptiveState* state,
-    double*, const cuda::StepConstants<Real>& k)
+    double*, const cuda::StepConstants<Real>& k, double tolerance)
   {
     if (state->done)
     {
@@ -90,7 +90,7 @@ public:
       total += sum;
     }
     state->densityError = n > 0 ? total / double(n) : 0.0;
-    if (state->densityError <= k.tolerance)
+    if (state->densityError <= tolerance)
     {
       state->done = 1;
     }

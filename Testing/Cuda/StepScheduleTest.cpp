@@ -45,6 +45,8 @@ public:
     k.schedule = MaskSchedule{ skin * h, h, MaskSchedule::roundingBound<Real>(maxAbs), masks };
     k.tolerance = parameters.densityErrorTolerance / 100.0;
     k.inverseRestDensity = 1.0 / parameters.restDensity;
+    time_ = StepTime<Real>::make(parameters, calibrateLattice(parameters), parameters.timeStep);
+    k.time = &time_;
 
     for (auto& v : vec_)
     {
@@ -117,6 +119,7 @@ private:
   test::HostExecutor exec_;
   std::size_t n_;
   cuda::StepConstants<Real> constants_{};
+  StepTime<Real> time_{};
   cuda::StepBuffers<Real> buffers_{};
   cuda::Roles roles_;
   const CellKey* sortedKeys_ = nullptr;

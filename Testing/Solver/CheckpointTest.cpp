@@ -96,6 +96,7 @@ TEST(AdaptiveIterations, FixedModeAppliesExactlyTheCount)
 {
   Parameters p = coarse();
   p.solverIterations = 3;
+  p.densityErrorTolerance = 0;
   Simulation simulation(presetScene("dam_break"), p, Backend::Serial, Precision::Single);
   const AdvanceReport report = simulation.advance(5);
   EXPECT_EQ(report.iterations, 15);

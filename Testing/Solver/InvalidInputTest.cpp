@@ -53,7 +53,8 @@ std::vector<std::pair<std::string, double Parameters::*>> scalarFields()
     { "sCorrK", &Parameters::sCorrK },
     { "sCorrN", &Parameters::sCorrN },
     { "sCorrDeltaQ", &Parameters::sCorrDeltaQ },
-    { "xsphC", &Parameters::xsphC },
+    { "xsphViscosity", &Parameters::xsphViscosity },
+    { "cflNumber", &Parameters::cflNumber },
     { "vorticityEpsilon", &Parameters::vorticityEpsilon },
     { "timeStep", &Parameters::timeStep },
   };

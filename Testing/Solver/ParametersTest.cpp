@@ -53,7 +53,9 @@ TEST(Parameters, BadValuesNameTheFieldAndTheValue)
   expectRejected([](Parameters& p) { p.solverIterations = -3; }, "solverIterations", "-3");
   expectRejected([](Parameters& p) { p.relaxation = 0; }, "relaxation", "0");
   expectRejected([](Parameters& p) { p.sCorrDeltaQ = 1.5; }, "sCorrDeltaQ", "1.5");
-  expectRejected([](Parameters& p) { p.xsphC = -1; }, "xsphC", "-1");
+  expectRejected([](Parameters& p) { p.xsphViscosity = -1; }, "xsphViscosity", "-1");
+  expectRejected([](Parameters& p) { p.cflNumber = 0; }, "cflNumber", "0");
+  expectRejected([](Parameters& p) { p.cflNumber = 1.5; }, "cflNumber", "1.5");
   expectRejected([&](Parameters& p) { p.gravity.y = nan; }, "gravity.y", "nan");
   expectRejected([](Parameters& p) { p.domain.max.x = 0.01; }, "domain.max.x", "0.01");
 }
