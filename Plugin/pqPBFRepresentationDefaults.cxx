@@ -56,8 +56,8 @@ void pqPBFRepresentationDefaults::onRepresentationAdded(pqRepresentation* repres
   if (input.GetOutputPort() == 1 && display->GetProperty("SeriesVisibility"))
   {
     static const char* const columns[] = { "AverageDensityError", "MaxDensityError",
-      "AverageNeighbors", "SolverIterations", "MillisecondsPerStep", "MaxSpeed", "KineticEnergy",
-      "Frame", "Particles" };
+      "AverageNeighbors", "SolverIterations", "MillisecondsPerStep", "Substeps", "MinTimeStep",
+      "MaxTimeStep", "MaxSpeed", "KineticEnergy", "Frame", "Particles" };
     vtkSMPropertyHelper visibility(display, "SeriesVisibility");
     unsigned int element = 0;
     for (const char* column : columns)

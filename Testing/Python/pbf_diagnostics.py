@@ -14,14 +14,15 @@ T.load_plugin(globals())
 expect = T.expect
 
 INTERVAL = 1.0 / 60.0
-SUBSTEPS = 2
 COLUMNS = ["Time", "Frame", "AverageDensityError", "MaxDensityError", "AverageNeighbors",
-           "SolverIterations", "MillisecondsPerStep", "MaxSpeed", "KineticEnergy", "Particles",
-           "Backend"]
+           "SolverIterations", "MillisecondsPerStep", "Substeps", "MinTimeStep", "MaxTimeStep",
+           "MaxSpeed", "KineticEnergy", "Particles", "Backend"]
 DETERMINISTIC = [c for c in COLUMNS if c != "MillisecondsPerStep"]
 
+# Automatic time steps (the default) and the fixed count of projections, so that every step's
+# iterations are known.
 source = PositionBasedFluids(ParticleSpacing=T.QUICK_SPACING, NumberOfFrames=12,  # noqa: F821
-                             SubstepsPerFrame=SUBSTEPS)
+                             AdaptiveIterations=0, SolverIterations=4, MaxTimeStep=0.002)
 expect(source.SMProxy.GetOutputPortName(1) == "Diagnostics",
        "output port 1 is named %r" % source.SMProxy.GetOutputPortName(1))
 particles = T.output_at(source, 8 * INTERVAL)
@@ -37,8 +38,17 @@ expect(list(table) == COLUMNS, "columns %s, expected %s" % (list(table), COLUMNS
 expect(table_object.GetColumnByName("Backend").IsA("vtkStringArray"), "Backend is not a string column")
 frames = numpy.arange(9)
 expect(list(table["Frame"]) == list(frames), "rows of frames %s, expected 0..8" % list(table["Frame"]))
-# Frame k is k * SUBSTEPS steps of INTERVAL / SUBSTEPS: the time as the solver counts it.
-expect(numpy.allclose(table["Time"], frames * INTERVAL, rtol=0, atol=1e-12), "times %s" % table["Time"])
+# Frame k lands on k * INTERVAL exactly, however many steps it took.
+expect(numpy.array_equal(table["Time"], frames * INTERVAL), "times %s" % table["Time"])
+# Each frame's steps: whole, at most MaxTimeStep, and adding up to the interval.
+n, low, high = table["Substeps"][1:], table["MinTimeStep"][1:], table["MaxTimeStep"][1:]
+expect(numpy.all(n >= numpy.ceil(INTERVAL / 0.002)) and numpy.all(n == numpy.round(n)),
+       "substeps per frame %s (at most 0.002 s each)" % n)
+expect(numpy.all((low > 0) & (low <= high) & (high <= 0.002 * (1 + 1e-12))) and
+       numpy.all(n * low <= INTERVAL * (1 + 1e-9)) and numpy.all(n * high >= INTERVAL * (1 - 1e-9)),
+       "time steps per frame: %s substeps of %s..%s s" % (n, low, high))
+expect(numpy.isnan(table["Substeps"][0]) and numpy.isnan(table["MinTimeStep"][0]),
+       "frame 0 has time steps")
 expect(all(table["Particles"] == T.QUICK_PARTICLES), "particles %s" % table["Particles"])
 expect(table["Backend"] == [T.field_value(particles, "Backend")] * 9,
        "backend %s, the frame says %s" % (table["Backend"], T.field_value(particles, "Backend")))
@@ -55,7 +65,7 @@ expect(numpy.all(table["AverageDensityError"] >= 0) and
                                                      table["MaxDensityError"]))
 expect(numpy.all(numpy.diff(table["MaxSpeed"][:6]) > 0) and table["KineticEnergy"][8] > 0,
        "the falling column does not speed up: %s" % table["MaxSpeed"])
-# Frame 0 took no step; every later frame took SUBSTEPS steps of SolverIterations (fixed mode).
+# Frame 0 took no step; every later frame's steps took SolverIterations (fixed count).
 expect(numpy.isnan(table["SolverIterations"][0]) and numpy.isnan(table["MillisecondsPerStep"][0]),
        "frame 0 has per-step values")
 expect(numpy.all(table["SolverIterations"][1:] == source.SolverIterations),
@@ -71,7 +81,7 @@ expect(list(table["Frame"]) == list(frames), "after going back to 3 the rows are
        % list(table["Frame"]))
 for name in DETERMINISTIC:
     same = table[name] == first[name] if name == "Backend" else \
-        numpy.array_equal(table[name], first[name], equal_nan=name == "SolverIterations")
+        numpy.array_equal(table[name], first[name], equal_nan=True)
     expect(same, "going back to 3 changed the %s column" % name)
 T.output_at(source, 12 * INTERVAL)
 table = T.diagnostics(source)

@@ -100,9 +100,14 @@ scene.AnimationTime = steps[13]
 data = source.GetClientSideObject().GetOutputDataObject(0)
 resumed = data.GetFieldData().GetAbstractArray("ResumedFrom").GetValue(0)
 stepped = int(data.GetFieldData().GetArray("RequestSteps").GetTuple1(0))
+# The steps from frame 10's checkpoint to frame 13: whatever the automatic stepping chose, no
+# more than the frame's own step count says.
+reached = int(data.GetFieldData().GetArray("StepCount").GetTuple1(0))
+start = int(data.GetFieldData().GetArray("ResumedFromStep").GetTuple1(0))
 expect(int(data.GetFieldData().GetArray("Frame").GetTuple1(0)) == 13 and resumed == "checkpoint"
-       and stepped == 3 * source.SubstepsPerFrame,
-       "going back to frame 13 resumed from %s with %d steps" % (resumed, stepped))
+       and stepped == reached - start and stepped >= 3,
+       "going back to frame 13 resumed from %s at step %d with %d steps to step %d"
+       % (resumed, start, stepped, reached))
 
 # Display-only changes do not re-execute the simulation.
 executions = []

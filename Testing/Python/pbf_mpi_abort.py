@@ -52,7 +52,9 @@ algorithm = aborting.GetClientSideObject()  # rank 0's: pvbatch's script runs on
 after_abort, progress, elapsed = T.cancelled_request(algorithm, lambda: fetched(owners, TARGET))
 stepped = [p for p in progress if 0.0 < p < 1.0]
 print("abort on rank 0 after %d steps; the request returned in %.2f s" % (len(stepped), elapsed))
-expect(len(stepped) <= 12, "the abort took %d steps to be honoured" % len(stepped))
+# 1 % of the jump is about 5 frames of 4 automatic steps (1/240 s at this spacing): about 20
+# steps, then the abort within one more.
+expect(len(stepped) <= 24, "the abort took %d steps to be honoured" % len(stepped))
 expect(elapsed < 60.0, "the aborted request took %.1f s" % elapsed)
 expect(numpy.array_equal(after_abort[0], before[0]) and
        numpy.array_equal(after_abort[1], before[1]) and after_abort[2] == {0, 1},

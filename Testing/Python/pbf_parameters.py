@@ -23,15 +23,17 @@ FIELDS = {
     "sCorrK": ("SCorrK", "SCorrK"),
     "sCorrN": ("SCorrN", "SCorrN"),
     "sCorrDeltaQ": ("SCorrDeltaQ", "SCorrDeltaQ"),
-    "xsphC": ("XSPHViscosity", "XSPHViscosity"),
+    "xsphViscosity": ("XSPHViscosity", "XSPHViscosity"),
     "vorticityEpsilon": ("VorticityEpsilon", "VorticityEpsilon"),
     "unilateral": ("Unilateral", "Unilateral"),
     "mirrorWalls": ("MirrorWalls", "MirrorWalls"),
     "gravity": ("Gravity", "Gravity"),
-    # dt is FrameInterval / SubstepsPerFrame; the domain comes from the scene.
-    "timeStep": (None, "TimeStep"),
+    # Automatic (the default): the largest step; Fixed: FrameInterval / SubstepsPerFrame.
+    "timeStep": ("MaxTimeStep", "MaxTimeStep"),
+    "cflNumber": ("CFLNumber", "CFLNumber"),
 }
-SCENE_FIELDS = {"domain"}
+# The domain comes from the scene; sceneSpeedHint is derived from it by pbf::Simulation.
+SCENE_FIELDS = {"domain", "sceneSpeedHint"}
 
 
 def solver_defaults(header):
@@ -82,12 +84,13 @@ expect(source.FrameInterval / source.SubstepsPerFrame == defaults["timeStep"],
        % (source.FrameInterval / source.SubstepsPerFrame, defaults["timeStep"]))
 expect(source.FrameInterval == 1.0 / 60.0 and source.SubstepsPerFrame == 4 and
        source.NumberOfFrames == 120, "time defaults are not 1/60 s, 4 substeps, 120 frames")
-# The solver's default is the fixed count; the tolerance offered with it is 0.1 %.
-expect(defaults["densityErrorTolerance"] == 0 and source.AdaptiveIterations == 0 and
-       source.DensityErrorTolerance == 0.1,
+# The solver's default is adaptive, at 0.2 %, with automatic time steps.
+expect(defaults["densityErrorTolerance"] == 0.2 and source.AdaptiveIterations == 1 and
+       source.DensityErrorTolerance == 0.2,
        "adaptive defaults: AdaptiveIterations %r, DensityErrorTolerance %r, solver tolerance %r"
        % (source.AdaptiveIterations, source.DensityErrorTolerance,
           defaults["densityErrorTolerance"]))
+expect(source.TimeStepping == "Automatic", "TimeStepping default %r" % source.TimeStepping)
 expect(source.CheckpointInterval == 10 and source.CheckpointMemoryMB == 1024,
        "checkpoint defaults: every %r frames, %r MiB"
        % (source.CheckpointInterval, source.CheckpointMemoryMB))
@@ -111,7 +114,7 @@ changed = {
     "RestDensity": 800.0, "ParticleSpacing": 0.05, "SmoothingRatio": 2.5, "SolverIterations": 3,
     "RelaxationEpsilon": 0.02, "SCorrK": 0.05, "SCorrN": 3.0, "SCorrDeltaQ": 0.25,
     "XSPHViscosity": 0.02, "VorticityEpsilon": 0.005, "Unilateral": 0, "MirrorWalls": 0,
-    "Gravity": [0.5, -5.0, 0.25],
+    "Gravity": [0.5, -5.0, 0.25], "CFLNumber": 0.3, "MaxTimeStep": 0.005,
 }
 for prop, value in changed.items():
     source.SetPropertyWithName(prop, value)
@@ -133,6 +136,18 @@ for field, (prop, array) in FIELDS.items():
         expect(list(got) == want, "%s = %s reached the solver as %s" % (prop, want, list(got)))
     else:
         expect(got == want, "%s = %r reached the solver as %r" % (prop, want, got))
+# Automatic: frame 1 lands on 0.02 s exactly in steps of at most MaxTimeStep.
+expect(T.field_value(data, "Time") == 0.02, "frame 1 at t = %r" % T.field_value(data, "Time"))
+expect(T.field_value(data, "TimeStepping") == "Automatic",
+       "TimeStepping reached the solver as %r" % T.field_value(data, "TimeStepping"))
+# CFL 0.3 at s = 0.05 m and the scene's fall speed of about 3 m/s: steps of about 5 ms.
+expect(T.field_value(data, "StepCount") >= 4 and T.field_value(data, "TimeStep") <= 0.005,
+       "frame 1 of 0.02 s ran %d steps, the last of %r s (at most 0.005)"
+       % (T.field_value(data, "StepCount"), T.field_value(data, "TimeStep")))
+# Fixed: SubstepsPerFrame equal steps.
+source.TimeStepping = "Fixed"
+data = T.output_at(source, 0.02)
+expect(T.field_value(data, "TimeStepping") == "Fixed", "TimeStepping Fixed did not reach the solver")
 expect(T.field_value(data, "TimeStep") == 0.02 / 5, "dt = %r" % T.field_value(data, "TimeStep"))
 expect(T.field_value(data, "StepCount") == 5, "frame 1 at 5 substeps ran %d steps"
        % T.field_value(data, "StepCount"))

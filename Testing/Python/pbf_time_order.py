@@ -12,7 +12,10 @@ T.load_plugin(globals())
 expect = T.expect
 
 FRAMES = 6
-SETTINGS = dict(ParticleSpacing=T.QUICK_SPACING, NumberOfFrames=FRAMES, SubstepsPerFrame=2)
+# The default (automatic) time stepping: the steps of each frame are chosen from the state, so
+# a frame reached from a checkpoint (every 2 frames here) must take the same steps as a straight
+# run.
+SETTINGS = dict(ParticleSpacing=T.QUICK_SPACING, NumberOfFrames=FRAMES, CheckpointInterval=2)
 INTERVAL = 1.0 / 60.0
 
 
@@ -29,7 +32,8 @@ def straight(frame, **extra):
 reference = {k: straight(k) for k in range(FRAMES + 1)}
 # The frames differ from one another, or equality below would prove nothing.
 for k in range(1, FRAMES + 1):
-    expect(reference[k]["step"] == 2 * k, "frame %d ran %d steps" % (k, reference[k]["step"]))
+    expect(reference[k]["step"] > reference[k - 1]["step"],
+           "frame %d ran no step (%d steps in all)" % (k, reference[k]["step"]))
     moved = abs(reference[k]["points"] - reference[k - 1]["points"]).max()
     expect(moved > 0, "frames %d and %d are equal: the fluid does not move" % (k - 1, k))
 
@@ -51,18 +55,21 @@ source.NumberOfFrames = FRAMES
 source.XSPHViscosity = 0.2
 viscous = T.frame(source, 4 * INTERVAL)
 expect(abs(viscous["velocity"] - reference[4]["velocity"]).max() > 1e-4,
-       "XSPHViscosity 0.01 -> 0.2 left frame 4 unchanged")
+       "XSPHViscosity 0.05 -> 0.2 left frame 4 unchanged")
 T.expect_identical(viscous, straight(4, XSPHViscosity=0.2), "frame 4 with XSPHViscosity 0.2")
-source.XSPHViscosity = 0.01
+source.XSPHViscosity = 0.05
 T.expect_identical(T.frame(source, 3 * INTERVAL), reference[3], "frame 3 after changing back")
 
 # Every physics property restarts the simulation, even when the next frame is later: step on
 # from frame 1 of the old settings and frame 2 would differ from a straight run of the new ones.
 CHANGES = [("RestDensity", 900.0), ("ParticleSpacing", 0.06), ("SmoothingRatio", 2.2),
            ("SolverIterations", 3), ("RelaxationEpsilon", 0.02), ("SCorrK", 0.05),
-           ("SCorrN", 3.0), ("SCorrDeltaQ", 0.25), ("XSPHViscosity", 0.05),
+           ("SCorrN", 3.0), ("SCorrDeltaQ", 0.25), ("XSPHViscosity", 0.1),
            ("VorticityEpsilon", 0.02), ("Unilateral", 0), ("MirrorWalls", 0),
-           ("Gravity", [0.0, -9.0, 0.0]), ("FrameInterval", 0.02), ("SubstepsPerFrame", 3)]
+           ("Gravity", [0.0, -9.0, 0.0]), ("FrameInterval", 0.02), ("CFLNumber", 0.3),
+           ("MaxTimeStep", 0.0005)]
+# (TimeStepping Fixed is absent: at this spacing the automatic step is the largest one, 1/240 s,
+# which is also Fixed's FrameInterval / SubstepsPerFrame, so the frames are the same.)
 for name, value in CHANGES:
     original = source.GetPropertyValue(name)
     original = list(original) if hasattr(original, "__len__") else original

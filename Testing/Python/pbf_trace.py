@@ -18,11 +18,11 @@ folder = tempfile.mkdtemp(prefix="pbf_trace_")
 smtrace.start_trace()
 source = PositionBasedFluids(  # noqa: F821 (defined by LoadPlugin)
     registrationName="fluid", Preset="blob", ParticleSpacing=T.QUICK_SPACING, NumberOfFrames=10,
-    SubstepsPerFrame=3, XSPHViscosity=0.03, SolverIterations=5, AdaptiveIterations=1,
-    DensityErrorTolerance=0.5, CheckpointInterval=2)
+    TimeStepping="Fixed", SubstepsPerFrame=3, XSPHViscosity=0.03, SolverIterations=5,
+    AdaptiveIterations=0, DensityErrorTolerance=0.5, CheckpointInterval=2)
 trace = smtrace.stop_trace()
 for text in ("PositionBasedFluids(registrationName='fluid'", "Preset = 'blob'",
-             "DensityErrorTolerance = 0.5", "AdaptiveIterations = 1"):
+             "DensityErrorTolerance = 0.5", "AdaptiveIterations = 0", "TimeStepping = 'Fixed'"):
     expect(text in trace, "the trace lacks %r:\n%s" % (text, trace))
 live = T.frame(source, 6 * INTERVAL)
 
