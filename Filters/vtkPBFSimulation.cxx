@@ -83,7 +83,8 @@ bool SameParameters(const pbf::Parameters& a, const pbf::Parameters& b)
 {
   return a.restDensity == b.restDensity && a.particleSpacing == b.particleSpacing &&
     a.smoothingRatio == b.smoothingRatio && a.solverIterations == b.solverIterations &&
-    a.densityErrorTolerance == b.densityErrorTolerance && a.relaxation == b.relaxation &&
+    a.densityErrorTolerance == b.densityErrorTolerance &&
+    a.maxDensityErrorTolerance == b.maxDensityErrorTolerance && a.relaxation == b.relaxation &&
     a.sCorrK == b.sCorrK && a.sCorrN == b.sCorrN && a.sCorrDeltaQ == b.sCorrDeltaQ &&
     a.xsphViscosity == b.xsphViscosity && a.vorticityEpsilon == b.vorticityEpsilon &&
     a.unilateral == b.unilateral && a.mirrorWalls == b.mirrorWalls && a.gravity.x == b.gravity.x &&
@@ -306,6 +307,7 @@ vtkSmartPointer<vtkFieldData> FrameFieldData(
   AddInteger(fieldData, "SolverIterations", p.solverIterations);
   AddInteger(fieldData, "AdaptiveIterations", p.densityErrorTolerance > 0 ? 1 : 0);
   AddValue(fieldData, "DensityErrorTolerance", p.densityErrorTolerance);
+  AddValue(fieldData, "MaxDensityErrorTolerance", p.maxDensityErrorTolerance);
   AddValue(fieldData, "RelaxationEpsilon", p.relaxation);
   AddValue(fieldData, "SCorrK", p.sCorrK);
   AddValue(fieldData, "SCorrN", p.sCorrN);
@@ -726,6 +728,7 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->AdaptiveIterations = defaults.densityErrorTolerance > 0;
   this->DensityErrorTolerance =
     defaults.densityErrorTolerance > 0 ? defaults.densityErrorTolerance : 0.2;
+  this->MaxDensityErrorTolerance = defaults.maxDensityErrorTolerance;
   this->FrameInterval = 1.0 / 60.0;
   this->SubstepsPerFrame = 4;
   this->TimeStepping =
@@ -967,6 +970,7 @@ int vtkPBFSimulation::RequestData(
     p.smoothingRatio = this->SmoothingRatio;
     p.solverIterations = this->SolverIterations;
     p.densityErrorTolerance = this->AdaptiveIterations ? this->DensityErrorTolerance : 0.0;
+    p.maxDensityErrorTolerance = this->MaxDensityErrorTolerance;
     p.relaxation = this->RelaxationEpsilon;
     p.sCorrK = this->SCorrK;
     p.sCorrN = this->SCorrN;
@@ -1351,6 +1355,7 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "SolverIterations: " << this->SolverIterations << "\n";
   os << indent << "AdaptiveIterations: " << (this->AdaptiveIterations ? "On" : "Off") << "\n";
   os << indent << "DensityErrorTolerance: " << this->DensityErrorTolerance << "\n";
+  os << indent << "MaxDensityErrorTolerance: " << this->MaxDensityErrorTolerance << "\n";
   os << indent << "RelaxationEpsilon: " << this->RelaxationEpsilon << "\n";
   os << indent << "SCorrK: " << this->SCorrK << "\n";
   os << indent << "SCorrN: " << this->SCorrN << "\n";

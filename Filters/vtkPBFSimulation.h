@@ -218,6 +218,10 @@ public:
   vtkBooleanMacro(AdaptiveIterations, bool);
   vtkSetClampMacro(DensityErrorTolerance, double, 1e-6, 100.0);
   vtkGetMacro(DensityErrorTolerance, double);
+  // ... and while any particle is compressed by more than this [percent] (default 5; 0: the mean
+  // alone decides).
+  vtkSetClampMacro(MaxDensityErrorTolerance, double, 0.0, 1000.0);
+  vtkGetMacro(MaxDensityErrorTolerance, double);
   ///@}
 
   ///@{
@@ -321,6 +325,7 @@ protected:
   double Gravity[3];
   bool AdaptiveIterations;
   double DensityErrorTolerance;
+  double MaxDensityErrorTolerance;
 
   double FrameInterval;
   int SubstepsPerFrame;

@@ -135,17 +135,19 @@ void CpuStepper<Real>::step()
   sortByCell();
   const FluidView<Real> f = view();
   const FluidView<Real> first = view(true); // the first projection adds s_corr
-  const double tolerance = parameters_.densityErrorTolerance / 100.0;
+  const bool adaptive = parameters_.densityErrorTolerance > 0;
   report_ = StepReport{};
   for (int iteration = 0; iteration < parameters_.solverIterations; ++iteration)
   {
     forEachParticle([&](std::uint32_t i) { densityAndLambda(i, f); });
-    if (tolerance > 0)
+    if (adaptive)
     {
       // Adaptive mode: the constraint already holds well enough, no need to project again. The
       // first projection always runs: it carries the step's tensile push.
-      report_.densityError = meanDensityError();
-      if (iteration > 0 && report_.densityError <= tolerance)
+      const Compression c = compression();
+      report_.densityError = c.mean;
+      if (iteration > 0 &&
+        c.within(parameters_.densityErrorTolerance, parameters_.maxDensityErrorTolerance))
       {
         break;
       }
@@ -155,7 +157,7 @@ void CpuStepper<Real>::step()
     forEachParticle([&](std::uint32_t i) { applyCorrection(i, f); });
     ++report_.iterations;
   }
-  if (tolerance <= 0)
+  if (!adaptive)
   {
     report_.densityError = std::numeric_limits<double>::quiet_NaN();
   }
@@ -186,36 +188,43 @@ void CpuStepper<Real>::append(const ParticleBatch& batch)
 }
 
 template <class Real>
-double CpuStepper<Real>::meanDensityError()
+Compression CpuStepper<Real>::compression()
 {
+  Compression c;
   if (density_.empty())
   {
-    return 0.0;
+    return c;
   }
   // Fixed blocks summed in parallel, then the block sums in order: the same bits whatever the
   // number of threads, so OpenMP stays identical to serial.
   constexpr std::size_t block = 4096;
   const std::size_t n = density_.size();
   const auto blocks = static_cast<std::int64_t>((n + block - 1) / block);
-  blockSums_.assign(static_cast<std::size_t>(blocks), 0.0);
+  // Sums then maxima, one block each: blockSums_[b] and blockSums_[blocks + b].
+  blockSums_.assign(2 * static_cast<std::size_t>(blocks), 0.0);
   const double inverseRho0 = 1.0 / parameters_.restDensity;
 #pragma omp parallel for schedule(static) if (parallel_)
   for (std::int64_t b = 0; b < blocks; ++b)
   {
-    double sum = 0.0;
+    double sum = 0.0, largest = 0.0;
     const std::size_t end = std::min(n, static_cast<std::size_t>(b + 1) * block);
     for (std::size_t i = static_cast<std::size_t>(b) * block; i < end; ++i)
     {
-      sum += std::max(double(density_[i]) * inverseRho0 - 1.0, 0.0);
+      const double e = std::max(double(density_[i]) * inverseRho0 - 1.0, 0.0);
+      sum += e;
+      largest = std::max(largest, e);
     }
     blockSums_[static_cast<std::size_t>(b)] = sum;
+    blockSums_[static_cast<std::size_t>(blocks + b)] = largest;
   }
   double total = 0.0;
-  for (double sum : blockSums_)
+  for (std::int64_t b = 0; b < blocks; ++b)
   {
-    total += sum;
+    total += blockSums_[static_cast<std::size_t>(b)];
+    c.max = std::max(c.max, blockSums_[static_cast<std::size_t>(blocks + b)]);
   }
-  return total / double(n);
+  c.mean = total / double(n);
+  return c;
 }
 
 template <class Real>

@@ -42,7 +42,9 @@ private:
   void copyOut(Snapshot<Out>& out) const;
   template <class In>
   void loadState(const Snapshot<In>& state);
-  double meanDensityError();     // of density_, summed in fixed blocks: thread-count independent
+  // Mean and max of max(rho_i / rho_0 - 1, 0) of density_, summed in fixed blocks: thread-count
+  // independent.
+  Compression compression();
   template <class Stage>
   void forEachParticle(Stage&& stage);
   FluidView<Real> view(bool tensile = false);

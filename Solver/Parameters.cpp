@@ -187,6 +187,7 @@ void Parameters::validate() const
     reject("solverIterations", solverIterations, "must lie in [1, 1000]");
   }
   requireNonNegative("densityErrorTolerance", densityErrorTolerance);
+  requireNonNegative("maxDensityErrorTolerance", maxDensityErrorTolerance);
   requirePositive("relaxation", relaxation);
   requireNonNegative("sCorrK", sCorrK);
   requirePositive("sCorrN", sCorrN);
@@ -352,7 +353,9 @@ std::string describe(const Parameters& p)
   std::ostringstream out;
   out << "rho0=" << p.restDensity << " s=" << p.particleSpacing << " h=" << p.smoothingLength()
       << " m=" << calibratedParticleMass(p) << " iterations=" << p.solverIterations
-      << (p.densityErrorTolerance > 0 ? " (adaptive to " + std::to_string(p.densityErrorTolerance) + "%)" : "")
+      << (p.densityErrorTolerance > 0 ? " (adaptive to " + std::to_string(p.densityErrorTolerance) +
+                 "% mean, " + std::to_string(p.maxDensityErrorTolerance) + "% max)"
+                                       : "")
       << " epsilon=" << p.relaxation << " k=" << p.sCorrK << " n=" << p.sCorrN
       << " dq=" << p.sCorrDeltaQ << " xsph=" << p.xsphViscosity << " (nu " << p.xsphNu() << ")" << " vorticity=" << p.vorticityEpsilon
       << (p.timeStepping == TimeStepping::Automatic

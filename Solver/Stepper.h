@@ -84,6 +84,20 @@ struct Health
   std::int64_t firstBadId = -1; // the id of a particle counted above; -1: none, or not known
 };
 
+// Adaptive mode's measure of the constraint: mean and max over particles of
+// max(rho_i / rho_0 - 1, 0), and whether a step may stop projecting there.
+struct Compression
+{
+  double mean = 0;
+  double max = 0;
+  // Within the tolerances (Parameters::densityErrorTolerance, maxDensityErrorTolerance; percent).
+  bool within(double meanTolerancePercent, double maxTolerancePercent) const
+  {
+    return mean <= meanTolerancePercent / 100.0 &&
+      (maxTolerancePercent <= 0 || max <= maxTolerancePercent / 100.0);
+  }
+};
+
 // What the last step() did.
 struct StepReport
 {

@@ -107,6 +107,9 @@ if grep -q "CMake Error" "$work/ctest.log"; then
   done
 fi
 
+if [[ ${PBF_GPU_SKIP_SANITIZERS:-0} == 1 ]]; then
+  phase "compute-sanitizer and soak: skipped (PBF_GPU_SKIP_SANITIZERS=1)"
+else
 phase "compute-sanitizer"
 # sanitize "TOOL [OPTIONS]" PROGRAM ARGS...
 sanitize() {
@@ -136,6 +139,7 @@ timeout "$(limit 150)" "$build/Solver/Tools/pbf_soak" --backend cuda --particles
 soak_status=$?
 cat "$work/soak.log"
 record "soak 1M x 10000 steps: $(tail -n 1 "$work/soak.log") (exit $soak_status)"
+fi
 
 if ((quick)); then
   phase "ncu: skipped (quick run)"
@@ -157,6 +161,61 @@ timeout "$(limit 100)" ncu --clock-control none --kernel-name-base demangled \
   record "ncu sections: FAILED or cut"
 grep -E "Stage|Duration|Throughput|Achieved Occupancy|Issue Slots Busy|thread_inst_executed_per|Registers" \
   "$out/ncu_sections.txt" | head -80
+fi
+
+if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
+  # The resolution issue's runs (Testing/Validation/README.md, "Resolution"): CSVs of every frame
+  # into $out/resolution, the summary tables into the log. PBF_GPU_RESOLUTION=1: the 1.15M and
+  # 9.2M dam breaks and the Martin & Moyce fronts; 2: the smoothing ratios, the CFL halving and
+  # the CPU (OpenMP) dam breaks.
+  res=$out/resolution
+  mkdir -p "$res"
+  refined=$build/Solver/Tools/pbf_refined
+  mm=$build/Testing/Validation/pbf_martin_moyce
+  experiment=$root/Testing/Validation/martin_moyce_1952_surge_front_n2.csv
+  refine() { # refine NAME SECONDS ARGS...
+    local name=$1 seconds=$2
+    shift 2
+    phase "resolution $name: $*"
+    timeout "$(limit "$seconds")" "$refined" "$@" --csv "$res" >"$res/$name.log" 2>&1
+    local status=$?
+    tail -n 8 "$res/$name.log"
+    record "resolution $name: exit $status"
+  }
+  if [[ $PBF_GPU_RESOLUTION == 1 || $PBF_GPU_RESOLUTION == 3 ]]; then
+    refine dam_break_1M 150 --backend cuda --spacings 0.005 --until 2
+    refine dam_break_9M 200 --backend cuda --spacings 0.0025 --until 0.5
+    for across in 10 20 40 80; do
+      phase "martin-moyce $across across"
+      timeout "$(limit 60)" "$mm" --backend cuda --across "$across" --experiment "$experiment" \
+        --front "$res/mm_$across.csv" >"$res/mm_$across.txt" 2>"$res/mm_$across.err"
+      record "martin-moyce $across: $(grep -E 'rms_relative_error,|fitted' "$res/mm_$across.txt" | tr '\n' ' ')"
+    done
+  fi
+  if [[ $PBF_GPU_RESOLUTION == 2 || $PBF_GPU_RESOLUTION == 3 ]]; then
+    for ratio in 1.5 2 2.5 3; do
+      refine "tank_ratio_$ratio" 40 --backend cuda --scene "$root/Testing/Validation/hydrostatic_tank.json" \
+        --spacings 0.02 --smoothing-ratio "$ratio" --until 0.5 --modes defaults
+      refine "dam_break_ratio_$ratio" 40 --backend cuda --spacings 0.02 --smoothing-ratio "$ratio" \
+        --until 2 --modes defaults
+      mv "$res/dam_break_0.02_defaults_CUDA.csv" "$res/dam_break_0.02_ratio_$ratio.csv" 2>/dev/null
+      mv "$res/hydrostatic_tank_0.02_defaults_CUDA.csv" "$res/tank_0.02_ratio_$ratio.csv" 2>/dev/null
+    done
+    refine dam_break_cfl_0.2 60 --backend cuda --spacings 0.01,0.005 --until 2 --modes defaults --cfl 0.2
+    for f in "$res"/dam_break_0.01_defaults_CUDA.csv "$res"/dam_break_0.005_defaults_CUDA.csv; do
+      [[ -f $f ]] && mv "$f" "${f%.csv}_cfl0.2.csv"
+    done
+    refine dam_break_cuda_coarse 60 --backend cuda --spacings 0.04,0.02,0.01 --until 2 --modes defaults
+    for across in 40 80; do
+      phase "martin-moyce $across across, CFL 0.2"
+      timeout "$(limit 60)" "$mm" --backend cuda --across "$across" --experiment "$experiment" \
+        --dt-factor 0.5 --front "$res/mm_${across}_cfl0.2.csv" >"$res/mm_${across}_cfl0.2.txt" 2>&1
+      record "martin-moyce $across, CFL 0.2: $(grep -E 'rms_relative_error,' "$res/mm_${across}_cfl0.2.txt")"
+    done
+    refine dam_break_openmp 200 --backend openmp --spacings 0.04,0.02,0.01 --until 2 --modes defaults
+  fi
+  # The device tool brings back a limited number of files: one archive of them all.
+  (cd "$out" && tar czf resolution.tar.gz resolution && rm -rf resolution)
 fi
 
 phase "summary"

@@ -166,6 +166,18 @@ __device__ inline void treeSum(double* shared)
   }
 }
 
+__device__ inline void treeMax(double* shared)
+{
+  for (int width = kReduceThreads / 2; width > 0; width >>= 1)
+  {
+    if (static_cast<int>(threadIdx.x) < width)
+    {
+      shared[threadIdx.x] = fmax(shared[threadIdx.x], shared[threadIdx.x + width]);
+    }
+    __syncthreads();
+  }
+}
+
 template <class Real>
 __global__ void __launch_bounds__(kReduceThreads) compressionBlocksKernel(const Real* density,
   std::uint32_t n, double inverseRestDensity, const AdaptiveState* state, double* blockSums)
@@ -177,44 +189,56 @@ __global__ void __launch_bounds__(kReduceThreads) compressionBlocksKernel(const 
   }
   const std::uint32_t begin = blockIdx.x * kCompressionBlock;
   const std::uint32_t end = n - begin < kCompressionBlock ? n : begin + kCompressionBlock;
-  double sum = 0.0;
+  __shared__ double largest[kReduceThreads];
+  double sum = 0.0, top = 0.0;
   for (std::uint32_t i = begin + threadIdx.x; i < end; i += kReduceThreads)
   {
     const double c = static_cast<double>(density[i]) * inverseRestDensity - 1.0;
-    sum += c < 0.0 ? 0.0 : c; // std::max(c, 0.0), as CpuStepper::meanDensityError
+    const double e = c < 0.0 ? 0.0 : c; // std::max(c, 0.0), as CpuStepper::compression
+    sum += e;
+    top = fmax(top, e);
   }
   shared[threadIdx.x] = sum;
+  largest[threadIdx.x] = top;
   __syncthreads();
   treeSum(shared);
+  treeMax(largest);
   if (threadIdx.x == 0)
   {
+    // Sums first, then maxima: blockSums[b] and blockSums[gridDim.x + b].
     blockSums[blockIdx.x] = shared[0];
+    blockSums[gridDim.x + blockIdx.x] = largest[0];
   }
 }
 
 template <class Real> // only so that each translation unit has its own instance
 __global__ void __launch_bounds__(kReduceThreads) compressionFinalKernel(
-  std::uint32_t blocks, std::uint32_t n, double tolerance, AdaptiveState* state,
-  const double* blockSums)
+  std::uint32_t blocks, std::uint32_t n, double tolerance, double maxTolerance,
+  AdaptiveState* state, const double* blockSums)
 {
   __shared__ double shared[kReduceThreads];
+  __shared__ double largest[kReduceThreads];
   if (state->done)
   {
     return;
   }
-  double sum = 0.0;
+  double sum = 0.0, top = 0.0;
   for (std::uint32_t b = threadIdx.x; b < blocks; b += kReduceThreads)
   {
     sum += blockSums[b];
+    top = fmax(top, blockSums[blocks + b]);
   }
   shared[threadIdx.x] = sum;
+  largest[threadIdx.x] = top;
   __syncthreads();
   treeSum(shared);
+  treeMax(largest);
   if (threadIdx.x == 0)
   {
     const double mean = n > 0 ? shared[0] / n : 0.0;
     state->densityError = mean;
-    if (mean <= tolerance)
+    state->maxDensityError = largest[0];
+    if (mean <= tolerance && (maxTolerance <= 0.0 || largest[0] <= maxTolerance))
     {
       state->done = 1;
     }
@@ -293,7 +317,7 @@ public:
       check(cudaGetLastError(), "kernel launch (compression)");
     }
     compressionFinalKernel<Real><<<1, kReduceThreads, 0, stream_>>>(
-      blocks, n, tolerance, state, blockSums);
+      blocks, n, tolerance, k.maxTolerance, state, blockSums);
     check(cudaGetLastError(), "kernel launch (compression)");
   }
 

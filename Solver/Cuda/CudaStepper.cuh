@@ -447,8 +447,9 @@ void CudaStepper<Real>::allocate(std::size_t capacity, std::size_t particles)
   const std::size_t movedAt = place(static_cast<std::size_t>(k.iterations) * 8);
   const std::size_t buildsAt = place(8);
   const std::size_t adaptiveAt = place(sizeof(AdaptiveState));
+  // Two per block: the sums, then the maxima.
   const std::size_t blockSumsAt =
-    place((capacity + kCompressionBlock - 1) / kCompressionBlock * sizeof(double));
+    place(2 * ((capacity + kCompressionBlock - 1) / kCompressionBlock) * sizeof(double));
   const std::size_t partialsAt = place(kStatisticsBlocks * kStatisticsValues * sizeof(double));
   const std::size_t resultAt = place(kStatisticsValues * sizeof(double));
   const std::size_t tempAt = place(tempBytes);

@@ -468,7 +468,7 @@ private:
     auto* ownedList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
     auto* borderList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
     auto* interiorList = static_cast<std::uint32_t*>(make(sizeof(std::uint32_t)));
-    // Adaptive mode's partial sums: one per block of the reduction, a fraction of a byte per
+    // Adaptive mode's partial sums and maxima: two per block of 4096, a fraction of a byte per
     // particle (whole bytes here, to keep make() per particle).
     auto* blockSums = static_cast<double*>(make(1));
     device_->reserveTemp(count(capacity), std::size_t(constants_.cellCount) + 1, constants_.keyBits);
@@ -1255,8 +1255,10 @@ private:
       receiveRefresh<Real>(density_, lambda_);
       if (adaptive)
       {
-        report_.densityError = meanCompression(n);
-        if (iteration > 0 && report_.densityError <= k.tolerance)
+        const Compression c = compression(n);
+        report_.densityError = c.mean;
+        if (iteration > 0 &&
+          c.within(parameters_.densityErrorTolerance, parameters_.maxDensityErrorTolerance))
         {
           converged = true;
           break;
@@ -1318,9 +1320,10 @@ private:
     keepOwned(f.p, f.scratch, r.v, r.x);
   }
 
-  // Adaptive mode: mean(max(rho_i / rho_0 - 1, 0)) over every rank's owned particles (collective).
-  // The owned densities are gathered into densityAlt_ (free until keepOwned) and reduced there.
-  double meanCompression(std::uint32_t n)
+  // Adaptive mode: mean and max of max(rho_i / rho_0 - 1, 0) over every rank's owned particles
+  // (collective). The owned densities are gathered into densityAlt_ (free until keepOwned) and
+  // reduced there.
+  Compression compression(std::uint32_t n)
   {
     auto exec = device_->executor();
     subdomain::gather<Real>(exec, n, ownedList_, density_, densityAlt_);
@@ -1331,13 +1334,16 @@ private:
     device_->download(&state, adaptive_, sizeof state);
     device_->synchronize();
     double total = 0.0, count = 0.0;
+    Compression c;
     for (const std::vector<double>& r : distributed::allGather(
-           communicator_, { state.densityError * double(n), double(n) }))
+           communicator_, { state.densityError * double(n), double(n), state.maxDensityError }))
     {
       total += r[0];
       count += r[1];
+      c.max = std::max(c.max, r[2]);
     }
-    return count > 0 ? total / count : 0.0;
+    c.mean = count > 0 ? total / count : 0.0;
+    return c;
   }
 
   // The owned particles (ownedList_) of positions and velocities into vec[toX], vec[toV], and

@@ -18,7 +18,8 @@
 //   maxScan(data, count)                 inclusive max-scan in place
 //   fillZero(pointer, bytes), copy(destination, source, bytes)
 //   reduceCompression(density, n, state, blockSums, constants, tolerance)   adaptive mode, see
-//                                        AdaptiveState; a negative tolerance never finishes
+//                                        AdaptiveState (blockSums: 2 per block of
+//                                        kCompressionBlock); a negative tolerance never finishes
 #pragma once
 
 #include "Equations.h"
@@ -54,7 +55,8 @@ struct AdaptiveState
 {
   int done;
   int iterations;
-  double densityError;
+  double densityError;    // the mean compression
+  double maxDensityError; // the largest, which must also be within k.maxTolerance when > 0
 };
 
 struct SortedPairs
@@ -93,6 +95,7 @@ struct StepConstants
   Real reach2;       // (h + skin)^2: what a mask marks
   MaskSchedule schedule;
   double tolerance;            // adaptive mode when > 0: densityErrorTolerance as a fraction
+  double maxTolerance;         // maxDensityErrorTolerance as a fraction; 0: not a criterion
   double inverseRestDensity;   // 1 / rho_0 in double, for the compression of adaptive mode
   // This step's dt and what follows from it, in the stepper's memory (device memory on a GPU):
   // the stepper writes it before a step, so a captured step reads the current values.
@@ -126,6 +129,7 @@ StepConstants<Real> makeStepConstants(const Parameters& parameters, double skin,
   k.schedule.roundingPerStep = MaskSchedule::roundingBound<Real>(maxAbs);
   k.schedule.enabled = masks ? 1 : 0;
   k.tolerance = parameters.densityErrorTolerance / 100.0;
+  k.maxTolerance = parameters.maxDensityErrorTolerance / 100.0;
   k.inverseRestDensity = 1.0 / parameters.restDensity;
   return k;
 }

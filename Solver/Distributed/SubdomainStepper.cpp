@@ -400,23 +400,29 @@ void SubdomainStepper<Real>::dropGhosts()
 }
 
 template <class Real>
-double SubdomainStepper<Real>::meanDensityError()
+Compression SubdomainStepper<Real>::compression()
 {
   // In fixed blocks per rank, then the ranks in order: deterministic, though summed in another
   // order than the serial backend's blocks.
-  double sum = 0.0;
+  double sum = 0.0, largest = 0.0;
   const double inverseRho0 = 1.0 / parameters_.restDensity;
   for (std::uint32_t i : owned_)
   {
-    sum += std::max(double(density_[i]) * inverseRho0 - 1.0, 0.0);
+    const double e = std::max(double(density_[i]) * inverseRho0 - 1.0, 0.0);
+    sum += e;
+    largest = std::max(largest, e);
   }
   double total = 0.0, count = 0.0;
-  for (const std::vector<double>& r : allGather(communicator_, { sum, double(owned_.size()) }))
+  Compression c;
+  for (const std::vector<double>& r :
+    allGather(communicator_, { sum, double(owned_.size()), largest }))
   {
     total += r[0];
     count += r[1];
+    c.max = std::max(c.max, r[2]);
   }
-  return count > 0 ? total / count : 0.0;
+  c.mean = count > 0 ? total / count : 0.0;
+  return c;
 }
 
 template <class Real>
@@ -444,16 +450,18 @@ void SubdomainStepper<Real>::step()
   sortByCell();
   const FluidView<Real> f = view();
   const FluidView<Real> first = view(true); // the first projection adds s_corr
-  const double tolerance = parameters_.densityErrorTolerance / 100.0;
+  const bool adaptive = parameters_.densityErrorTolerance > 0;
   for (int iteration = 0; iteration < parameters_.solverIterations; ++iteration)
   {
     forOwned([&](std::uint32_t i) { densityAndLambda(i, f); });
     refreshGhosts([&](std::uint32_t i) -> Real& { return density_[i]; });
     refreshGhosts([&](std::uint32_t i) -> Real& { return lambda_[i]; });
-    if (tolerance > 0)
+    if (adaptive)
     {
-      report_.densityError = meanDensityError();
-      if (iteration > 0 && report_.densityError <= tolerance)
+      const Compression c = compression();
+      report_.densityError = c.mean;
+      if (iteration > 0 &&
+        c.within(parameters_.densityErrorTolerance, parameters_.maxDensityErrorTolerance))
       {
         break;
       }
@@ -464,7 +472,7 @@ void SubdomainStepper<Real>::step()
     refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return p_[i]; });
     ++report_.iterations;
   }
-  if (tolerance <= 0)
+  if (!adaptive)
   {
     report_.densityError = std::numeric_limits<double>::quiet_NaN();
   }

@@ -119,7 +119,7 @@ private:
   void refreshGhosts(Field field);     // field(i) of each ghost from its owner
   void dropGhosts();                   // back to owned only, in cell order
   void evaluateAtRest();               // density and lambda of the current positions
-  double meanDensityError();           // collective
+  Compression compression();           // collective
 
   Communicator& communicator_;
   bool parallel_;

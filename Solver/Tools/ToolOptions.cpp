@@ -54,7 +54,10 @@ std::map<std::string, std::pair<std::string, Setter>> parameterSetters()
     { "tolerance",
       { "adaptive iterations: mean compression target [%] (0: fixed count)",
         real(&Parameters::densityErrorTolerance) } },
-    { "scorr-k", { "s_corr k", real(&Parameters::sCorrK) } },
+    { "max-tolerance",
+      { "adaptive iterations: largest compression allowed [%] (0: the mean alone decides)",
+        real(&Parameters::maxDensityErrorTolerance) } },
+    { "scorr-k", { "s_corr k in units of g0", real(&Parameters::sCorrK) } },
     { "scorr-n", { "s_corr n", real(&Parameters::sCorrN) } },
     { "scorr-dq", { "s_corr delta_q / h", real(&Parameters::sCorrDeltaQ) } },
     { "xsph", { "XSPH viscosity nu [m^2/s]", real(&Parameters::xsphViscosity) } },
@@ -132,6 +135,7 @@ ToolOptions parseToolOptions(
     }
     const std::string key = flag.substr(2);
     const std::string value = argv[a + 1];
+    options.given.insert(key);
     if (auto it = setters.find(key); it != setters.end())
     {
       try
@@ -153,6 +157,18 @@ ToolOptions parseToolOptions(
     }
   }
   return options;
+}
+
+void usePaperIterationsUnlessGiven(ToolOptions& options)
+{
+  if (!options.given.count("tolerance"))
+  {
+    options.parameters.densityErrorTolerance = 0;
+  }
+  if (!options.given.count("iterations"))
+  {
+    options.parameters.solverIterations = 4;
+  }
 }
 
 long toolInteger(const ToolOptions& options, const std::string& key, long fallback, long minimum)

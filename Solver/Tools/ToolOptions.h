@@ -6,6 +6,7 @@
 #include "Stepper.h"
 
 #include <map>
+#include <set>
 #include <string>
 
 namespace pbf
@@ -18,7 +19,13 @@ struct ToolOptions
   Backend backend = Backend::Serial;
   Precision precision = Precision::Single;
   std::map<std::string, std::string> extra; // tool-specific keys
+  std::set<std::string> given;               // every key on the command line
 };
+
+// The kernel benchmarks and soaks time a step of the paper's fixed 4 projections (comparable
+// across sessions and with the speed targets), not the adaptive default, unless --iterations or
+// --tolerance was given.
+void usePaperIterationsUnlessGiven(ToolOptions& options);
 
 // Parses argv; keys not in `toolKeys` nor a Parameters field throw InvalidInput naming them.
 ToolOptions parseToolOptions(int argc, char** argv, const std::map<std::string, std::string>& toolKeys);

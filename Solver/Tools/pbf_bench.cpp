@@ -254,6 +254,7 @@ int main(int argc, char** argv)
   try
   {
     ToolOptions options = parseToolOptions(argc, argv, keys);
+    usePaperIterationsUnlessGiven(options);
     auto extra = [&](const std::string& key, const std::string& fallback) {
       return options.extra.count(key) ? options.extra[key] : fallback;
     };

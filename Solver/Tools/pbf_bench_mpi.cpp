@@ -187,7 +187,8 @@ int main(int argc, char** argv)
       { "warmup", "steps before timing (default 3)" },
       { "json", "write the run to this file (rank 0)" },
     };
-    const ToolOptions options = parseToolOptions(argc, argv, keys);
+    ToolOptions options = parseToolOptions(argc, argv, keys);
+    usePaperIterationsUnlessGiven(options);
     distributed::MpiCommunicator communicator;
     status = options.precision == Precision::Double ? run<double>(options, communicator)
                                                     : run<float>(options, communicator);

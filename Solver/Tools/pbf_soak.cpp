@@ -89,6 +89,7 @@ int main(int argc, char** argv)
   try
   {
     ToolOptions options = parseToolOptions(argc, argv, keys);
+    usePaperIterationsUnlessGiven(options);
     const long steps = toolInteger(options, "steps", 10000, 0);
     const long check = toolInteger(options, "check", 500, 1);
     const Scene scene = options.extra.count("particles")

@@ -21,10 +21,15 @@ using namespace pbf;
 namespace
 {
 
+// Fixed steps and projections: the faults are injected at a step number, and the runs are
+// compared step for step.
 Parameters withSpacing(double spacing)
 {
   Parameters p;
   p.particleSpacing = spacing;
+  p.timeStepping = TimeStepping::Fixed;
+  p.densityErrorTolerance = 0;
+  p.solverIterations = 4;
   return p;
 }
 

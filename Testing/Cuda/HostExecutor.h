@@ -79,18 +79,21 @@ public:
     {
       return;
     }
-    double total = 0.0;
+    double total = 0.0, top = 0.0;
     for (std::uint32_t begin = 0; begin < n; begin += 4096)
     {
       double sum = 0.0;
       for (std::uint32_t i = begin; i < std::min(n, begin + 4096); ++i)
       {
-        sum += std::max(double(density[i]) * k.inverseRestDensity - 1.0, 0.0);
+        const double e = std::max(double(density[i]) * k.inverseRestDensity - 1.0, 0.0);
+        sum += e;
+        top = std::max(top, e);
       }
       total += sum;
     }
     state->densityError = n > 0 ? total / double(n) : 0.0;
-    if (state->densityError <= tolerance)
+    state->maxDensityError = top;
+    if (state->densityError <= tolerance && (k.maxTolerance <= 0 || top <= k.maxTolerance))
     {
       state->done = 1;
     }

@@ -44,6 +44,7 @@ public:
       std::abs(d.max.x), std::abs(d.max.y), std::abs(d.max.z) });
     k.schedule = MaskSchedule{ skin * h, h, MaskSchedule::roundingBound<Real>(maxAbs), masks };
     k.tolerance = parameters.densityErrorTolerance / 100.0;
+    k.maxTolerance = parameters.maxDensityErrorTolerance / 100.0;
     k.inverseRestDensity = 1.0 / parameters.restDensity;
     time_ = StepTime<Real>::make(parameters, calibrateLattice(parameters), parameters.timeStep);
     k.time = &time_;

@@ -19,6 +19,7 @@ FIELDS = {
     "solverIterations": ("SolverIterations", "SolverIterations"),
     # AdaptiveIterations ? DensityErrorTolerance : 0 (the solver's fixed mode); checked below.
     "densityErrorTolerance": (None, "DensityErrorTolerance"),
+    "maxDensityErrorTolerance": ("MaxDensityErrorTolerance", "MaxDensityErrorTolerance"),
     "relaxation": ("RelaxationEpsilon", "RelaxationEpsilon"),
     "sCorrK": ("SCorrK", "SCorrK"),
     "sCorrN": ("SCorrN", "SCorrN"),
@@ -114,7 +115,7 @@ changed = {
     "RestDensity": 800.0, "ParticleSpacing": 0.05, "SmoothingRatio": 2.5, "SolverIterations": 3,
     "RelaxationEpsilon": 0.02, "SCorrK": 0.05, "SCorrN": 3.0, "SCorrDeltaQ": 0.25,
     "XSPHViscosity": 0.02, "VorticityEpsilon": 0.005, "Unilateral": 0, "MirrorWalls": 0,
-    "Gravity": [0.5, -5.0, 0.25], "CFLNumber": 0.3, "MaxTimeStep": 0.005,
+    "Gravity": [0.5, -5.0, 0.25], "CFLNumber": 0.3, "MaxTimeStep": 0.005, "MaxDensityErrorTolerance": 3.0,
 }
 for prop, value in changed.items():
     source.SetPropertyWithName(prop, value)

@@ -59,7 +59,9 @@ int main(int argc, char** argv)
     }
     const auto experiment = readExperiment(options.extra["experiment"]);
     MartinMoyceSetup setup = martinMoyce(static_cast<int>(across), options.parameters);
+    // Fixed steps: dt itself; automatic (the default): the CFL number and the largest step.
     setup.parameters.timeStep *= dtFactor;
+    setup.parameters.cflNumber *= dtFactor;
     Simulation simulation(setup.scene, setup.parameters, options.backend, options.precision);
     const double s = setup.parameters.particleSpacing;
     std::fprintf(stderr, "martin-moyce: %ld across, %zu particles, dt %.4g s, %s\n", across,
