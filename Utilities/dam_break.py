@@ -34,7 +34,8 @@ def parse_arguments():
     parser.add_argument("--frames", type=int, help="NumberOfFrames (default: the plugin's, 120)")
     parser.add_argument("--spacing", type=float,
                         help="ParticleSpacing [m] (default: the plugin's, 0.02)")
-    parser.add_argument("--substeps", type=int, help="SubstepsPerFrame (default: the plugin's, 4)")
+    parser.add_argument("--substeps", type=int,
+                        help="fixed time stepping with this many steps per frame (default: automatic)")
     parser.add_argument("--backend", help="Auto, CUDA, CPU (OpenMP) or Serial (default Auto)")
     parser.add_argument("--size", type=int, nargs=2, default=[1280, 720], metavar=("W", "H"),
                         help="PNG size in pixels (default 1280 720)")
@@ -66,6 +67,7 @@ def simulate_and_write(args, output, constructors):
     if args.spacing is not None:
         source.ParticleSpacing = args.spacing
     if args.substeps is not None:
+        source.TimeStepping = "Fixed"
         source.SubstepsPerFrame = args.substeps
     if args.backend is not None:
         source.Backend = args.backend
