@@ -282,10 +282,48 @@ public:
     const HostState s = hostState();
     return distributed::reduceStatistics(communicator_, parameters_, s.view());
   }
+  // The divergence check's scan and the automatic step's fastest particle, every step: three
+  // maxima over the owned particles on the device (largest speed^2, largest compression, any
+  // non-finite value), 24 bytes back, then reduced over the ranks so that every rank reaches the
+  // same verdict (distributed::reduceHealth's rule). nonFinite counts the ranks with one; outside
+  // is 0: the collision step keeps finite positions in the box.
   Health health() const override
   {
-    const HostState s = hostState();
-    return distributed::reduceHealth(communicator_, parameters_, s.view());
+    device_->activate();
+    auto exec = device_->executor();
+    exec.fillZero(healthBits_, 3 * sizeof(unsigned long long));
+    const std::uint32_t n = count(n_);
+    const Vec3<Real>* x = vec_[x_];
+    const Vec3<Real>* v = vec_[v_];
+    const Real* density = density_;
+    const double inverseRho0 = 1.0 / parameters_.restDensity;
+    exec.forEachMax(GatherStage{}, n, healthBits_, [=] PBF_HD(std::uint32_t i) -> double {
+      const Vec3<Real> vi = v[i];
+      const double speed2 = double(vi.x) * vi.x + double(vi.y) * vi.y + double(vi.z) * vi.z;
+      return speed2 < 1e300 ? speed2 : 0.0; // NaN and infinity are the third maximum's
+    });
+    exec.forEachMax(GatherStage{}, n, healthBits_ + 1, [=] PBF_HD(std::uint32_t i) -> double {
+      const double e = double(density[i]) * inverseRho0 - 1.0;
+      return e > 0.0 && e < 1e300 ? e : 0.0;
+    });
+    exec.forEachMax(GatherStage{}, n, healthBits_ + 2, [=] PBF_HD(std::uint32_t i) -> double {
+      const Vec3<Real> xi = x[i], vi = v[i];
+      const double sum = double(xi.x) + xi.y + xi.z + vi.x + vi.y + vi.z;
+      return sum - sum == 0.0 ? 0.0 : 1.0; // finite exactly when sum - sum is 0
+    });
+    unsigned long long bits[3] = { 0, 0, 0 };
+    device_->download(bits, healthBits_, sizeof bits);
+    device_->synchronize();
+    Health all;
+    for (const std::vector<double>& r : distributed::allGather(communicator_,
+           { MaskSchedule::bitsToDouble(bits[0]), MaskSchedule::bitsToDouble(bits[1]),
+             MaskSchedule::bitsToDouble(bits[2]) }))
+    {
+      all.maxSpeed = std::max(all.maxSpeed, std::sqrt(r[0]));
+      all.maxDensityError = std::max(all.maxDensityError, r[1]);
+      all.nonFinite += r[2] > 0.0 ? 1 : 0;
+    }
+    return all;
   }
   StepReport lastStep() const override { return report_; }
   void synchronize() const override
@@ -399,6 +437,7 @@ private:
     deviceTime_ = allocateFixed<StepTime<Real>>(1);
     constants_.time = deviceTime_;
     adaptive_ = allocateFixed<AdaptiveState>(1);
+    healthBits_ = allocateFixed<unsigned long long>(3);
     listCounts_ = static_cast<std::uint32_t*>(device_->allocateHost(8 * sizeof(std::uint32_t)));
     // The owner counts' copies, then the ghosts sent to each side.
     setupCounts_ = static_cast<std::uint32_t*>(
@@ -1467,6 +1506,7 @@ private:
   Vec3<Real>* vec_[4] = {};
   Real *density_ = nullptr, *lambda_ = nullptr, *densityAlt_ = nullptr, *lambdaAlt_ = nullptr;
   AdaptiveState* adaptive_ = nullptr; // adaptive mode: this rank's reduction
+  unsigned long long* healthBits_ = nullptr; // health(): three maxima as double bits
   double* blockSums_ = nullptr;
   std::int64_t *id_ = nullptr, *idAlt_ = nullptr;
   CellKey* keys_[2] = {};

@@ -161,3 +161,39 @@ TEST(DeviceSubdomainOnHost, AdaptiveIterationsMatchTheSerialBackend)
     EXPECT_LT(worst, 1e-9) << ranks << " ranks";
   }
 }
+
+TEST(DeviceSubdomainOnHost, HealthIsTheRanksReducedScanOfTheState)
+{
+  // health() runs every automatic step, so it scans on the device and sends 24 bytes a rank. It
+  // must give every rank what a scan of the whole state gives: the fastest particle (the next
+  // step's size) and the largest compression, to the bit (maxima, no sums).
+  const PresetFluid setup = presetFluid("dam_break", 0.08);
+  std::vector<Health> seen(3);
+  std::vector<Snapshot<double>> parts(3);
+  distributed::runThreadCluster(3, [&](distributed::Communicator& communicator) {
+    const auto r = static_cast<std::size_t>(communicator.rank());
+    auto stepper = onHost<double>()(communicator, setup);
+    for (int s = 0; s < 5; ++s)
+    {
+      stepper->step();
+    }
+    seen[r] = stepper->health();
+    stepper->read(parts[r]);
+  });
+  double speed = 0, error = 0;
+  for (const Snapshot<double>& part : parts)
+  {
+    for (std::size_t i = 0; i < part.id.size(); ++i)
+    {
+      speed = std::max(speed, std::sqrt(dot(part.velocity[i], part.velocity[i])));
+      error = std::max(error, part.density[i] / setup.parameters.restDensity - 1.0);
+    }
+  }
+  ASSERT_GT(speed, 0.0); // the column is falling
+  for (const Health& h : seen)
+  {
+    EXPECT_EQ(h.maxSpeed, speed);
+    EXPECT_EQ(h.maxDensityError, std::max(error, 0.0));
+    EXPECT_EQ(h.nonFinite, 0u);
+  }
+}
