@@ -2,7 +2,8 @@
 // them, at a tiny size. Input: a scene (JSON text) up to the first NUL byte; after it, raw
 // doubles (any bits: NaN, infinities, denormals, huge) that replace the parameters of kFields in
 // order, then gravity x, y, z; then a byte of solver iterations (signed: 0 and negatives must be
-// refused) and a byte of flags. Without a NUL the defaults apply.
+// refused) and a byte of flags (1 double, 2 unilateral off, 4 mirror walls off, 8 given points,
+// 16 fixed time steps). Without a NUL the defaults apply.
 //
 // The contract: parsing, validation and construction throw nothing but InvalidInput; advance()
 // throws nothing but SimulationDiverged (the input was checked on construction). Anything else,
@@ -35,9 +36,11 @@ double Parameters::*const kFields[] = {
   &Parameters::sCorrK,
   &Parameters::sCorrN,
   &Parameters::sCorrDeltaQ,
-  &Parameters::xsphC,
+  &Parameters::xsphViscosity,
   &Parameters::vorticityEpsilon,
   &Parameters::densityErrorTolerance,
+  &Parameters::maxDensityErrorTolerance,
+  &Parameters::cflNumber,
 };
 constexpr std::size_t kFieldCount = sizeof(kFields) / sizeof(kFields[0]);
 
@@ -87,6 +90,7 @@ Input decode(const std::uint8_t* data, std::size_t size)
     in.parameters.unilateral = !(flags & 2);
     in.parameters.mirrorWalls = !(flags & 4);
     in.givenPoints = flags & 8;
+    in.parameters.timeStepping = flags & 16 ? TimeStepping::Fixed : TimeStepping::Automatic;
   }
   return in;
 }

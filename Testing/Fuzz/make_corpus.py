@@ -14,13 +14,15 @@ data = os.path.join(here, "..", "..", "Data")
 
 # Parameters in FuzzScene.cpp's kFields order, then gravity: the defaults of Parameters.h.
 DEFAULTS = dict(particleSpacing=0.02, timeStep=1 / 240, relaxation=0.01, smoothingRatio=2.0,
-                restDensity=1000.0, sCorrK=0.1, sCorrN=4.0, sCorrDeltaQ=0.2, xsphC=0.01,
-                vorticityEpsilon=0.01, densityErrorTolerance=0.0, gx=0.0, gy=-9.81, gz=0.0)
+                restDensity=1000.0, sCorrK=0.1, sCorrN=4.0, sCorrDeltaQ=0.2, xsphViscosity=0.05,
+                vorticityEpsilon=0.01, densityErrorTolerance=0.2, maxDensityErrorTolerance=5.0,
+                cflNumber=0.4, gx=0.0, gy=-9.81, gz=0.0)
 
 
-def tail(iterations=4, flags=0, **changes):
+def tail(iterations=40, flags=0, **changes):
     values = dict(DEFAULTS, **changes)
-    return b"\0" + struct.pack("<14d", *values.values()) + struct.pack("<bB", iterations, flags)
+    return (b"\0" + struct.pack("<%dd" % len(values), *values.values()) +
+            struct.pack("<bB", iterations, flags))
 
 
 def scene(name):
@@ -41,7 +43,10 @@ write("dam_break_coarse", scene("dam_break") + tail(particleSpacing=0.2))
 write("stream_coarse_double", scene("stream") + tail(particleSpacing=0.1, flags=1))
 write("blob_given_points_adaptive",
       scene("blob") + tail(particleSpacing=0.2, densityErrorTolerance=0.5, iterations=20, flags=8))
-write("dam_break_blows_up", scene("dam_break") + tail(particleSpacing=0.2, timeStep=0.05, gy=-1e4))
+# Fixed steps (flag 16), 4 projections: the old defaults, which blow up here.
+write("dam_break_blows_up", scene("dam_break") + tail(particleSpacing=0.2, timeStep=0.05, gy=-1e4,
+                                                     densityErrorTolerance=0, iterations=4,
+                                                     flags=16))
 write("nan_spacing", scene("dam_break") + tail(particleSpacing=math.nan))
 # Found by fuzzing: NaN from (W / W(delta_q))^n with n = 2e174 (sCorrN is now at most 16).
 write("huge_scorr_n", scene("dam_break") + tail(particleSpacing=0.2, timeStep=0.05, gy=-1e4,
