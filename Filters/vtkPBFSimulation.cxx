@@ -442,7 +442,6 @@ public:
 
   // The ranks of a decomposed run (Key.Ranks > 1), over ParaView's global controller.
   std::unique_ptr<vtkPBFRankCommunicator> Ranks;
-  bool DecomposedReported = false;
 
   // CUDA is probed once: a device does not come and go while ParaView runs.
   bool CudaProbed = false;
@@ -1051,22 +1050,8 @@ int vtkPBFSimulation::RequestData(
 
     if (decomposed)
     {
-      // Every rank gets here for the same request and makes the same choices.
-      if (configuration.Backend == pbf::Backend::CUDA && this->Backend == BACKEND_AUTO &&
-        p.densityErrorTolerance > 0)
-      {
-        // The GPU's decomposed step has fixed iterations only; the CPU's has both.
-        configuration.Backend = pbf::Backend::OpenMP;
-        if (!internals.DecomposedReported && piece == 0)
-        {
-          internals.DecomposedReported = true;
-          std::ostringstream text;
-          text << this->GetClassName() << " (" << this << "): Backend Auto over " << pieces
-               << " ranks with adaptive iterations: decomposed GPU runs have fixed iterations "
-                  "only, so this run uses the CPU (OpenMP).\n";
-          vtkOutputWindowDisplayText(text.str().c_str());
-        }
-      }
+      // Every rank gets here for the same request and makes the same choices. Both decomposed
+      // steppers run adaptive iterations and automatic steps (they reduce over the ranks).
       configuration.Ranks = pieces;
     }
     configuration.HasInput = input != nullptr;
