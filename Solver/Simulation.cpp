@@ -101,6 +101,41 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
     20.0 * limits_.sceneSpeed, 2.0 * parameters_.smoothingLength() / parameters_.timeStep);
   limits_.maxDensityError = 3.0 * std::max(1.0, 1.0 + start.maxDensityError) - 1.0;
   lastGoodSpeed_ = start.maxSpeed;
+  if (automatic)
+  {
+    // The scene's own speed and gravity bound the automatic step from the start: a step too
+    // small to represent is an input error, named by the term that forces it.
+    const double s = parameters_.particleSpacing;
+    const double c = parameters_.cflNumber;
+    // Gravity is named by its largest component (its length may overflow).
+    const Vec3d& gv = parameters_.gravity;
+    const int axis = std::abs(gv.x) >= std::abs(gv.y)
+      ? (std::abs(gv.x) >= std::abs(gv.z) ? 0 : 2)
+      : (std::abs(gv.y) >= std::abs(gv.z) ? 1 : 2);
+    const std::string gravityName = std::string("gravity.") + "xyz"[axis];
+    const double gravityValue = axis == 0 ? gv.x : (axis == 1 ? gv.y : gv.z);
+    const struct
+    {
+      double dt;
+      std::string field;
+      double value;
+    } bounds[] = {
+      { c * s / sceneSpeed, g > 0 ? gravityName : "the initial or emitted speed",
+        g > 0 ? gravityValue : v0 },
+      { g > 0 ? c * std::sqrt(s / g) : parameters_.timeStep, gravityName, gravityValue },
+      { xsphStepLimit_, "xsphViscosity", parameters_.xsphViscosity },
+    };
+    for (const auto& b : bounds)
+    {
+      if (!(b.dt >= kSmallestTimeStep))
+      {
+        throw InvalidInput(b.field + " = " + number(b.value) +
+          ": the automatic time step it allows, " + number(b.dt) + " s, is below " +
+          number(kSmallestTimeStep) + " s (cflNumber " + number(c) + ", particleSpacing " +
+          number(s) + ")");
+      }
+    }
+  }
   emit();
 }
 
@@ -291,6 +326,22 @@ double Simulation::nextTimeStep() const
   return dt;
 }
 
+double Simulation::checkedTimeStep() const
+{
+  const double dt = nextTimeStep();
+  // A largest step below the bound is the caller's own choice (validatePrecision checked it).
+  if (!(dt >= std::min(kSmallestTimeStep, parameters_.timeStep)))
+  {
+    const std::string cause = "a particle moves at " + number(health_.maxSpeed) +
+      " m/s; lower the initial speeds or gravity";
+    throw SimulationDiverged("simulation diverged at step " + std::to_string(steps_) + " (t = " +
+        number(time()) + " s): the automatic time step fell to " + number(dt) + " s, below " +
+        number(kSmallestTimeStep) + " s. Likely cause: " + cause,
+      steps_, time(), lastGoodStep_, cause);
+  }
+  return dt;
+}
+
 void Simulation::stepOnce(double dt, AdvanceReport& report)
 {
   if (dt != stepper_->timeStep())
@@ -319,7 +370,7 @@ AdvanceReport Simulation::advance(std::uint64_t steps)
     {
       checkDivergence(); // the fastest particle, and the check for free
     }
-    const double dt = nextTimeStep();
+    const double dt = checkedTimeStep();
     stepOnce(dt, report);
     time_ += dt;
     if (automatic || (checkInterval_ > 0 && steps_ % checkInterval_ == 0))
@@ -349,7 +400,7 @@ bool Simulation::stepToward(double until, AdvanceReport& report)
   // A whole number of steps of at most nextTimeStep() to `until`; the relative slack keeps a
   // remaining time that is a multiple of a fixed step in rounding from costing one more step.
   const double remaining = until - time_;
-  const double largest = nextTimeStep();
+  const double largest = checkedTimeStep();
   const double count = std::max(1.0, std::ceil(remaining / largest * (1.0 - 1e-9)));
   const bool fixedFits = !automatic && count * largest <= remaining * (1.0 + 1e-9);
   // Fixed steps stay exactly timeStep; only a remainder that is no multiple of it is shortened.

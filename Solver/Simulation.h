@@ -129,6 +129,10 @@ public:
   //     proportional to s / v_scene it is the same at every spacing and depth,
   //   cflNumber sqrt(s / |g|): gravity moves a resting particle at most cflNumber^2 spacings,
   //   kMaxXsphBlend beta h^2 / nu: explicit XSPH smoothing stays stable.
+  // The smallest step it may choose [s]: below it single precision's 1 / dt and dt^2 lose their
+  // meaning, and no physical scene needs it. At construction a smaller step is InvalidInput
+  // naming the parameter that forces it; later, SimulationDiverged.
+  static constexpr double kSmallestTimeStep = 1e-30;
   double nextTimeStep() const;
 
   // The divergence check runs after every `steps`-th step, counted from step 0, so it falls on
@@ -160,6 +164,7 @@ public:
 
 private:
   void stepOnce(double dt, AdvanceReport& report);
+  double checkedTimeStep() const; // nextTimeStep(), or SimulationDiverged below the smallest
   void emit();
   void checkEmitters(std::size_t initialParticles) const;
   std::string likelyCause() const;

@@ -51,6 +51,9 @@ write("nan_spacing", scene("dam_break") + tail(particleSpacing=math.nan))
 # Found by fuzzing: NaN from (W / W(delta_q))^n with n = 2e174 (sCorrN is now at most 16).
 write("huge_scorr_n", scene("dam_break") + tail(particleSpacing=0.2, timeStep=0.05, gy=-1e4,
                                                sCorrN=2.2e174, sCorrDeltaQ=6e-154))
+# Found by fuzzing: gravity 1.7e156 made the automatic time step 0 (now InvalidInput naming it).
+write("automatic_step_underflow", scene("stream") + tail(particleSpacing=0.1, gy=1.7164750796028833e156,
+                                                         iterations=40, flags=1))
 write("not_json", b"domain: [0, 1]\n")
 write("number_beyond_double", b'{"domain": {"min": [0,0,0], "max": [1e400,1,1]}, "fluid": []}')
 write("unknown_key", json.dumps({"domain": {"min": [0, 0, 0], "max": [1, 1, 1]}, "fluid": [],

@@ -376,3 +376,17 @@ TEST(InvalidInput, EmittedParticleCountIsBoundedForGivenParticlesToo)
   EXPECT_MENTIONS(message, "the emitters would add about");
   EXPECT_MENTIONS(message, "particleSpacing = 0.05");
 }
+
+TEST(InvalidInput, AnAutomaticStepTooSmallToRepresentNamesWhatForcesIt)
+{
+  // Found by fuzzing: gravity 1.7e156 m/s^2 is finite, but the automatic step it allows,
+  // 0.4 s / sqrt(2 |g| L), underflows to 0, and the first step threw from inside advance().
+  Parameters p = coarse();
+  p.gravity = { 0, 1.7164750796028833e156, 0 };
+  const std::string message = messageOf([&] { start(smallScene(), p, Precision::Double); });
+  EXPECT_NE(message.find("gravity.y = 1.72e+156"), std::string::npos) << "[" << message << "]";
+  EXPECT_NE(message.find("the automatic time step it allows"), std::string::npos) << message;
+  // The same gravity with fixed steps is the caller's choice; it blows up, it is not refused.
+  p.timeStepping = TimeStepping::Fixed;
+  EXPECT_EQ(messageOf([&] { start(smallScene(), p, Precision::Double); }), "");
+}
