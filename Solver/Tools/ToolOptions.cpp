@@ -171,6 +171,40 @@ void usePaperIterationsUnlessGiven(ToolOptions& options)
   }
 }
 
+std::vector<double> toolReals(const ToolOptions& options, const std::string& key, double fallback)
+{
+  const auto it = options.extra.find(key);
+  if (it == options.extra.end())
+  {
+    return { fallback };
+  }
+  std::vector<double> out;
+  std::stringstream in(it->second);
+  std::string item;
+  while (std::getline(in, item, ','))
+  {
+    double value = std::nan("");
+    try
+    {
+      value = toNumber(item);
+    }
+    catch (const InvalidInput&)
+    {
+    }
+    if (!(value > 0) || !std::isfinite(value))
+    {
+      throw InvalidInput("--" + key + " = \"" + it->second +
+        "\": must be a positive number (or a comma-separated list of them)");
+    }
+    out.push_back(value);
+  }
+  if (out.empty())
+  {
+    throw InvalidInput("--" + key + " = \"\": must be a positive number");
+  }
+  return out;
+}
+
 long toolInteger(const ToolOptions& options, const std::string& key, long fallback, long minimum)
 {
   const auto it = options.extra.find(key);

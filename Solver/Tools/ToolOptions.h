@@ -7,6 +7,7 @@
 
 #include <map>
 #include <set>
+#include <vector>
 #include <string>
 
 namespace pbf
@@ -35,6 +36,14 @@ std::string toolUsage(const std::map<std::string, std::string>& toolKeys);
 // The whole number given for a tool key, or `fallback` when absent. Throws InvalidInput naming
 // the key unless it is a whole number of at least `minimum` (a count of 0 would loop forever).
 long toolInteger(const ToolOptions& options, const std::string& key, long fallback, long minimum);
+
+// The positive finite numbers given for a tool key as a comma-separated list (one number is a list
+// of one), or {fallback} when absent. Throws InvalidInput naming the key otherwise.
+std::vector<double> toolReals(const ToolOptions& options, const std::string& key, double fallback);
+inline double toolReal(const ToolOptions& options, const std::string& key, double fallback)
+{
+  return toolReals(options, key, fallback).front();
+}
 
 Backend parseBackend(const std::string& name);
 

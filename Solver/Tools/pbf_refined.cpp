@@ -24,37 +24,6 @@ using namespace pbf;
 namespace
 {
 
-std::vector<double> numbers(const std::string& text, const std::string& key)
-{
-  std::vector<double> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ','))
-  {
-    std::size_t used = 0;
-    double value = std::nan("");
-    try
-    {
-      value = std::stod(item, &used);
-    }
-    catch (const std::exception&)
-    {
-    }
-    if (used != item.size() || !(value > 0) || !std::isfinite(value))
-    {
-      throw InvalidInput("--" + key + " = \"" + text + "\": a comma-separated list of positive numbers");
-    }
-    out.push_back(value);
-  }
-  return out;
-}
-
-double option(const ToolOptions& options, const std::string& key, double fallback)
-{
-  const auto it = options.extra.find(key);
-  return it == options.extra.end() ? fallback : numbers(it->second, key).at(0);
-}
-
 struct Summary
 {
   std::string mode;
@@ -164,10 +133,11 @@ int main(int argc, char** argv)
     const Scene scene = options.scene.find(".json") != std::string::npos
       ? loadSceneFile(options.scene)
       : presetScene(options.scene);
-    const std::vector<double> spacings = numbers(
-      options.extra.count("spacings") ? options.extra.at("spacings") : "0.04,0.02", "spacings");
-    const double until = option(options, "until", 2.0);
-    const double interval = option(options, "frame", 1.0 / 60.0);
+    const std::vector<double> spacings = options.extra.count("spacings")
+      ? toolReals(options, "spacings", 0.0)
+      : std::vector<double>{ 0.04, 0.02 };
+    const double until = toolReal(options, "until", 2.0);
+    const double interval = toolReal(options, "frame", 1.0 / 60.0);
     const std::string modes = options.extra.count("modes") ? options.extra.at("modes") : "both";
     if (modes != "defaults" && modes != "fixed4" && modes != "both")
     {

@@ -15,29 +15,6 @@ using namespace pbf;
 namespace
 {
 
-double toolReal(const ToolOptions& options, const std::string& key, double fallback)
-{
-  const auto it = options.extra.find(key);
-  if (it == options.extra.end())
-  {
-    return fallback;
-  }
-  std::size_t used = 0;
-  double value = std::nan("");
-  try
-  {
-    value = std::stod(it->second, &used);
-  }
-  catch (const std::exception&)
-  {
-  }
-  if (used != it->second.size() || !(value > 0) || !std::isfinite(value))
-  {
-    throw InvalidInput("--" + key + " = \"" + it->second + "\": must be a positive number");
-  }
-  return value;
-}
-
 // Frame k lands on k * frame exactly, as the VTK filter's frames do.
 int runFrames(Simulation& simulation, const ToolOptions& options, const Scene& scene, long report)
 {
