@@ -1,7 +1,12 @@
 #include "vtkPBFRankCommunicator.h"
 
-#include "vtkMPICommunicator.h"
 #include "vtkMultiProcessController.h"
+
+#ifdef PBF_WITH_MPI
+#include "Distributed/MpiCommunicator.h"
+#include "vtkMPI.h"
+#include "vtkMPICommunicator.h"
+#endif
 
 #include <limits>
 #include <numeric>
@@ -23,95 +28,19 @@ int vtkPBFRankCommunicator::size() const
   return this->Controller->GetNumberOfProcesses();
 }
 
-namespace
+std::unique_ptr<pbf::distributed::Communicator> MakeRankCommunicator(
+  vtkMultiProcessController* controller)
 {
-// Tags of this exchange's messages, away from those ParaView's own remote calls use.
-constexpr int LengthTag = 31471;
-constexpr int MessageTag = 31472;
+#ifdef PBF_WITH_MPI
+  if (auto* mpi = vtkMPICommunicator::SafeDownCast(controller->GetCommunicator()))
+  {
+    return std::make_unique<pbf::distributed::MpiCommunicator>(*mpi->GetMPIComm()->GetHandle());
+  }
+#endif
+  return std::make_unique<vtkPBFRankCommunicator>(controller);
 }
 
 std::vector<pbf::distributed::Bytes> vtkPBFRankCommunicator::exchange(
-  const std::vector<pbf::distributed::Bytes>& outgoing)
-{
-  if (auto* mpi = vtkMPICommunicator::SafeDownCast(this->Controller->GetCommunicator()))
-  {
-    return this->ExchangePointToPoint(mpi, outgoing);
-  }
-  return this->ExchangeGathered(outgoing);
-}
-
-std::vector<pbf::distributed::Bytes> vtkPBFRankCommunicator::ExchangePointToPoint(
-  vtkMPICommunicator* mpi, const std::vector<pbf::distributed::Bytes>& outgoing)
-{
-  const int ranks = this->size();
-  const int me = this->rank();
-  const auto n = static_cast<std::size_t>(ranks);
-  if (outgoing.size() != n)
-  {
-    throw std::invalid_argument("exchange: one buffer per rank expected");
-  }
-  // Every rank tells every other how much it sends (often nothing), then the messages go only
-  // where there is something to send: a slab's neighbours.
-  std::vector<int> sendLength(n), receiveLength(n);
-  for (std::size_t r = 0; r < n; ++r)
-  {
-    if (outgoing[r].size() > static_cast<std::size_t>(std::numeric_limits<int>::max()))
-    {
-      throw std::runtime_error("exchange: a message of more than 2 GiB");
-    }
-    sendLength[r] = static_cast<int>(outgoing[r].size());
-  }
-  std::vector<vtkMPICommunicator::Request> requests;
-  requests.reserve(2 * n);
-  auto wait = [&]() {
-    if (!requests.empty() &&
-      !mpi->WaitAll(static_cast<int>(requests.size()), requests.data()))
-    {
-      throw std::runtime_error("exchange: MPI wait failed");
-    }
-    requests.clear();
-  };
-  for (int peer = 0; peer < ranks; ++peer)
-  {
-    if (peer == me)
-    {
-      continue;
-    }
-    const auto p = static_cast<std::size_t>(peer);
-    requests.emplace_back();
-    mpi->NoBlockReceive(&receiveLength[p], 1, peer, LengthTag, requests.back());
-    requests.emplace_back();
-    mpi->NoBlockSend(&sendLength[p], 1, peer, LengthTag, requests.back());
-  }
-  wait();
-  std::vector<pbf::distributed::Bytes> incoming(n);
-  incoming[static_cast<std::size_t>(me)] = outgoing[static_cast<std::size_t>(me)];
-  for (int peer = 0; peer < ranks; ++peer)
-  {
-    const auto p = static_cast<std::size_t>(peer);
-    if (peer == me)
-    {
-      continue;
-    }
-    if (receiveLength[p] > 0)
-    {
-      incoming[p].resize(static_cast<std::size_t>(receiveLength[p]));
-      requests.emplace_back();
-      mpi->NoBlockReceive(reinterpret_cast<char*>(incoming[p].data()), receiveLength[p], peer,
-        MessageTag, requests.back());
-    }
-    if (sendLength[p] > 0)
-    {
-      requests.emplace_back();
-      mpi->NoBlockSend(reinterpret_cast<const char*>(outgoing[p].data()), sendLength[p], peer,
-        MessageTag, requests.back());
-    }
-  }
-  wait();
-  return incoming;
-}
-
-std::vector<pbf::distributed::Bytes> vtkPBFRankCommunicator::ExchangeGathered(
   const std::vector<pbf::distributed::Bytes>& outgoing)
 {
   const int ranks = this->size();

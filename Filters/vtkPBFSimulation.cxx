@@ -440,8 +440,10 @@ public:
   double DeliveryMilliseconds = 0;
   vtkIdType RequestSteps = 0;
 
-  // The ranks of a decomposed run (Key.Ranks > 1), over ParaView's global controller.
-  std::unique_ptr<vtkPBFRankCommunicator> Ranks;
+  // The ranks of a decomposed run (Key.Ranks > 1), over ParaView's global controller: its MPI
+  // communicator where it has one (pvbatch under mpiexec, a pvserver), so that a rank whose GPU
+  // faults stops every rank with its error (Distributed/RankFailure.h).
+  std::unique_ptr<pbf::distributed::Communicator> Ranks;
 
   // CUDA is probed once: a device does not come and go while ParaView runs.
   bool CudaProbed = false;
@@ -992,7 +994,7 @@ int vtkPBFSimulation::RequestData(
       this->Precision == PRECISION_DOUBLE ? pbf::Precision::Double : pbf::Precision::Single;
     if (decomposed && !internals.Ranks)
     {
-      internals.Ranks = std::make_unique<vtkPBFRankCommunicator>(controller);
+      internals.Ranks = MakeRankCommunicator(controller);
     }
     // Whether CUDA can run. In a decomposed run every rank takes its local rank's GPU, and the
     // ranks must agree before the first exchange (a rank whose host has no GPU must not fail
@@ -1096,6 +1098,12 @@ int vtkPBFSimulation::RequestData(
       // Decomposed, every rank builds the whole fluid (from the whole input, which
       // RequestUpdateExtent asks for on every rank) and keeps its slab.
       pbf::distributed::Communicator* ranks = c.Ranks > 1 ? internals.Ranks.get() : nullptr;
+      if (ranks && ranks->failed())
+      {
+        // Every rank failed together (the same error on each): every rank comes here and opens
+        // a fresh channel, leaving the failed one's messages behind.
+        ranks->recover();
+      }
       if (input)
       {
         internals.Live = std::make_unique<pbf::Simulation>(

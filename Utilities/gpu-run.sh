@@ -175,21 +175,21 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
   # the CPU (OpenMP) dam breaks.
   res=$out/resolution
   mkdir -p "$res"
-  refined=$build/Solver/Tools/pbf_refined
+  bench=$build/Solver/Tools/pbf_bench
   mm=$build/Testing/Validation/pbf_martin_moyce
   experiment=$root/Testing/Validation/martin_moyce_1952_surge_front_n2.csv
   refine() { # refine NAME SECONDS ARGS...
     local name=$1 seconds=$2
     shift 2
     phase "resolution $name: $*"
-    timeout "$(limit "$seconds")" "$refined" "$@" --csv "$res" >"$res/$name.log" 2>&1
+    timeout "$(limit "$seconds")" "$bench" "$@" --csv "$res" >"$res/$name.log" 2>&1
     local status=$?
-    tail -n 8 "$res/$name.log"
+    tail -n 10 "$res/$name.log"
     record "resolution $name: exit $status"
   }
   if [[ $PBF_GPU_RESOLUTION == 1 || $PBF_GPU_RESOLUTION == 3 ]]; then
-    refine dam_break_1M 150 --backend cuda --spacings 0.005 --until 2
-    refine dam_break_9M 200 --backend cuda --spacings 0.0025 --until 0.5
+    refine dam_break_1M 150 --backend cuda --refined 0.005 --until 2
+    refine dam_break_9M 200 --backend cuda --refined 0.0025 --until 0.5
     for across in 10 20 40 80; do
       phase "martin-moyce $across across"
       timeout "$(limit 60)" "$mm" --backend cuda --across "$across" --experiment "$experiment" \
@@ -198,15 +198,15 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
     done
   fi
   if [[ $PBF_GPU_RESOLUTION == 4 ]]; then
-    refine dam_break_1M_defaults 60 --backend cuda --spacings 0.005 --until 2 --modes defaults
+    refine dam_break_1M_defaults 60 --backend cuda --refined 0.005 --until 2 --modes defaults
     # The CPU's finest case: OpenMP on this machine's cores.
-    refine dam_break_openmp_fine 420 --backend openmp --spacings 0.01 --until 2 --modes defaults
+    refine dam_break_openmp_fine 420 --backend openmp --refined 0.01 --until 2 --modes defaults
   fi
   if [[ $PBF_GPU_RESOLUTION == 2 || $PBF_GPU_RESOLUTION == 3 ]]; then
     for ratio in 1.5 2 2.5 3; do
       refine "tank_ratio_$ratio" 40 --backend cuda --scene "$root/Testing/Validation/hydrostatic_tank.json" \
-        --spacings 0.02 --smoothing-ratio "$ratio" --until 0.5 --modes defaults
-      refine "dam_break_ratio_$ratio" 40 --backend cuda --spacings 0.02 --smoothing-ratio "$ratio" \
+        --refined 0.02 --smoothing-ratio "$ratio" --until 0.5 --modes defaults
+      refine "dam_break_ratio_$ratio" 40 --backend cuda --refined 0.02 --smoothing-ratio "$ratio" \
         --until 2 --modes defaults
       mv "$res/dam_break_0.02_defaults_CUDA.csv" "$res/dam_break_0.02_ratio_$ratio.csv" 2>/dev/null
       mv "$res/hydrostatic_tank_0.02_defaults_CUDA.csv" "$res/tank_0.02_ratio_$ratio.csv" 2>/dev/null
@@ -215,19 +215,19 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
     mkdir -p "$res/cfl0.2"
     res_main=$res
     res=$res/cfl0.2
-    refine dam_break_cfl_0.2 60 --backend cuda --spacings 0.01,0.005 --until 2 --modes defaults --cfl 0.2
+    refine dam_break_cfl_0.2 60 --backend cuda --refined 0.01,0.005 --until 2 --modes defaults --cfl 0.2
     res=$res_main
     for f in "$res"/cfl0.2/dam_break_*_defaults_CUDA.csv; do
       [[ -f $f ]] && mv "$f" "$res/$(basename "${f%.csv}")_cfl0.2.csv"
     done
-    refine dam_break_cuda_coarse 60 --backend cuda --spacings 0.04,0.02,0.01 --until 2 --modes defaults
+    refine dam_break_cuda_coarse 60 --backend cuda --refined 0.04,0.02,0.01 --until 2 --modes defaults
     for across in 40 80; do
       phase "martin-moyce $across across, CFL 0.2"
       timeout "$(limit 60)" "$mm" --backend cuda --across "$across" --experiment "$experiment" \
         --dt-factor 0.5 --front "$res/mm_${across}_cfl0.2.csv" >"$res/mm_${across}_cfl0.2.txt" 2>&1
       record "martin-moyce $across, CFL 0.2: $(grep -E 'rms_relative_error,' "$res/mm_${across}_cfl0.2.txt")"
     done
-    refine dam_break_openmp 200 --backend openmp --spacings 0.04,0.02,0.01 --until 2 --modes defaults
+    refine dam_break_openmp 200 --backend openmp --refined 0.04,0.02,0.01 --until 2 --modes defaults
   fi
   # The device tool brings back a limited number of files: one archive of them all.
   (cd "$out" && tar czf resolution.tar.gz resolution && rm -rf resolution)

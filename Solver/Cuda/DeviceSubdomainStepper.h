@@ -57,6 +57,7 @@
 #pragma once
 
 #include "Distributed/Communicator.h"
+#include "Distributed/RankFailure.h"
 #include "Distributed/RankReductions.h"
 #include "Distributed/Slabs.h"
 #include "Distributed/SubdomainStepper.h"
@@ -104,7 +105,7 @@ public:
   DeviceSubdomainStepper(distributed::Communicator& communicator, const Parameters& parameters,
     const ParticleBatch& everything, std::unique_ptr<Device> device, double skin = 0.02,
     bool masks = true)
-    : communicator_(communicator)
+  try : communicator_(communicator)
     , parameters_(parameters)
     , device_(std::move(device))
   {
@@ -151,6 +152,11 @@ public:
     uploadSlabs();
     append(everything);
   }
+  catch (...)
+  {
+    // A rank that cannot hold its share (its device's memory, say) stops every rank.
+    distributed::failTogether(communicator, std::current_exception());
+  }
 
   ~DeviceSubdomainStepper() override
   {
@@ -187,7 +193,49 @@ public:
   DeviceSubdomainStepper(const DeviceSubdomainStepper&) = delete;
   DeviceSubdomainStepper& operator=(const DeviceSubdomainStepper&) = delete;
 
+  // The public calls that the ranks make together fail together (distributed/RankFailure.h): a
+  // device fault on one rank stops every rank with the same error.
   void step() override
+  {
+    distributed::together(communicator_, [&] { stepAlone(); });
+  }
+  void setTimeStep(double dt) override
+  {
+    distributed::together(communicator_, [&] { setTimeStepAlone(dt); });
+  }
+  void append(const ParticleBatch& batch) override
+  {
+    distributed::together(communicator_, [&] { appendAlone(batch); });
+  }
+  void read(Snapshot<float>& out) const override
+  {
+    distributed::together(communicator_, [&] { copyToSnapshot(hostState().view(), out); });
+  }
+  void read(Snapshot<double>& out) const override
+  {
+    distributed::together(communicator_, [&] { copyToSnapshot(hostState().view(), out); });
+  }
+  Statistics statistics() const override
+  {
+    return distributed::together(communicator_, [&] {
+      const HostState s = hostState();
+      return distributed::reduceStatistics(communicator_, parameters_, s.view());
+    });
+  }
+  Health health() const override
+  {
+    return distributed::together(communicator_, [&] { return healthAlone(); });
+  }
+  void load(const Snapshot<float>& state) override
+  {
+    distributed::together(communicator_, [&] { loadState(state); });
+  }
+  void load(const Snapshot<double>& state) override
+  {
+    distributed::together(communicator_, [&] { loadState(state); });
+  }
+
+  void stepAlone()
   {
     device_->activate();
     const auto stepStart = Clock::now();
@@ -217,7 +265,7 @@ public:
   }
 
   // Every rank sets the same dt (Simulation chooses it from reduced maxima).
-  void setTimeStep(double dt) override
+  void setTimeStepAlone(double dt)
   {
     checkTimeStep(dt);
     device_->activate();
@@ -229,7 +277,7 @@ public:
   double timeStep() const override { return dt_; }
 
   // Every rank passes the whole batch; each keeps the particles of its slab.
-  void append(const ParticleBatch& batch) override
+  void appendAlone(const ParticleBatch& batch)
   {
     checkBatch(parameters_, batch);
     device_->activate();
@@ -275,19 +323,12 @@ public:
       " along x)";
   }
 
-  void read(Snapshot<float>& out) const override { copyToSnapshot(hostState().view(), out); }
-  void read(Snapshot<double>& out) const override { copyToSnapshot(hostState().view(), out); }
-  Statistics statistics() const override
-  {
-    const HostState s = hostState();
-    return distributed::reduceStatistics(communicator_, parameters_, s.view());
-  }
   // The divergence check's scan and the automatic step's fastest particle, every step: three
   // maxima over the owned particles on the device (largest speed^2, largest compression, any
   // non-finite value), 24 bytes back, then reduced over the ranks so that every rank reaches the
   // same verdict (distributed::reduceHealth's rule). nonFinite counts the ranks with one; outside
   // is 0: the collision step keeps finite positions in the box.
-  Health health() const override
+  Health healthAlone() const
   {
     device_->activate();
     auto exec = device_->executor();
@@ -331,8 +372,6 @@ public:
     device_->activate();
     device_->synchronize();
   }
-  void load(const Snapshot<float>& state) override { loadState(state); }
-  void load(const Snapshot<double>& state) override { loadState(state); }
 
   std::vector<std::uint64_t> particlesPerRank() const override
   {

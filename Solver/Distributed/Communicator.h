@@ -14,6 +14,14 @@ namespace pbf::distributed
 
 using Bytes = std::vector<unsigned char>;
 
+// What a failing rank tells the others (Communicator::abandon), so that they throw the same type.
+enum class FailureKind : unsigned char
+{
+  Other = 0,        // std::runtime_error
+  InvalidInput = 1, // pbf::InvalidInput (a rank's particles do not fit its device, say)
+  DeviceFault = 2,  // pbf::DeviceFault (a rank's GPU faulted mid-step)
+};
+
 class Communicator
 {
 public:
@@ -75,6 +83,20 @@ public:
       }
     }
   }
+
+  // Failing together (RankFailure.h). A rank whose share of the collective calls fails on its own
+  // (its device faulted, its memory ran out) calls abandon() before it throws: every other rank
+  // then throws the same error from the call it waits in, or the next one it enters, instead of
+  // waiting forever for messages that will not come. failed() is then true on every rank, and
+  // every call throws, until recover() (collective) opens a fresh channel for the next run. The
+  // defaults, for one process, do nothing.
+  virtual void abandon(FailureKind kind, const std::string& text)
+  {
+    (void)kind;
+    (void)text;
+  }
+  virtual bool failed() const { return false; }
+  virtual void recover() {}
 };
 
 // Collective: every rank's values, in rank order. Reductions sum them in that order, so every

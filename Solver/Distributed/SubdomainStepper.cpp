@@ -1,5 +1,7 @@
 #include "SubdomainStepper.h"
 
+#include "RankFailure.h"
+
 #include "CellSort.h"
 #include "HostParticles.h"
 #include "ParticleChecks.h"
@@ -427,6 +429,13 @@ Compression SubdomainStepper<Real>::compression()
 
 template <class Real>
 void SubdomainStepper<Real>::step()
+{
+  // A rank that fails mid-step (its memory, say) stops every rank with the same error.
+  together(communicator_, [&] { stepAlone(); });
+}
+
+template <class Real>
+void SubdomainStepper<Real>::stepAlone()
 {
   exchange_ = ExchangeReport{};
   report_ = StepReport{};

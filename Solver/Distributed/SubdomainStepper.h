@@ -101,6 +101,7 @@ public:
   int ranks() const override { return communicator_.size(); }
 
 private:
+  void stepAlone();
   template <class Out>
   void copyOut(Snapshot<Out>& out) const;
   template <class In>

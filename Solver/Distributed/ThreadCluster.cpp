@@ -1,5 +1,7 @@
 #include "ThreadCluster.h"
 
+#include "RankFailure.h"
+
 #include <condition_variable>
 #include <exception>
 #include <mutex>
@@ -50,13 +52,29 @@ struct Shared
   int arrived = 0;
   long generation = 0;
   bool broken = false;
+  // A rank's announced failure (Communicator::abandon): what the others throw.
+  bool noticed = false;
+  FailureKind noticeKind = FailureKind::Other;
+  std::string noticeText;
 
-  void wait()
+  // Throws, with the lock held, what a broken barrier means: the notice when a rank announced
+  // its failure, an echo otherwise (runThreadCluster then reports the rank's own error).
+  [[noreturn]] void throwBroken(bool& failed)
+  {
+    failed = true;
+    if (noticed)
+    {
+      throwRankFailure(noticeKind, noticeText);
+    }
+    throw std::runtime_error("thread cluster: another rank failed");
+  }
+
+  void wait(bool& failed)
   {
     std::unique_lock<std::mutex> lock(mutex);
     if (broken)
     {
-      throw std::runtime_error("thread cluster: another rank failed");
+      throwBroken(failed);
     }
     const long mine = generation;
     if (++arrived == ranks)
@@ -69,13 +87,26 @@ struct Shared
     changed.wait(lock, [&] { return generation != mine || broken; });
     if (broken)
     {
-      throw std::runtime_error("thread cluster: another rank failed");
+      throwBroken(failed);
     }
   }
 
   void breakBarrier()
   {
     std::lock_guard<std::mutex> lock(mutex);
+    broken = true;
+    changed.notify_all();
+  }
+
+  void announce(FailureKind kind, const std::string& text)
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!noticed)
+    {
+      noticed = true;
+      noticeKind = kind;
+      noticeText = text;
+    }
     broken = true;
     changed.notify_all();
   }
@@ -106,20 +137,28 @@ public:
       shared_.mailbox[static_cast<std::size_t>(rank_)][static_cast<std::size_t>(to)] =
         outgoing[static_cast<std::size_t>(to)];
     }
-    shared_.wait(); // everything posted
+    shared_.wait(failed_); // everything posted
     std::vector<Bytes> incoming(static_cast<std::size_t>(shared_.ranks));
     for (int from = 0; from < shared_.ranks; ++from)
     {
       incoming[static_cast<std::size_t>(from)] =
         shared_.mailbox[static_cast<std::size_t>(from)][static_cast<std::size_t>(rank_)];
     }
-    shared_.wait(); // everything read: the mailboxes may be reused
+    shared_.wait(failed_); // everything read: the mailboxes may be reused
     return incoming;
   }
+
+  void abandon(FailureKind kind, const std::string& text) override
+  {
+    failed_ = true;
+    shared_.announce(kind, text);
+  }
+  bool failed() const override { return failed_; }
 
 private:
   Shared& shared_;
   int rank_;
+  bool failed_ = false;
 };
 
 } // namespace

@@ -4,6 +4,11 @@
 // spacing gives N particles: the height, the flow and the time step stay the preset's. Warm-up
 // steps are excluded; GPU steps are timed with CUDA events on the stepper's stream, CPU steps with
 // the host's steady clock. Prints a table and, with --json, writes every run as JSON.
+//
+// --refined SPACINGS times the scene users run instead: the dam_break preset (or --scene) refined
+// to those spacings, frame by frame to --until, fixed and automatic stepping side by side, in ms
+// per step and per simulated second (RefinedBench.h).
+#include "RefinedBench.h"
 #include "Scene.h"
 #include "ScaledScenes.h"
 #include "Stepper.h"
@@ -250,10 +255,32 @@ int main(int argc, char** argv)
     { "block", "CUDA: threads per block of the neighbour passes (default 128)" },
     { "json", "write the results to this JSON file" },
     { "label", "free text stored in the JSON" },
+    { "refined", "comma-separated spacings [m]: time the scene (--scene, default dam_break) "
+                 "refined, frame by frame, instead of the widened dam break" },
+    { "until", "--refined: simulated time [s] (default 2)" },
+    { "frame", "--refined: frame interval [s] (default 1/60)" },
+    { "modes", "--refined: comma-separated of fixed, fixed4, defaults (default all three)" },
+    { "csv", "--refined: a folder for one CSV of frames per run" },
   };
   try
   {
     ToolOptions options = parseToolOptions(argc, argv, keys);
+    if (options.extra.count("refined"))
+    {
+      const RefinedSettings settings = refinedSettings(options);
+      const Scene scene = options.scene.find(".json") != std::string::npos
+        ? loadSceneFile(options.scene)
+        : presetScene(options.scene);
+      std::vector<RefinedRun> runs;
+      for (double spacing : settings.spacings)
+      {
+        for (const std::string& mode : settings.modes)
+        {
+          runs.push_back(runRefined(options, scene, spacing, mode, settings));
+        }
+      }
+      return printRefinedTable(runs, settings.frameInterval) ? 0 : 1;
+    }
     usePaperIterationsUnlessGiven(options);
     auto extra = [&](const std::string& key, const std::string& fallback) {
       return options.extra.count(key) ? options.extra[key] : fallback;

@@ -197,3 +197,53 @@ TEST(DeviceSubdomainOnHost, HealthIsTheRanksReducedScanOfTheState)
     EXPECT_EQ(h.nonFinite, 0u);
   }
 }
+
+TEST(DeviceSubdomainOnHost, ADeviceFaultOnOneRankStopsEveryRankWithTheSameError)
+{
+  // Rank 1's device faults in the middle of a step (a synchronisation throws, as a CUDA error
+  // does). Before ranks failed together, the other two then waited forever in the step's next
+  // exchange (this test hung until CTest's timeout); now every rank throws a DeviceFault with
+  // the same text, which names rank 1 and the fault.
+  const PresetFluid setup = presetFluid("dam_break", 0.08);
+  std::vector<std::string> errors(3);
+  std::vector<int> steps(3, 0);
+  distributed::runThreadCluster(3, [&](distributed::Communicator& communicator) {
+    const auto r = static_cast<std::size_t>(communicator.rank());
+    auto policy = std::make_unique<HostDevicePolicy>();
+    HostDevicePolicy* device = policy.get();
+    cuda::DeviceSubdomainStepper<double, HostDevicePolicy> stepper(
+      communicator, setup.parameters, setup.fluid, std::move(policy));
+    stepper.step(); // the first step waits more often (the first cut)
+    const long before = device->synchronizations();
+    stepper.step();
+    const long perStep = device->synchronizations() - before;
+    ASSERT_GE(perStep, 2) << "a step waits for the device before its exchanges";
+    if (r == 1)
+    {
+      device->faultAtSynchronization(perStep / 2); // in the middle of the next step
+    }
+    try
+    {
+      for (int s = 0; s < 3; ++s)
+      {
+        stepper.step();
+        ++steps[r];
+      }
+      errors[r] = "no error";
+    }
+    catch (const DeviceFault& fault)
+    {
+      errors[r] = fault.what();
+    }
+    catch (const std::exception& other)
+    {
+      errors[r] = std::string("not a DeviceFault: ") + other.what();
+    }
+  });
+  EXPECT_NE(errors[0].find("rank 1 of 3: injected device fault"), std::string::npos) << errors[0];
+  EXPECT_EQ(errors[1], errors[0]);
+  EXPECT_EQ(errors[2], errors[0]);
+  EXPECT_EQ(steps[1], 0) << "rank 1 faulted in its next step";
+  EXPECT_EQ(steps[0], 0) << "rank 0 cannot finish the step without rank 1";
+  EXPECT_EQ(steps[2], 0) << "rank 2 cannot finish the step without rank 1";
+}

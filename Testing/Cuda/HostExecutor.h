@@ -5,6 +5,7 @@
 #pragma once
 
 #include "Cuda/StepSchedule.h"
+#include "DeviceFault.h"
 
 #include <algorithm>
 #include <cstdlib>
@@ -147,7 +148,18 @@ public:
   void releaseHost(void* pointer) { std::free(pointer); }
   void download(void* host, const void* device, std::size_t bytes) { std::memcpy(host, device, bytes); }
   void upload(void* device, const void* host, std::size_t bytes) { std::memcpy(device, host, bytes); }
-  void synchronize() {}
+  // A CUDA error surfaces at a synchronisation: the tests make the n-th one from now throw the
+  // DeviceFault that CudaRuntime.cuh would (n = 0: the next).
+  void synchronize()
+  {
+    if (faultIn_ >= 0 && faultIn_-- == 0)
+    {
+      throw DeviceFault("injected device fault (test): an illegal memory access", false);
+    }
+    ++synchronizations_;
+  }
+  void faultAtSynchronization(long n) { faultIn_ = n; }
+  long synchronizations() const { return synchronizations_; }
   void recordEvent() {}
   void waitEvent() {}
   void downloadAside(void* host, const void* device, std::size_t bytes)
@@ -170,6 +182,8 @@ public:
 
 private:
   bool backwards_;
+  long faultIn_ = -1;
+  long synchronizations_ = 0;
 };
 
 } // namespace test

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The resolution issue's figures from the CSVs that pbf_refined and pbf_martin_moyce write
+"""The resolution issue's figures from the CSVs that pbf_bench --refined and pbf_martin_moyce write
 (Utilities/gpu-run.sh with PBF_GPU_RESOLUTION=3 puts them in resolution.tar.gz):
 
     Testing/Validation/resolution.py FOLDER [--plots DIR]
@@ -134,7 +134,7 @@ def main():
         if not tank or not front:
             continue
         n = [r["average_neighbors"] for r in tank]
-        # The CSV's first row is frame 1; frame 0 is the lattice (pbf_refined prints it).
+        # The CSV's first row is frame 1; frame 0 is the lattice (pbf_bench prints it).
         start = n[0]
         low, high = min(n), max(n)
         change = max(abs(low - start), abs(high - start)) / start
