@@ -172,7 +172,7 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
   # The resolution issue's runs (Testing/Validation/README.md, "Resolution"): CSVs of every frame
   # into $out/resolution, the summary tables into the log. PBF_GPU_RESOLUTION=1: the 1.15M and
   # 9.2M dam breaks and the Martin & Moyce fronts; 2: the smoothing ratios, the CFL halving and
-  # the CPU (OpenMP) dam breaks.
+  # the CPU (OpenMP) dam breaks; 3: both; 5: the refined benchmark (pbf_bench --refined).
   res=$out/resolution
   mkdir -p "$res"
   bench=$build/Solver/Tools/pbf_bench
@@ -196,6 +196,12 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
         --front "$res/mm_$across.csv" >"$res/mm_$across.txt" 2>"$res/mm_$across.err"
       record "martin-moyce $across: $(grep -E 'rms_relative_error,|fitted' "$res/mm_$across.txt" | tr '\n' ' ')"
     done
+  fi
+  if [[ $PBF_GPU_RESOLUTION == 5 ]]; then
+    # The benchmark of the scene users run (Testing/Benchmarks/README.md, first table): 144k and
+    # 1.15M to 2 s, 9.2M to 0.5 s, fixed steps, automatic with 4 projections and the defaults.
+    refine bench_refined 200 --backend cuda --refined 0.01,0.005 --until 2
+    refine bench_refined_9M 200 --backend cuda --refined 0.0025 --until 0.5
   fi
   if [[ $PBF_GPU_RESOLUTION == 4 ]]; then
     refine dam_break_1M_defaults 60 --backend cuda --refined 0.005 --until 2 --modes defaults
