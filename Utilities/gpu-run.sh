@@ -96,6 +96,9 @@ if [[ ${PBF_GPU_SKIP_CTEST:-0} == 1 ]]; then
   phase "ctest: skipped (PBF_GPU_SKIP_CTEST=1)"
 else
 phase "ctest (gpu, solver)"
+# Here a GPU must be: a GPU test that finds none fails instead of reporting SKIPPED
+# (Testing/Cuda/RequireGpu.h). The two tests of the behaviour without a GPU still skip.
+export PBF_GPU_REQUIRED=1
 (cd "$build" && timeout "$(limit 240)" ctest -L 'gpu|solver' -j "$(nproc)" --timeout 300 \
   --output-on-failure) >"$work/ctest.log" 2>&1
 ctest_status=$?
