@@ -544,11 +544,28 @@ public:
     this->FitBudget(budget);
   }
 
+  // The bytes the budget is compared with. Decomposed, each rank holds its slab's share of a
+  // checkpoint, so the ranks would thin at different frames and resume from different ones
+  // (wrong particles, no error): the largest rank's bytes decide for every rank. Collective:
+  // every rank fits its budget at the same requests and frames.
+  double BudgetedBytes()
+  {
+    double largest = static_cast<double>(this->CheckpointBytes);
+    if (this->Key.Ranks > 1 && this->Ranks)
+    {
+      for (const std::vector<double>& r : pbf::distributed::allGather(*this->Ranks, { largest }))
+      {
+        largest = std::max(largest, r[0]);
+      }
+    }
+    return largest;
+  }
+
   // The thinning policy: while over budget, double the interval and drop the checkpoints off it.
   // The earliest checkpoint (frame 0 unless checkpoints were switched on late) always stays.
   void FitBudget(std::size_t budget)
   {
-    while (this->CheckpointBytes > budget && this->Checkpoints.size() > 1)
+    while (this->Checkpoints.size() > 1 && this->BudgetedBytes() > static_cast<double>(budget))
     {
       this->Stride *= 2;
       const int earliest = this->Checkpoints.begin()->first;
@@ -995,6 +1012,12 @@ int vtkPBFSimulation::RequestData(
     if (decomposed && !internals.Ranks)
     {
       internals.Ranks = MakeRankCommunicator(controller);
+    }
+    if (internals.Ranks && internals.Ranks->failed())
+    {
+      // Every rank failed together (the same error on each), so every rank comes here and opens
+      // a fresh channel before the next collective call, leaving the failed one's messages behind.
+      internals.Ranks->recover();
     }
     // Whether CUDA can run. In a decomposed run every rank takes its local rank's GPU, and the
     // ranks must agree before the first exchange (a rank whose host has no GPU must not fail

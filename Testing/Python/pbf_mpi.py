@@ -84,6 +84,23 @@ expect(info.GetNumberOfPoints() == a["n"], "data information counts %d particles
 fetched(split, 1)
 T.expect_identical(fetched(split, 2), a, "frame 2 asked again after frame 1")
 
+# Checkpoints thinned together (issue 16): a budget so small that thinning starts at once. The
+# ranks' slabs hold different byte counts, so each rank deciding from its own would keep different
+# frames (rank 0 0, 2, 4, ..., rank 1 0, 4, 8) and going back to frame 7 would resume the ranks
+# from different frames: wrong particles and ids, no error. Now frame 7 after frame 10 is the
+# straight run's frame 7, bit for bit.
+straight = fetched(split, 7)
+tiny = PositionBasedFluids(ParticleSpacing=SPACING, Precision="Double",  # noqa: F821
+                           SubstepsPerFrame=SUBSTEPS, NumberOfFrames=100, CheckpointInterval=1,
+                           CheckpointMemoryMB=0.13, DecomposeAcrossRanks=1)
+fetched(tiny, 10)
+tiny.UpdatePipeline(10 * FRAME)
+held = numpy_support.vtk_to_numpy(
+    tiny.GetClientSideObject().GetOutputDataObject(0).GetFieldData().GetArray("CheckpointFrames"))
+print("rank 0 holds checkpoints of frames %s with a 0.13 MB budget" % held.tolist())
+expect(len(held) < 11, "the 0.13 MB budget thinned nothing: %s" % held.tolist())
+T.expect_identical(fetched(tiny, 7), straight, "frame 7 after frame 10 with a 0.13 MB checkpoint budget")
+
 # The frames carry the decomposition.
 split.UpdatePipeline(2 * FRAME)
 output = split.GetClientSideObject().GetOutputDataObject(0)
