@@ -22,6 +22,20 @@ class TestFailure(AssertionError):
     pass
 
 
+def _fail_every_rank(kind, value, trace):
+    """Under mpiexec, an uncaught exception ends the script on this rank while the other ranks wait
+    for it in a collective call, until the test's timeout. Print it, then end this process at once
+    with a non-zero code: mpiexec then stops every rank within seconds."""
+    sys.__excepthook__(kind, value, trace)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(1)
+
+
+if int(os.environ.get("OMPI_COMM_WORLD_SIZE", os.environ.get("PMI_SIZE", "1"))) > 1:
+    sys.excepthook = _fail_every_rank
+
+
 def expect(condition, message):
     """An assertion that survives python -O and says what was expected."""
     if not condition:
