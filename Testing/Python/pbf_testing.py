@@ -133,6 +133,17 @@ def particles_of(data):
     """A frame's particles (a vtkPolyData of this plugin, live or read back from a file) as numpy
     arrays sorted by particle id."""
     n = data.GetNumberOfPoints()
+    # Every frame any test looks at has one vertex cell per point, each naming a point that exists
+    # (a review's deliberate bug reused the cells of an earlier frame: 189 cells for 27 points).
+    verts = data.GetVerts()
+    expect(verts is not None and verts.GetNumberOfCells() == n,
+           "%s vertex cells for %d points" % (verts.GetNumberOfCells() if verts else None, n))
+    expect(data.GetNumberOfCells() == n, "%d cells for %d points" % (data.GetNumberOfCells(), n))
+    if n > 0:
+        connectivity = numpy_support.vtk_to_numpy(verts.GetConnectivityArray())
+        expect(len(connectivity) == n and connectivity.min() >= 0 and connectivity.max() < n,
+               "vertex cells name points %d..%d of %d (%d entries)"
+               % (connectivity.min(), connectivity.max(), n, len(connectivity)))
     point_data = data.GetPointData()
     ids = numpy_support.vtk_to_numpy(point_data.GetArray("id")).copy()
     order = numpy.argsort(ids, kind="stable")
