@@ -175,3 +175,45 @@ TEST(CudaSubdomain, MakeSubdomainStepperGivesTheCudaStepperOnTheLocalRanksDevice
     EXPECT_EQ(automatic->backend(), Backend::CUDA);
   });
 }
+
+TEST(CudaSubdomain, ADivergenceStopsEveryRankAtTheSameStepWithTheSameError)
+{
+  PBF_REQUIRE_GPU();
+  // The serial divergence test's blow-up (fixed steps of 0.05 s at s = 0.05 m) decomposed over 3
+  // ranks on the GPU: the health scan is reduced over the ranks, so every rank stops at the same
+  // step with the same text, whichever slab piled up.
+  Parameters p;
+  p.particleSpacing = 0.05;
+  p.timeStepping = TimeStepping::Fixed;
+  p.densityErrorTolerance = 0;
+  p.solverIterations = 4;
+  p.xsphViscosity = 0.001;
+  p.timeStep = 0.05;
+  std::vector<std::string> errors(3, "no divergence");
+  std::vector<std::uint64_t> steps(3, 0);
+  distributed::runThreadCluster(3, [&](distributed::Communicator& communicator) {
+    const auto r = static_cast<std::size_t>(communicator.rank());
+    Simulation simulation(presetScene("dam_break"), p, Backend::CUDA, Precision::Single, &communicator);
+    try
+    {
+      for (int k = 1; k <= 60; ++k)
+      {
+        simulation.advanceTo(0.05 * k);
+      }
+    }
+    catch (const SimulationDiverged& error)
+    {
+      errors[r] = error.what();
+      steps[r] = error.step();
+    }
+  });
+  std::printf("3 CUDA ranks: %s\n", errors[0].c_str());
+  EXPECT_NE(errors[0].find("simulation diverged"), std::string::npos) << errors[0];
+  EXPECT_GT(steps[0], 0u);
+  EXPECT_LE(steps[0], 6u);
+  for (std::size_t r = 1; r < 3; ++r)
+  {
+    EXPECT_EQ(errors[r], errors[0]) << "rank " << r;
+    EXPECT_EQ(steps[r], steps[0]) << "rank " << r;
+  }
+}
