@@ -1,8 +1,9 @@
 // The validation report's figures (Testing/Validation/README.md) at sizes CI can afford: the
 // Martin & Moyce dam break at 10 and 20 particles across the column, the density error of a
 // small hydrostatic tank and of the moving dam break per iteration count, and the adaptive mode.
-// Bounds are the measured values plus a stated margin; the figures at full size come from
-// validate.py.
+// Tests named ...Regression are gates at recorded values (any change of the flow fails them and
+// must be recorded anew); the others judge by the physics or the experiment, with the criteria of
+// the resolution issue. The figures at full size come from validate.py and resolution.py.
 #include "MartinMoyce.h"
 #include "Measures.h"
 
@@ -23,8 +24,9 @@ std::vector<FrontSample> experiment()
   return readExperiment(PBF_VALIDATION_DIR "/martin_moyce_1952_surge_front_n2.csv");
 }
 
-// The time-origin shift of the report's supplementary view: fitted once, by validate.py, on the
-// 80-across run (least squares on T), and applied unchanged at every resolution.
+// The time-origin shift T0 of the resolution issue's criteria: fitted once, by least squares on T
+// over points 2-15 of the 80-across GPU run (Testing/Validation/resolution.py, README section
+// 0), and applied unchanged at every resolution.
 constexpr double kReportTimeShift = PBF_REPORT_TIME_SHIFT;
 
 struct DamBreakRun
@@ -119,36 +121,47 @@ double largestRelativeGap(const FrontComparison& a, const FrontComparison& b)
 
 } // namespace
 
-TEST(MartinMoyce, TenAcrossFrontWithinReportedErrorOfExperiment)
+TEST(MartinMoyceRegression, TenAcrossRmsAtItsRecordedValue)
 {
+  // A regression gate, not agreement with the experiment (the criteria are the next test's): the
+  // unshifted RMS of the 10-across front against Martin & Moyce, recorded at 0.0844 (commit
+  // 102a888, the defaults of the resolution issue). A few ulps of difference (another compiler,
+  // FMA) move an arrival by a fraction of a step (dT 0.035 at 10 across, 0.01 in the RMS at the
+  // first point); 0.02 either way allows that twice over, and any real change of the flow, for
+  // better or worse, fails it and must be recorded here anew.
   const DamBreakRun run = damBreak(10);
-  std::printf("10 across: RMS of relative differences %.4f (shifted by %.3f: %.4f)\n",
+  std::printf("10 across: RMS of relative differences %.4f (shifted by T0 = %.3f: %.4f)\n",
     run.comparison.rmsRelativeError, kReportTimeShift,
     compareFront(run.front, experiment(), kReportTimeShift).rmsRelativeError);
-  // Measured 0.0917. A few ulps of difference (another compiler, FMA) move the front's arrival
-  // at a Z by a fraction of a step; a whole step (dT 0.035) at the first point (T = 0.41) would
-  // move the RMS by 0.01: 0.11 allows that twice over and still fails a real change.
-  EXPECT_LT(run.comparison.rmsRelativeError, 0.11);
+  EXPECT_NEAR(run.comparison.rmsRelativeError, 0.0844, 0.02);
 }
 
-TEST(MartinMoyce, TwentyAcrossFrontWithinReportedErrorAndLateSpeedOfExperiment)
+TEST(MartinMoyce, TwentyAcrossMeetsTheExperimentCriteria)
 {
+  // Judged as the resolution issue decided (the 1952 release is not modelled): the late front
+  // speed dZ/dT within 5 % of the experiment's, and the RMS over points 2-15 after one time
+  // origin shift T0 (fitted once on the 80-across GPU run, Testing/Validation/README.md) at most
+  // 5 %. The issue asks them at 40 and 80 across (GPU runs, README section 0); 20 across is what
+  // CI affords, measured 1.7 % and 4.5 %. The unshifted RMS is reported, not judged.
   const auto data = experiment();
   const DamBreakRun run = damBreak(20);
-  // Measured 0.1360; the same margin as at 10 across. It is above 10 %: the report says why.
-  EXPECT_LT(run.comparison.rmsRelativeError, 0.155);
-  // dZ/dT between the tabulated Z = 2.56 and 4.11: the experiment's is (4.11 - 2.56) /
-  // (3.33 - 2.20) = 1.37. The simulated front leads in time but runs at nearly the same speed.
   const auto& t = run.comparison.simulatedT;
   const std::size_t a = 7, b = data.size() - 1; // Z = 2.56 and 4.11
   const double simulated = (data[b].Z - data[a].Z) / (t[b] - t[a]);
   const double measured = (data[b].Z - data[a].Z) / (data[b].T - data[a].T);
-  std::printf("20 across: RMS of relative differences %.4f; late front speed dZ/dT %.3f, "
-              "experiment %.3f\n",
-    run.comparison.rmsRelativeError, simulated, measured);
-  // Measured 1.334. Within 10 %: the experiment's times are given to 0.01-0.02 in T, 1-2 % of
-  // the 1.13 span, and the simulated speed moves by a few % with resolution.
-  EXPECT_NEAR(simulated, measured, 0.10 * measured);
+  double sum = 0;
+  for (std::size_t k = 1; k < data.size(); ++k) // points 2-15
+  {
+    ASSERT_TRUE(std::isfinite(t[k])) << "the front never reached Z = " << data[k].Z;
+    const double relative = (t[k] + kReportTimeShift - data[k].T) / data[k].T;
+    sum += relative * relative;
+  }
+  const double shiftedRms = std::sqrt(sum / static_cast<double>(data.size() - 1));
+  std::printf("20 across: RMS unshifted %.4f; points 2-15 shifted by T0 = %.3f: %.4f; late front "
+              "speed dZ/dT %.3f, experiment %.3f\n",
+    run.comparison.rmsRelativeError, kReportTimeShift, shiftedRms, simulated, measured);
+  EXPECT_NEAR(simulated, measured, 0.05 * measured);
+  EXPECT_LE(shiftedRms, 0.05);
 }
 
 TEST(MartinMoyce, WithoutTensileTermTheFrontIsConvergedInTheTimeStep)
@@ -170,7 +183,7 @@ TEST(MartinMoyce, WithoutTensileTermTheFrontIsConvergedInTheTimeStep)
   EXPECT_LT(worst, 0.05);
 }
 
-TEST(Incompressibility, MoreIterationsLeaveLessCompressionInAHydrostaticTank)
+TEST(IncompressibilityRegression, MoreIterationsLeaveLessCompressionInAHydrostaticTank)
 {
   // 1 iteration is not run: it blows up within 15 steps (the report says so).
   TankFigures f[3];
@@ -205,7 +218,7 @@ TEST(Incompressibility, AdaptiveModeKeepsTankWithinTolerance)
   EXPECT_LT(f.iterationsPerStep, 100.0); // never ran into the cap
 }
 
-TEST(Incompressibility, MoreIterationsLeaveLessCompressionInTheMovingDamBreak)
+TEST(IncompressibilityRegression, MoreIterationsLeaveLessCompressionInTheMovingDamBreak)
 {
   DamBreakRun r[3];
   const int counts[3] = { 2, 4, 8 };
