@@ -16,7 +16,7 @@ PresetFluid presetFluid(const std::string& name, double spacing)
   s.parameters.particleSpacing = spacing;
   // The decomposition tests compare steppers step for step: the paper's fixed count of
   // projections, so that every step does the same work on every backend (the adaptive loop is
-  // tested on its own, presetFluidAdaptive).
+  // tested on its own, with densityErrorTolerance set back).
   s.parameters.densityErrorTolerance = 0;
   s.parameters.solverIterations = 4;
   s.parameters = withSceneDomain(s.parameters, scene);
