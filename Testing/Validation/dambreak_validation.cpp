@@ -40,6 +40,8 @@ int main(int argc, char** argv)
                  "mean and max compression of the end-of-step positions, the solver's own mean)" },
     { "density-dT", "sample the density every this much T (default 0.05)" },
     { "dt-factor", "multiply the scene's time step (0.25 h / sqrt(4 g a)) by this (default 1)" },
+    { "settle", "first hold the column behind a gate (a wall at x = a) for this long in T, then "
+                "release it from that state (default 0: released from the lattice)" },
   };
   try
   {
@@ -62,7 +64,30 @@ int main(int argc, char** argv)
     // Fixed steps: dt itself; automatic (the default): the CFL number and the largest step.
     setup.parameters.timeStep *= dtFactor;
     setup.parameters.cflNumber *= dtFactor;
-    Simulation simulation(setup.scene, setup.parameters, options.backend, options.precision);
+    const double settleT = options.extra.count("settle") ? std::stod(options.extra["settle"]) : 0.0;
+    ParticleBatch released;
+    if (settleT > 0)
+    {
+      // The experiment's column stood at rest behind its diaphragm: the same column in a box that
+      // ends at the gate, simulated until the lattice has become the solver's column at rest.
+      Scene gated = setup.scene;
+      gated.domain.max.x = kColumnWidth;
+      Simulation settling(gated, setup.parameters, options.backend, options.precision);
+      settling.advanceTo(settleT / setup.timeScale);
+      Snapshot<double> state;
+      settling.stepper().read(state);
+      released.position = state.position;
+      released.velocity = state.velocity;
+      released.id = state.id;
+      const Statistics st = settling.stepper().statistics();
+      std::fprintf(stderr, "martin-moyce: settled for T = %g (%llu steps): max speed %.3g m/s, mean "
+        "compression %.3f %%, max %.3f %%\n", settleT,
+        static_cast<unsigned long long>(settling.stepCount()), st.maxSpeed,
+        100 * st.averageDensityError, 100 * st.maxDensityError);
+    }
+    Simulation simulation = settleT > 0
+      ? Simulation(setup.scene, setup.parameters, options.backend, options.precision, released)
+      : Simulation(setup.scene, setup.parameters, options.backend, options.precision);
     const double s = setup.parameters.particleSpacing;
     std::fprintf(stderr, "martin-moyce: %ld across, %zu particles, dt %.4g s, %s\n", across,
       simulation.stepper().size(), setup.parameters.timeStep,
