@@ -155,4 +155,20 @@ expect(T.field_value(data, "StepCount") == 5, "frame 1 at 5 substeps ran %d step
 expect(T.field_value(data, "SmoothingLength") == 2.5 * 0.05, "h = %r"
        % T.field_value(data, "SmoothingLength"))
 
+# Labels read as words (issue 17): ParaView splits a name without a label at every capital, so
+# XSPHViscosity read "X SPHViscosity". No label may hold a lone capital before an acronym or a
+# word run together from an acronym.
+labels = {}
+for name in source.ListProperties():
+    labels[name] = source.GetProperty(name).SMProperty.GetXMLLabel()
+for name, label in sorted(labels.items()):
+    expect(not re.search(r"\b[A-Z] [A-Z]{2,}|[A-Z]{3,}[a-z]", label),
+           "property %s has the label %r" % (name, label))
+for name, label in (("XSPHViscosity", "XSPH Viscosity"), ("CFLNumber", "CFL Number")):
+    expect(labels.get(name) == label, "%s is labelled %r, expected %r" % (name, labels.get(name), label))
+# paraview.simple names a property after its label without the spaces: a label must keep the
+# scripting name (SCorrK, not S_corrK), or scripts, traces and states break.
+for name in ("XSPHViscosity", "CFLNumber", "SCorrK", "SCorrN", "SCorrDeltaQ", "MaxTimeStep"):
+    expect(name in labels, "the scripting name %s is gone (properties: %s)" % (name, sorted(labels)))
+
 T.passed("Parameters")
