@@ -33,6 +33,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cctype>
 #include <cstring>
 #include <fstream>
 #include <initializer_list>
@@ -45,6 +46,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace
@@ -358,6 +360,61 @@ double Milliseconds(std::chrono::steady_clock::time_point since)
 }
 
 const double NaN = std::numeric_limits<double>::quiet_NaN();
+
+// The solver's messages name its own fields (timeStep, cflNumber, solverIterations); a ParaView
+// user sees properties. Advice about a field becomes advice about the properties that set it,
+// then every remaining field name becomes its property's label.
+std::string InUserTerms(std::string text)
+{
+  const std::pair<const char*, const char*> phrases[] = {
+    { "lower timeStep (more substeps per frame) or use automatic time stepping",
+      "raise Substeps Per Frame (or lower Frame Interval), or set Time Stepping to Automatic" },
+    { "lower cflNumber or the largest time step", "lower CFL Number or Max Time Step" },
+    { "lower timeStep first",
+      "lower the time step first (Time Stepping Automatic, a smaller CFL Number or Max Time Step; "
+      "with Fixed steps more Substeps Per Frame)" },
+    { "raise relaxation", "raise Relaxation Epsilon" },
+  };
+  for (const auto& phrase : phrases)
+  {
+    for (std::size_t at = text.find(phrase.first); at != std::string::npos;
+         at = text.find(phrase.first, at + std::strlen(phrase.second)))
+    {
+      text.replace(at, std::strlen(phrase.first), phrase.second);
+    }
+  }
+  const std::pair<const char*, const char*> fields[] = {
+    { "maxDensityErrorTolerance", "Max Density Error Tolerance" },
+    { "densityErrorTolerance", "Density Error Tolerance" },
+    { "particleSpacing", "Particle Spacing" },
+    { "smoothingRatio", "Smoothing Ratio" },
+    { "solverIterations", "Solver Iterations" },
+    { "restDensity", "Rest Density" },
+    { "cflNumber", "CFL Number" },
+    { "xsphViscosity", "XSPH Viscosity" },
+    { "vorticityEpsilon", "Vorticity Epsilon" },
+    { "sCorrDeltaQ", "S Corr Delta Q" },
+    { "sCorrK", "S Corr K" },
+    { "sCorrN", "S Corr N" },
+    { "timeStep", "the time step" },
+  };
+  auto isWordCharacter = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+  for (const auto& field : fields)
+  {
+    const std::size_t length = std::strlen(field.first);
+    for (std::size_t at = text.find(field.first); at != std::string::npos;
+         at = text.find(field.first, at + 1))
+    {
+      const bool whole = (at == 0 || !isWordCharacter(text[at - 1])) &&
+        (at + length == text.size() || !isWordCharacter(text[at + length]));
+      if (whole)
+      {
+        text.replace(at, length, field.second);
+      }
+    }
+  }
+  return text;
+}
 
 // Collective over the ranks of a decomposed run: true on every rank when it is true on any.
 bool AnyRank(pbf::distributed::Communicator& ranks, bool mine)
@@ -1340,7 +1397,7 @@ int vtkPBFSimulation::RequestData(
   }
   catch (const pbf::InvalidInput& error)
   {
-    vtkErrorMacro(<< error.what());
+    vtkErrorMacro(<< InUserTerms(error.what()));
   }
   catch (const std::bad_alloc&)
   {
@@ -1348,7 +1405,7 @@ int vtkPBFSimulation::RequestData(
   }
   catch (const std::exception& error)
   {
-    vtkErrorMacro(<< error.what());
+    vtkErrorMacro(<< InUserTerms(error.what()));
   }
   // A failed request may have stopped a simulation half way through a step: never step on from
   // it. Checkpoints and rows are of whole frames and stay.

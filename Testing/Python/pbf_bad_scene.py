@@ -4,6 +4,7 @@ kept, and the next valid request works."""
 import json
 import math
 import os
+import re
 import shutil
 import sys
 import tempfile
@@ -70,6 +71,29 @@ for what, path, changes, needles in CASES:
     expect(kept["time"] == 2 / 60.0, "%s: the kept output claims time %g" % (what, kept["time"]))
     source.SceneFile = ""
     source.Gravity = [0.0, -9.81, 0.0]
+
+# A blow-up is reported in the GUI's words (issue 17): the properties that exist (Substeps Per
+# Frame, Frame Interval, Time Stepping), never the solver's field names (timeStep). Fixed steps of
+# 0.05 s with light XSPH pile the fluid up within a few steps (DivergenceTest.cpp).
+source.TimeStepping = "Fixed"
+source.FrameInterval = 0.05
+source.SubstepsPerFrame = 1
+source.AdaptiveIterations = 0
+source.XSPHViscosity = 0.001
+data, text = T.capture_messages(lambda: T.output_at(source, 0.3))
+errors = [line for line in text.splitlines() if line.startswith("vtkPBFSimulation")]
+expect(len(errors) == 1 and "diverged" in errors[0], "a fixed-step blow-up gave %r" % text)
+print("divergence message: %s" % errors[0])
+for needle in ("Substeps Per Frame", "Frame Interval", "Time Stepping"):
+    expect(needle in errors[0], "the divergence message %r does not name %r" % (errors[0], needle))
+for solver_name in ("timeStep", "cflNumber", "solverIterations"):
+    expect(not re.search(r"\b%s\b" % solver_name, errors[0]),
+           "the divergence message %r names the solver's %s" % (errors[0], solver_name))
+source.TimeStepping = "Automatic"
+source.FrameInterval = 1 / 60.0
+source.SubstepsPerFrame = 4
+source.AdaptiveIterations = 1
+source.XSPHViscosity = 0.05
 
 # A valid scene file after the errors: 0.3 / 0.05 = 6 sites per axis.
 source.SceneFile = scene_file("good.json", json.dumps(GOOD))
