@@ -1,9 +1,11 @@
 #include "ParticleChecks.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <sstream>
+#include <unordered_map>
 
 namespace pbf
 {
@@ -60,6 +62,62 @@ void checkBatch(const Parameters& parameters, const ParticleBatch& batch)
       throw InvalidInput("position of particle " + std::to_string(i) + " = " + format(x) +
         ": outside the domain " + format(d.min) + " - " + format(d.max));
     }
+  }
+}
+
+void checkPacking(const Parameters& parameters, const ParticleBatch& batch, const std::string& where)
+{
+  const double s = parameters.particleSpacing;
+  const Box& d = parameters.domain;
+  std::unordered_map<std::uint64_t, std::uint32_t> perCell;
+  perCell.reserve(batch.position.size());
+  std::size_t onWalls = 0, firstOnWall = 0;
+  for (std::size_t i = 0; i < batch.position.size(); ++i)
+  {
+    const Vec3d& x = batch.position[i];
+    if (!finite(x))
+    {
+      continue; // checkBatch names it
+    }
+    // Cells of side s from the domain's corner, 21 bits an axis (2 million cells along each).
+    auto cell = [&](double value, double low) {
+      const double c = std::floor((value - low) / s);
+      return static_cast<std::uint64_t>(std::min(std::max(c, 0.0), 2097151.0));
+    };
+    ++perCell[cell(x.x, d.min.x) | cell(x.y, d.min.y) << 21 | cell(x.z, d.min.z) << 42];
+    const double wall = std::min({ x.x - d.min.x, d.max.x - x.x, x.y - d.min.y, d.max.y - x.y,
+      x.z - d.min.z, d.max.z - x.z });
+    if (parameters.mirrorWalls && std::abs(wall) < 0.25 * s)
+    {
+      firstOnWall = onWalls++ == 0 ? i : firstOnWall;
+    }
+  }
+  const double occupied = static_cast<double>(perCell.size());
+  const double perOccupied = occupied > 0 ? static_cast<double>(batch.position.size()) / occupied : 0;
+  if (perOccupied > kMaxParticlesPerCell)
+  {
+    std::ostringstream text;
+    text.precision(3);
+    text << "initial particles: " << batch.position.size() << " points in " << perCell.size()
+         << " occupied cells of side particleSpacing = " << s << " m, " << perOccupied
+         << " per cell where the fluid holds 1 (more than " << kMaxParticlesPerCell
+         << "): the points are packed about " << std::cbrt(perOccupied)
+         << " times closer than the spacing, and the first projection would fling them apart. Set "
+            "particleSpacing to about "
+         << s / std::cbrt(perOccupied) << " m (the points' own spacing), or resample the points";
+    throw InvalidInput(text.str());
+  }
+  if (onWalls > 0)
+  {
+    std::ostringstream text;
+    text.precision(4);
+    text << "initial particles: " << onWalls << (onWalls == 1 ? " point lies" : " points lie")
+         << " within a quarter of particleSpacing = " << s << " m of a wall of the domain "
+         << format(d.min) << " - " << format(d.max) << " (" << where << "), point "
+         << batch.id[firstOnWall] << " = " << format(batch.position[firstOnWall])
+         << " first: a wall mirrors the fluid, so a point on it counts twice. Move the points half "
+            "a spacing inside, enlarge the domain (a scene file), or turn mirrorWalls off";
+    throw InvalidInput(text.str());
   }
 }
 

@@ -1,5 +1,7 @@
 #include "Simulation.h"
 
+#include "ParticleChecks.h"
+
 #include "Distributed/SubdomainStepper.h"
 
 #include <algorithm>
@@ -63,6 +65,7 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
     throw InvalidInput("particle count = 0: the fluid is empty");
   }
   checkEmitters(initial.position.size());
+  checkPacking(parameters_, initial, "the domain of scene \"" + scene_.name + "\"");
   // The scene's speed scale, from the initial velocities and the emitters: the floor of the
   // automatic step and the scale of XSPH's viscosity (Parameters::sceneSpeedHint).
   double v0 = 0.0;

@@ -83,6 +83,13 @@ BAD = [
     ("NaN coordinate", "x[5, 1] = float('nan')", ["input point 5", "nan", "finite"]),
     ("point outside the domain", "x[7] = [5.0, 0.2, 0.3]",
      ["position of particle 7", "(5, 0.2, 0.3)", "outside the domain"]),
+    # Input the solver would tear apart is named before any step (issue 17): packed at 0.4 of the
+    # spacing, or lying on the floor, which the floor's mirror image doubles.
+    ("points packed denser than the spacing", "x = (x - x.mean(axis=0)) * 0.4 + x.mean(axis=0)",
+     ["64 points in", "per cell where the fluid holds 1", "Set Particle Spacing to about"]),
+    ("points on the floor", "x[:, 1] -= x[:, 1].min()",
+     ["16 points lie within a quarter of Particle Spacing", "a wall of the domain", "dam_break",
+      "half a spacing inside"]),
 ]
 for what, edit, needles in BAD:
     lattice.Script = LATTICE % {"n": 4, "edit": edit}
