@@ -1,6 +1,7 @@
 #include "pqPBFRepresentationDefaults.h"
 
 #include "pqApplicationCore.h"
+#include "pqPipelineSource.h"
 #include "pqRepresentation.h"
 #include "pqServerManagerModel.h"
 #include "vtkNew.h"
@@ -8,8 +9,35 @@
 #include "vtkSMProxy.h"
 #include "vtkSMSessionProxyManager.h"
 #include "vtkSMTransferFunctionManager.h"
+#include "vtkWeakPointer.h"
+
+#include <QPointer>
+#include <QVariant>
 
 #include <cstring>
+
+namespace
+{
+// The radius this class last gave a display, kept on the pqRepresentation: a display whose radius
+// still equals it was not changed by the user, so it follows the spacing.
+const char* const FollowedRadius = "pbfFollowedGaussianRadius";
+
+void FollowSpacing(pqRepresentation* representation, vtkSMProxy* producer)
+{
+  vtkSMProxy* display = representation->getProxy();
+  const QVariant followed = representation->property(FollowedRadius);
+  const double radius = vtkSMPropertyHelper(display, "GaussianRadius").GetAsDouble();
+  const double wanted = 0.5 * vtkSMPropertyHelper(producer, "ParticleSpacing").GetAsDouble();
+  if (!followed.isValid() || radius != followed.toDouble() || radius == wanted)
+  {
+    return;
+  }
+  vtkSMPropertyHelper(display, "GaussianRadius").Set(wanted);
+  representation->setProperty(FollowedRadius, wanted);
+  display->UpdateVTKObjects();
+  representation->renderViewEventually();
+}
+} // namespace
 
 //------------------------------------------------------------------------------
 pqPBFRepresentationDefaults::pqPBFRepresentationDefaults(QObject* parent)
@@ -79,6 +107,23 @@ void pqPBFRepresentationDefaults::onRepresentationAdded(pqRepresentation* repres
   const double spacing = vtkSMPropertyHelper(producer, "ParticleSpacing").GetAsDouble();
   vtkSMPropertyHelper(display, "GaussianRadius").Set(0.5 * spacing);
   display->UpdateVTKObjects();
+  // ... and whenever the spacing changes (the data is then computed again), unless the user has
+  // set a radius of their own.
+  representation->setProperty(FollowedRadius, 0.5 * spacing);
+  pqServerManagerModel* model = pqApplicationCore::instance()->getServerManagerModel();
+  if (auto* source = model->findItem<pqPipelineSource*>(producer))
+  {
+    QPointer<pqRepresentation> guard(representation);
+    vtkWeakPointer<vtkSMProxy> weakProducer(producer);
+    QObject::connect(source, QOverload<pqPipelineSource*>::of(&pqPipelineSource::dataUpdated),
+      representation,
+      [guard, weakProducer](pqPipelineSource*) {
+        if (guard && weakProducer)
+        {
+          FollowSpacing(guard, weakProducer);
+        }
+      });
+  }
 
   // The color map is the session's one for arrays named "velocity", the one Show picks.
   vtkNew<vtkSMTransferFunctionManager> manager;

@@ -1,7 +1,8 @@
 // Display defaults that proxy XML hints cannot express in ParaView 5.11, applied in the GUI when a
 // Position Based Fluids source or filter is shown:
 // - the Point Gaussian radius is half the ParticleSpacing, so that neighbouring particles touch
-//   and the fluid reads as a volume (the representation's own default is 0.5% of the bounds);
+//   and the fluid reads as a volume (the representation's own default is 0.5% of the bounds),
+//   and follows the spacing when it changes unless the user set a radius of their own;
 // - the "velocity" color map grows every time step, because frame 0 is at rest (all speeds 0)
 //   and a range taken on Apply would saturate as soon as the animation plays;
 // - the Diagnostics table (output port 1) in a Line Chart View plots the two density errors (in

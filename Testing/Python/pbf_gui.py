@@ -168,6 +168,19 @@ expect(len(colored) > 200 and len(columns) > 300,
        "the chart shows %d colored line pixels over %d columns: no plotted line"
        % (len(colored), len(columns)))
 
+# The radius follows the spacing (issue 17, item 5): at another spacing the spheres touch again;
+# a radius the user set stays. (Last: it recomputes the source, and the diagnostics above count
+# the frames played.)
+source.ParticleSpacing = 0.08
+simple.Render(view)
+expect(display.GaussianRadius == 0.04,
+       "spacing 0.08: the Point Gaussian radius stayed %g" % display.GaussianRadius)
+display.GaussianRadius = 0.03
+source.ParticleSpacing = 0.05
+simple.Render(view)
+expect(display.GaussianRadius == 0.03,
+       "a radius the user set was replaced by %g" % display.GaussianRadius)
+
 print("pbf_gui: frame %d of %d, %.1f%% of the view is particles in %d colors; saved %s; "
       "diagnostics: %d rows, %d line pixels" % (frame, source.NumberOfFrames, 100 * fraction,
                                                 len(colors), shot, table.GetNumberOfRows(),
