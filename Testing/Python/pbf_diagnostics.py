@@ -9,6 +9,7 @@ import numpy
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import pbf_testing as T  # noqa: E402
 from paraview import servermanager  # noqa: E402
+from paraview.simple import CreateRenderView, Delete, GetViews  # noqa: E402
 
 T.load_plugin(globals())
 expect = T.expect
@@ -25,6 +26,20 @@ source = PositionBasedFluids(ParticleSpacing=T.QUICK_SPACING, NumberOfFrames=12,
                              AdaptiveIterations=0, SolverIterations=4, MaxTimeStep=0.002)
 expect(source.SMProxy.GetOutputPortName(1) == "Diagnostics",
        "output port 1 is named %r" % source.SMProxy.GetOutputPortName(1))
+# What Apply does with the two ports (issue 17, items 1-2): the particles go to the active render
+# view, the Diagnostics to no view at all, so a first Apply opens no second view and draws no
+# chart of a single row ("Attempted to paint a line with <2 points"); a Line Chart View shows
+# them when its eye is clicked.
+controller = servermanager.vtkSMParaViewPipelineControllerWithRendering()
+render_view = CreateRenderView()
+views_before = len(GetViews())
+expect(controller.ShowInPreferredView(source.SMProxy, 1, render_view.SMProxy) is None,
+       "Apply would show the Diagnostics in a view of their own")
+expect(controller.ShowInPreferredView(source.SMProxy, 0, render_view.SMProxy) is not None,
+       "Apply would not show the particles in the render view")
+expect(len(GetViews()) == views_before,
+       "Apply opened %d more views" % (len(GetViews()) - views_before))
+Delete(render_view)
 particles = T.output_at(source, 8 * INTERVAL)
 table_object = source.GetClientSideObject().GetOutputDataObject(1)
 expect(table_object.IsA("vtkTable"), "port 1 is a %s" % table_object.GetClassName())
