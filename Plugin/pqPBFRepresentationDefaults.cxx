@@ -6,12 +6,14 @@
 #include "pqServerManagerModel.h"
 #include "vtkNew.h"
 #include "vtkSMPropertyHelper.h"
+#include "vtkSMPVRepresentationProxy.h"
 #include "vtkSMProxy.h"
 #include "vtkSMSessionProxyManager.h"
 #include "vtkSMTransferFunctionManager.h"
 #include "vtkWeakPointer.h"
 
 #include <QPointer>
+#include <QString>
 #include <QVariant>
 
 #include <cstring>
@@ -21,6 +23,30 @@ namespace
 // The radius this class last gave a display, kept on the pqRepresentation: a display whose radius
 // still equals it was not changed by the user, so it follows the spacing.
 const char* const FollowedRadius = "pbfFollowedGaussianRadius";
+
+// The scene last seen by a display (Preset and SceneFile): another scene starts from rest with
+// other speeds, so the color map starts again from its data instead of keeping the old range.
+const char* const FollowedScene = "pbfFollowedScene";
+
+QString SceneOf(vtkSMProxy* producer)
+{
+  const char* file = vtkSMPropertyHelper(producer, "SceneFile").GetAsString();
+  return QString::number(vtkSMPropertyHelper(producer, "Preset").GetAsInt()) + "|" +
+    QString::fromUtf8(file ? file : "");
+}
+
+void FollowScene(pqRepresentation* representation, vtkSMProxy* producer)
+{
+  const QString scene = SceneOf(producer);
+  const QVariant followed = representation->property(FollowedScene);
+  representation->setProperty(FollowedScene, scene);
+  if (followed.isValid() && followed.toString() != scene)
+  {
+    vtkSMPVRepresentationProxy::RescaleTransferFunctionToDataRange(
+      representation->getProxy(), /*extend=*/false, /*force=*/true);
+    representation->renderViewEventually();
+  }
+}
 
 void FollowSpacing(pqRepresentation* representation, vtkSMProxy* producer)
 {
@@ -110,6 +136,7 @@ void pqPBFRepresentationDefaults::onRepresentationAdded(pqRepresentation* repres
   // ... and whenever the spacing changes (the data is then computed again), unless the user has
   // set a radius of their own.
   representation->setProperty(FollowedRadius, 0.5 * spacing);
+  representation->setProperty(FollowedScene, SceneOf(producer));
   pqServerManagerModel* model = pqApplicationCore::instance()->getServerManagerModel();
   if (auto* source = model->findItem<pqPipelineSource*>(producer))
   {
@@ -121,6 +148,7 @@ void pqPBFRepresentationDefaults::onRepresentationAdded(pqRepresentation* repres
         if (guard && weakProducer)
         {
           FollowSpacing(guard, weakProducer);
+          FollowScene(guard, weakProducer);
         }
       });
   }

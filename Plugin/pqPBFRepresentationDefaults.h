@@ -4,7 +4,8 @@
 //   and the fluid reads as a volume (the representation's own default is 0.5% of the bounds),
 //   and follows the spacing when it changes unless the user set a radius of their own;
 // - the "velocity" color map grows every time step, because frame 0 is at rest (all speeds 0)
-//   and a range taken on Apply would saturate as soon as the animation plays;
+//   and a range taken on Apply would saturate as soon as the animation plays, and starts again
+//   from the data when the scene (Preset, SceneFile) changes;
 // - the Diagnostics table (output port 1) in a Line Chart View plots the two density errors (in
 //   percent) against Time, instead of every column on one axis.
 #ifndef pqPBFRepresentationDefaults_h
