@@ -88,15 +88,16 @@ def check_proxy(proxy, label):
            representation.GetAttribute("type") in ("Point Gaussian", "Points"),
            "%s: no RepresentationType hint that shows particles" % label)
 
-    # Two output ports: the particles, and the diagnostics table that Apply shows in a Line Chart
-    # View.
+    # Two output ports: the particles, and the diagnostics table, which Apply shows in no view
+    # (issue 17: a chart opened on Apply split the layout and drew a single row); a Line Chart
+    # View plots it when its eye is clicked (pbf_diagnostics.py checks what Apply does).
     ports = [sm.GetOutputPortName(i) for i in range(sm.GetNumberOfOutputPorts())]
     expect(ports == ["Particles", "Diagnostics"], "%s: output ports %s" % (label, ports))
     views = [hints.GetNestedElement(i) for i in range(hints.GetNumberOfNestedElements())
              if hints.GetNestedElement(i).GetName() == "View"]
     expect([(v.GetAttribute("type"), v.GetAttribute("port")) for v in views] ==
-           [("XYChartView", "1")], "%s: the diagnostics port is not shown in a Line Chart View"
-           % label)
+           [("None", "1")], "%s: the diagnostics port's View hint is %s, not None"
+           % (label, [(v.GetAttribute("type"), v.GetAttribute("port")) for v in views]))
 
     # SceneFile: the GUI's file dialog, filtered to JSON scenes.
     scene_file = sm.GetProperty("SceneFile")
