@@ -422,31 +422,14 @@ TEST(CudaStepper, RefinedDamBreakAtAMillionParticlesHolds)
   EXPECT_EQ(simulation.time(), 0.25);
 }
 
-namespace
-{
-// The serial divergence test's blow-up (Testing/Solver/DivergenceTest.cpp,
-// HugeTimeStepIsCaughtAtTheStepItHappens): fixed steps of 0.05 s, 12 times the default, at
-// s = 0.05 m pile the fluid up on the floor at 3 x rho_0 by the third step.
-Parameters hugeFixedStep()
-{
-  Parameters p;
-  p.particleSpacing = 0.05;
-  p.timeStepping = TimeStepping::Fixed;
-  p.densityErrorTolerance = 0;
-  p.solverIterations = 4;
-  p.xsphViscosity = 0.001;
-  p.timeStep = 0.05;
-  return p;
-}
-} // namespace
-
 TEST(CudaStepper, TheDivergenceCheckStopsABlowUpOnTheGpu)
 {
   PBF_REQUIRE_GPU();
   // On the GPU the check runs at every frame with fixed steps (and after every automatic step):
   // frames of one step each must stop at the step where the fluid piles up, never hand out a
   // frame of it, and blame the time step.
-  Simulation simulation(presetScene("dam_break"), hugeFixedStep(), Backend::CUDA, Precision::Single);
+  // The serial divergence test's blow-up (DivergenceTest.cpp, HugeTimeStepIsCaughtAtTheStepItHappens).
+  Simulation simulation(presetScene("dam_break"), test::hugeFixedStep(), Backend::CUDA, Precision::Single);
   int frames = 0;
   try
   {

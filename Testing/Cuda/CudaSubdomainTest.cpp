@@ -182,13 +182,7 @@ TEST(CudaSubdomain, ADivergenceStopsEveryRankAtTheSameStepWithTheSameError)
   // The serial divergence test's blow-up (fixed steps of 0.05 s at s = 0.05 m) decomposed over 3
   // ranks on the GPU: the health scan is reduced over the ranks, so every rank stops at the same
   // step with the same text, whichever slab piled up.
-  Parameters p;
-  p.particleSpacing = 0.05;
-  p.timeStepping = TimeStepping::Fixed;
-  p.densityErrorTolerance = 0;
-  p.solverIterations = 4;
-  p.xsphViscosity = 0.001;
-  p.timeStep = 0.05;
+  const Parameters p = hugeFixedStep();
   std::vector<std::string> errors(3, "no divergence");
   std::vector<std::uint64_t> steps(3, 0);
   distributed::runThreadCluster(3, [&](distributed::Communicator& communicator) {

@@ -213,15 +213,8 @@ TEST(DeviceSubdomainOnHost, ADeviceFaultOnOneRankStopsEveryRankWithTheSameError)
     HostDevicePolicy* device = policy.get();
     cuda::DeviceSubdomainStepper<double, HostDevicePolicy> stepper(
       communicator, setup.parameters, setup.fluid, std::move(policy));
-    stepper.step(); // the first step waits more often (the first cut)
-    const long before = device->synchronizations();
-    stepper.step();
-    const long perStep = device->synchronizations() - before;
+    const long perStep = faultMidNextStep(stepper, *device, r == 1);
     ASSERT_GE(perStep, 2) << "a step waits for the device before its exchanges";
-    if (r == 1)
-    {
-      device->faultAtSynchronization(perStep / 2); // in the middle of the next step
-    }
     try
     {
       for (int s = 0; s < 3; ++s)

@@ -186,5 +186,22 @@ private:
   long synchronizations_ = 0;
 };
 
+// Takes two steps (the first waits more often: the first cut) and counts the synchronisations of
+// the second; when `faulty`, the device then faults in the middle of the next step. Returns the
+// synchronisations per step.
+template <class Stepper>
+long faultMidNextStep(Stepper& stepper, HostDevicePolicy& device, bool faulty)
+{
+  stepper.step();
+  const long before = device.synchronizations();
+  stepper.step();
+  const long perStep = device.synchronizations() - before;
+  if (faulty)
+  {
+    device.faultAtSynchronization(perStep / 2);
+  }
+  return perStep;
+}
+
 } // namespace test
 } // namespace pbf

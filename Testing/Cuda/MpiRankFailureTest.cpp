@@ -140,14 +140,7 @@ TEST(MpiCommunicator, ADeviceFaultMidStepStopsEveryRankOfTheDecomposedStepper)
   {
     cuda::DeviceSubdomainStepper<double, HostDevicePolicy> stepper(
       c, setup.parameters, setup.fluid, std::move(policy));
-    stepper.step(); // the first step waits more often (the first cut)
-    const long before = device->synchronizations();
-    stepper.step();
-    const long perStep = device->synchronizations() - before;
-    if (c.rank() == c.size() - 1)
-    {
-      device->faultAtSynchronization(perStep / 2);
-    }
+    faultMidNextStep(stepper, *device, c.rank() == c.size() - 1);
     try
     {
       for (int s = 0; s < 3; ++s)

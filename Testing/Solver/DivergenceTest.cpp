@@ -21,13 +21,7 @@ namespace
 // (automatic steps, adaptive iterations) prevent them (AutomaticSteppingHoldsWhatFixedStepsBlowUp).
 Parameters coarse()
 {
-  Parameters p;
-  p.particleSpacing = 0.05;
-  p.timeStepping = TimeStepping::Fixed;
-  p.densityErrorTolerance = 0;
-  p.solverIterations = 4;
-  p.xsphViscosity = 0.001; // the paper's c = 0.01 per step at the default 1/240 s
-  return p;
+  return test::coarseFixedSteps();
 }
 
 // The SimulationDiverged that advancing `steps` throws; fails the test when none is thrown.

@@ -24,6 +24,24 @@ PresetFluid presetFluid(const std::string& name, double spacing)
   return s;
 }
 
+Parameters coarseFixedSteps()
+{
+  Parameters p;
+  p.particleSpacing = 0.05;
+  p.timeStepping = TimeStepping::Fixed;
+  p.densityErrorTolerance = 0;
+  p.solverIterations = 4;
+  p.xsphViscosity = 0.001; // the paper's c = 0.01 per step at the default 1/240 s
+  return p;
+}
+
+Parameters hugeFixedStep()
+{
+  Parameters p = coarseFixedSteps();
+  p.timeStep = 0.05;
+  return p;
+}
+
 Scene restingBlock(int side, double spacing)
 {
   const double width = side * spacing;

@@ -19,6 +19,14 @@ struct PresetFluid
 };
 PresetFluid presetFluid(const std::string& name, double spacing);
 
+// The divergence tests' settings: s = 0.05 m with fixed steps (the default 1/240 s), the paper's
+// 4 projections and light XSPH, which the blow-ups need (automatic steps and adaptive projections
+// prevent them).
+Parameters coarseFixedSteps();
+// The same with steps of 0.05 s, 12 times the default: the dam break piles up on the floor at
+// 3 x rho_0 by the third step, on every backend.
+Parameters hugeFixedStep();
+
 // A block of fluid filling the floor of a closed box: side x side x side lattice sites.
 Scene restingBlock(int side, double spacing);
 
