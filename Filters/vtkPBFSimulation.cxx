@@ -13,6 +13,7 @@
 #include "vtkMultiProcessController.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
+#include "vtkOutlineSource.h"
 #include "vtkOutputWindow.h"
 #include "vtkPointData.h"
 #include "vtkPointSet.h"
@@ -119,10 +120,12 @@ std::string FormatPoint(const double x[3])
 pbf::ParticleBatch BatchFromInput(vtkPointSet* input)
 {
   const vtkIdType n = input->GetNumberOfPoints();
-  if (n == 0)
+  if (n < 2)
   {
-    throw pbf::InvalidInput("input number of points = 0: the filter needs at least one point to "
-                            "become the fluid");
+    // One particle has no neighbour: no density to constrain, nothing that behaves as a fluid.
+    throw pbf::InvalidInput("input number of points = " + std::to_string(n) +
+      ": the filter needs at least 2 points to become the fluid (a particle alone has no "
+      "neighbour within the smoothing length, so it only falls)");
   }
   vtkDataArray* velocity = input->GetPointData()->GetArray("velocity");
   if (velocity && velocity->GetNumberOfComponents() != 3)
@@ -487,6 +490,9 @@ public:
   vtkSmartPointer<vtkPolyData> LastOutput = vtkSmartPointer<vtkPolyData>::New();
   int LastFrame = -1;
 
+  // The outline of the domain last simulated (port 2), kept when a request fails.
+  vtkSmartPointer<vtkPolyData> Domain = vtkSmartPointer<vtkPolyData>::New();
+
   // Reused from frame to frame while the particle count stays.
   vtkSmartPointer<vtkCellArray> Vertices;
 
@@ -820,8 +826,9 @@ vtkPBFSimulation::vtkPBFSimulation()
 
   // Port 0 is optional: without an input the algorithm is a source.
   this->SetNumberOfInputPorts(1);
-  // Port 0: the particles of the frame; port 1: the diagnostics table.
-  this->SetNumberOfOutputPorts(2);
+  // Port 0: the particles of the frame; port 1: the diagnostics table; port 2: the outline of
+  // the domain (the tank), so that a view shows and frames the whole of it from frame 0 on.
+  this->SetNumberOfOutputPorts(3);
 }
 
 //------------------------------------------------------------------------------
@@ -892,7 +899,7 @@ int vtkPBFSimulation::FillOutputPortInformation(int port, vtkInformation* info)
 //------------------------------------------------------------------------------
 int vtkPBFSimulation::FrameForTime(double time) const
 {
-  if (!std::isfinite(time) || time <= 0.0)
+  if (!std::isfinite(time) || time <= 0.0 || !this->InvalidTimeProperty().empty())
   {
     return 0;
   }
@@ -906,7 +913,9 @@ int vtkPBFSimulation::RequestInformation(
 {
   // The time steps are this algorithm's frames, whatever the input's were. Both ports announce
   // them: the table grows as frames are computed.
-  std::vector<double> times(static_cast<std::size_t>(this->NumberOfFrames) + 1);
+  // Invalid time properties announce frame 0 only; RequestData then names the property.
+  const bool valid = this->InvalidTimeProperty().empty();
+  std::vector<double> times(valid ? static_cast<std::size_t>(this->NumberOfFrames) + 1 : 1, 0.0);
   for (std::size_t k = 0; k < times.size(); ++k)
   {
     times[k] = static_cast<double>(k) * this->FrameInterval;
@@ -955,6 +964,76 @@ int vtkPBFSimulation::RequestUpdateExtent(
 
 //------------------------------------------------------------------------------
 int vtkPBFSimulation::RequestData(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  const int result = this->RequestFrame(request, inputVector, outputVector);
+  this->RequestDomain(outputVector);
+  return result;
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::RequestDomain(vtkInformationVector* outputVector)
+{
+  vtkInternals& internals = *this->Internals;
+  vtkPolyData* domain = vtkPolyData::GetData(outputVector, 2);
+  vtkPolyData* particles = vtkPolyData::GetData(outputVector, 0);
+  if (internals.Live)
+  {
+    const pbf::Box& box = internals.Live->parameters().domain;
+    vtkNew<vtkOutlineSource> outline;
+    outline->SetBounds(box.min.x, box.max.x, box.min.y, box.max.y, box.min.z, box.max.z);
+    outline->Update();
+    internals.Domain = outline->GetOutput();
+    vtkNew<vtkStringArray> scene;
+    scene->SetName("Scene");
+    scene->InsertNextValue(internals.Live->scene().name);
+    internals.Domain->GetFieldData()->AddArray(scene);
+  }
+  // One outline for the whole run: rank 0's (the others would only draw it again).
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  const bool mine = !controller || controller->GetLocalProcessId() == 0;
+  if (mine)
+  {
+    domain->ShallowCopy(internals.Domain);
+  }
+  else
+  {
+    domain->Initialize();
+  }
+  vtkInformation* shown = particles->GetInformation();
+  if (shown->Has(vtkDataObject::DATA_TIME_STEP()))
+  {
+    domain->GetInformation()->Set(
+      vtkDataObject::DATA_TIME_STEP(), shown->Get(vtkDataObject::DATA_TIME_STEP()));
+  }
+}
+
+//------------------------------------------------------------------------------
+std::string vtkPBFSimulation::InvalidTimeProperty() const
+{
+  std::ostringstream text;
+  if (!std::isfinite(this->FrameInterval) || this->FrameInterval <= 0.0)
+  {
+    text << "Frame Interval = " << this->FrameInterval << ": must be > 0 (seconds between frames)";
+  }
+  else if (this->NumberOfFrames < 0)
+  {
+    text << "Number Of Frames = " << this->NumberOfFrames << ": must be >= 0";
+  }
+  else if (this->TimeStepping == TIME_STEPPING_FIXED && this->SubstepsPerFrame < 1)
+  {
+    text << "Substeps Per Frame = " << this->SubstepsPerFrame << ": must be >= 1";
+  }
+  else if (this->TimeStepping == TIME_STEPPING_AUTOMATIC &&
+    (!std::isfinite(this->MaxTimeStep) || this->MaxTimeStep <= 0.0))
+  {
+    text << "Max Time Step = " << this->MaxTimeStep << ": must be > 0 (seconds)";
+  }
+  return text.str();
+}
+
+//------------------------------------------------------------------------------
+int vtkPBFSimulation::RequestFrame(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
@@ -1033,6 +1112,11 @@ int vtkPBFSimulation::RequestData(
 
   try
   {
+    const std::string invalidTime = this->InvalidTimeProperty();
+    if (!invalidTime.empty())
+    {
+      throw pbf::InvalidInput(invalidTime);
+    }
     Configuration configuration;
     const std::string sceneFile = this->SceneFile ? this->SceneFile : "";
     configuration.SceneKey = sceneFile.empty()
@@ -1397,7 +1481,16 @@ int vtkPBFSimulation::RequestData(
   }
   catch (const pbf::InvalidInput& error)
   {
-    vtkErrorMacro(<< InUserTerms(error.what()));
+    std::string text = InUserTerms(error.what());
+    if (text.find("domain") != std::string::npos)
+    {
+      // The user set no domain: say where it comes from and what changes it.
+      const bool file = this->SceneFile && *this->SceneFile;
+      text += file ? std::string(". The domain is the one of Scene File \"") + this->SceneFile + "\""
+                   : std::string(". The domain is the tank of Preset \"") + this->GetPresetName() +
+          "\"; a Scene File with its own \"domain\" changes it";
+    }
+    vtkErrorMacro(<< text);
   }
   catch (const std::bad_alloc&)
   {

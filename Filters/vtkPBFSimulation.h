@@ -62,9 +62,14 @@
  * ParaView's parallel engine does. With it off, piece 0 simulates the whole fluid and other pieces
  * are empty. As a filter it asks its input for the whole data set on every rank.
  *
+ * Output port 2 is the outline of the scene's domain (a vtkPolyData of 12 lines, field data
+ * Scene), on rank 0 only: shown beside the particles, it makes a view frame the whole tank from
+ * frame 0 on, where frame 0's particles may fill only a corner of it.
+ *
  * Errors (a bad scene or parameter, an empty input, a NaN coordinate, an unavailable backend) are
- * reported with vtkErrorMacro naming the field and its value; the request then fails and the
- * previous output is kept.
+ * reported with vtkErrorMacro naming the property (its GUI label) and the value as set (the
+ * setters do not clamp: a clamped value would be reported as one the user never typed); the
+ * request then fails and the previous output is kept.
  */
 
 #ifndef vtkPBFSimulation_h
@@ -74,6 +79,7 @@
 #include "vtkPolyDataAlgorithm.h"
 
 #include <memory> // For std::unique_ptr
+#include <string> // For std::string
 
 class PBFFILTERS_EXPORT vtkPBFSimulation : public vtkPolyDataAlgorithm
 {
@@ -140,11 +146,11 @@ public:
    * Fluid: rest density rho_0 [kg/m^3], lattice spacing s of the initial fluid [m], and the
    * ratio h / s of the smoothing length to the spacing.
    */
-  vtkSetClampMacro(RestDensity, double, 1e-3, 1e6);
+  vtkSetMacro(RestDensity, double);
   vtkGetMacro(RestDensity, double);
-  vtkSetClampMacro(ParticleSpacing, double, 1e-4, 1.0);
+  vtkSetMacro(ParticleSpacing, double);
   vtkGetMacro(ParticleSpacing, double);
-  vtkSetClampMacro(SmoothingRatio, double, 1.0, 4.0);
+  vtkSetMacro(SmoothingRatio, double);
   vtkGetMacro(SmoothingRatio, double);
   ///@}
 
@@ -159,19 +165,19 @@ public:
    * domain walls mirror the fluid near them (so that fluid at rest against a wall reads rho_0)
    * and gravity [m/s^2]. Meanings and units are those of pbf::Parameters.
    */
-  vtkSetClampMacro(SolverIterations, int, 1, 1000);
+  vtkSetMacro(SolverIterations, int);
   vtkGetMacro(SolverIterations, int);
-  vtkSetClampMacro(RelaxationEpsilon, double, 1e-9, 1e3);
+  vtkSetMacro(RelaxationEpsilon, double);
   vtkGetMacro(RelaxationEpsilon, double);
-  vtkSetClampMacro(SCorrK, double, 0.0, 10.0);
+  vtkSetMacro(SCorrK, double);
   vtkGetMacro(SCorrK, double);
-  vtkSetClampMacro(SCorrN, double, 0.5, 16.0);
+  vtkSetMacro(SCorrN, double);
   vtkGetMacro(SCorrN, double);
-  vtkSetClampMacro(SCorrDeltaQ, double, 0.01, 0.99);
+  vtkSetMacro(SCorrDeltaQ, double);
   vtkGetMacro(SCorrDeltaQ, double);
-  vtkSetClampMacro(XSPHViscosity, double, 0.0, 1.0);
+  vtkSetMacro(XSPHViscosity, double);
   vtkGetMacro(XSPHViscosity, double);
-  vtkSetClampMacro(VorticityEpsilon, double, 0.0, 10.0);
+  vtkSetMacro(VorticityEpsilon, double);
   vtkGetMacro(VorticityEpsilon, double);
   vtkSetMacro(Unilateral, bool);
   vtkGetMacro(Unilateral, bool);
@@ -194,15 +200,15 @@ public:
    */
   vtkSetClampMacro(TimeStepping, int, TIME_STEPPING_FIXED, TIME_STEPPING_AUTOMATIC);
   vtkGetMacro(TimeStepping, int);
-  vtkSetClampMacro(CFLNumber, double, 0.01, 1.0);
+  vtkSetMacro(CFLNumber, double);
   vtkGetMacro(CFLNumber, double);
-  vtkSetClampMacro(MaxTimeStep, double, 1e-7, 10.0);
+  vtkSetMacro(MaxTimeStep, double);
   vtkGetMacro(MaxTimeStep, double);
-  vtkSetClampMacro(FrameInterval, double, 1e-6, 10.0);
+  vtkSetMacro(FrameInterval, double);
   vtkGetMacro(FrameInterval, double);
-  vtkSetClampMacro(SubstepsPerFrame, int, 1, 10000);
+  vtkSetMacro(SubstepsPerFrame, int);
   vtkGetMacro(SubstepsPerFrame, int);
-  vtkSetClampMacro(NumberOfFrames, int, 0, 1000000);
+  vtkSetMacro(NumberOfFrames, int);
   vtkGetMacro(NumberOfFrames, int);
   ///@}
 
@@ -216,11 +222,11 @@ public:
   vtkSetMacro(AdaptiveIterations, bool);
   vtkGetMacro(AdaptiveIterations, bool);
   vtkBooleanMacro(AdaptiveIterations, bool);
-  vtkSetClampMacro(DensityErrorTolerance, double, 1e-6, 100.0);
+  vtkSetMacro(DensityErrorTolerance, double);
   vtkGetMacro(DensityErrorTolerance, double);
   // ... and while any particle is compressed by more than this [percent] (default 5; 0: the mean
   // alone decides).
-  vtkSetClampMacro(MaxDensityErrorTolerance, double, 0.0, 1000.0);
+  vtkSetMacro(MaxDensityErrorTolerance, double);
   vtkGetMacro(MaxDensityErrorTolerance, double);
   ///@}
 
@@ -300,6 +306,13 @@ protected:
   int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  // The particles and diagnostics of the requested frame (ports 0 and 1).
+  int RequestFrame(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
+  // The domain's outline (port 2), from the simulation just run.
+  void RequestDomain(vtkInformationVector* outputVector);
+  // What is wrong with FrameInterval, NumberOfFrames, SubstepsPerFrame or MaxTimeStep, in the
+  // GUI's words and the value typed; empty when nothing is.
+  std::string InvalidTimeProperty() const;
 
   /**
    * The frame answering a requested time: the nearest one, clamped to 0..NumberOfFrames.

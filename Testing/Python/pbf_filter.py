@@ -4,12 +4,13 @@ an input change restarts it, and an empty input, a NaN coordinate or a point out
 an error naming the point and its value, with the previous output kept."""
 import os
 import sys
+import time
 
 import numpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import pbf_testing as T  # noqa: E402
-from paraview.simple import PointSource, ProgrammableSource  # noqa: E402
+from paraview.simple import Delete, PointSource, ProgrammableSource  # noqa: E402
 from vtkmodules.util import numpy_support  # noqa: E402
 
 T.load_plugin(globals())
@@ -99,6 +100,59 @@ for what, edit, needles in BAD:
     for needle in needles:
         expect(needle in errors[0], "%s: the error %r does not name %r" % (what, errors[0], needle))
     T.expect_identical(T.frame(fluid, 0.0), moving, "%s: the output after the error" % what)
+
+# The inputs a new user tried (issue 17, item 7), each named before any step and within 2 s:
+# dense random clouds (the number density against the spacing), a lattice at exactly the spacing
+# starting on the walls (the wall mirrors it), a single point. 2 s is what a user waits without
+# wondering; each check is one pass over the points (200,000 here).
+CLOUDS = [
+    ("200,000 random points in the tank",
+     "x = rng.uniform([0.1, 0.05, 0.05], [1.5, 0.75, 0.55], (200000, 3))",
+     ["200000 points in", "per cell where the fluid holds 1", "Set Particle Spacing to about",
+      "or resample"]),
+    ("500 random points in a 0.1 m ball",
+     "d = rng.normal(size=(500, 3)); x = [0.8, 0.4, 0.3] + 0.1 * rng.uniform(size=(500, 1)) ** "
+     "(1 / 3) * d / numpy.linalg.norm(d, axis=1)[:, None]",
+     ["500 points in", "Set Particle Spacing to about"]),
+    ("an 11^3 lattice at the spacing from the corner",
+     "g = numpy.arange(11) * 0.04; x = numpy.array(numpy.meshgrid(g, g, g)).reshape(3, -1).T",
+     ["331 points lie within a quarter of Particle Spacing", "a wall of the domain",
+      'Preset "dam_break"', "a Scene File"]),
+    ("a single point", "x = numpy.array([[0.8, 0.4, 0.3]])",
+     ["input number of points = 1", "at least 2 points"]),
+]
+CLOUD = """
+import numpy
+from vtkmodules.vtkCommonCore import vtkPoints
+from vtkmodules.util import numpy_support
+rng = numpy.random.default_rng(17)
+%s
+points = vtkPoints()
+points.SetData(numpy_support.numpy_to_vtk(numpy.ascontiguousarray(x, dtype=float), deep=True))
+output.SetPoints(points)
+"""
+for what, make, needles in CLOUDS:
+    cloud = ProgrammableSource(OutputDataSetType="vtkPolyData", Script=CLOUD % make)
+    cloud.UpdatePipeline()
+    checked = PositionBasedFluidsFromPoints(Input=cloud, ParticleSpacing=SPACING)  # noqa: F821
+    began = time.monotonic()
+    _, text = T.capture_messages(lambda: checked.UpdatePipeline(0.5))
+    seconds = time.monotonic() - began
+    # A new source says once which backend Auto chose; that line is not an error.
+    errors = [line for line in text.splitlines()
+              if line.startswith("vtkPBFSimulation") and "Backend Auto" not in line]
+    expect(len(errors) == 1, "%s: expected one vtkPBFSimulation error, got %r" % (what, text))
+    for needle in needles:
+        expect(needle in errors[0], "%s: the error %r does not name %r" % (what, errors[0], needle))
+    # No simulation started: no particles out and no frame in the diagnostics.
+    algorithm = checked.GetClientSideObject()
+    rows = algorithm.GetOutputDataObject(1).GetNumberOfRows()
+    expect(algorithm.GetOutputDataObject(0).GetNumberOfPoints() == 0 and rows == 0,
+           "%s: a simulation started (%d diagnostics rows)" % (what, rows))
+    expect(seconds < 2.0, "%s: the error took %.2f s" % (what, seconds))
+    print("%s: named in %.2f s: %s" % (what, seconds, errors[0][errors[0].index(":") + 2:][:160]))
+    Delete(checked)
+    Delete(cloud)
 
 # A valid input works again.
 lattice.Script = LATTICE % {"n": 3, "edit": ""}

@@ -7,11 +7,16 @@ row per frame and plots the density errors as lines.
 
 PBF_GUI_FRAMES, when set, shortens the animation (NumberOfFrames); everything else is default."""
 import os
+import sys
 
 import numpy
-from paraview import simple
+from paraview import servermanager, simple
 from vtkmodules.util import numpy_support
-from vtkmodules.vtkIOImage import vtkPNGReader
+
+# The GUI runs this with --script, where __file__ is not always defined: the test's environment
+# names the source tree.
+sys.path.insert(0, os.path.join(os.environ["PBF_SOURCE_DIR"], "Testing", "Python"))
+from pbf_images import corners_off_view, read_png  # noqa: E402
 
 
 def expect(condition, message):
@@ -19,20 +24,74 @@ def expect(condition, message):
         raise RuntimeError("pbf_gui: " + message)
 
 
-def read_png(path):
-    reader = vtkPNGReader()
-    reader.SetFileName(path)
-    reader.Update()
-    image = reader.GetOutput()
-    width, height, _ = image.GetDimensions()
-    pixels = numpy_support.vtk_to_numpy(image.GetPointData().GetScalars())
-    return pixels.reshape(height, width, -1)[:, :, :3].astype(int)
-
-
 expect(hasattr(simple, "PositionBasedFluids"),
        "the plugin's source is not available: was it loaded with --plugins?")
 output_dir = os.environ.get("PBF_GUI_OUTPUT", os.getcwd())
 os.makedirs(output_dir, exist_ok=True)
+
+# Apply, as the GUI does it (pqApplyBehavior::showData): every output port in its preferred view
+# (the Diagnostics port's View hint is None: no chart opens), then the camera reset of a view's
+# first data. The Domain outline (port 2) is shown with the particles, so the reset frames the
+# whole tank, not frame 0's particles.
+controller = servermanager.vtkSMParaViewPipelineControllerWithRendering()
+
+
+def apply(source, view):
+    views_before = len(servermanager.ProxyManager().GetProxiesInGroup("views"))
+    for port in range(source.SMProxy.GetNumberOfOutputPorts()):
+        controller.ShowInPreferredView(source.SMProxy, port, view.SMProxy)
+    simple.ResetCamera(view)
+    simple.Render(view)
+    views = len(servermanager.ProxyManager().GetProxiesInGroup("views"))
+    expect(views == views_before, "Apply opened %d more views" % (views - views_before))
+
+
+def expect_tank_in_view(view, tank, when):
+    off = corners_off_view(view, tank.GetBounds())
+    expect(not off, "%s: tank corners off the view (corner, pixel): %s" % (when, off))
+
+
+# Each preset as a new user sees it (issue 17): Apply, Play to the last frame; the whole tank in
+# view throughout, colors that cover the last frame's speeds, spheres that follow the spacing.
+# 0.04 m and PBF_GUI_FRAMES frames keep this to seconds a preset; the screenshots are
+# Plugin/README.md's.
+view = simple.GetActiveViewOrCreate("RenderView")
+view.ViewSize = [800, 450]
+scene = simple.GetAnimationScene()
+keeper = simple.GetTimeKeeper()
+for preset in ("dam_break", "double_dam_break", "blob", "stream"):
+    fluid = simple.PositionBasedFluids(Preset=preset, ParticleSpacing=0.04,
+                                       NumberOfFrames=int(os.environ.get("PBF_GUI_FRAMES", 24)))
+    apply(fluid, view)
+    tank = fluid.GetClientSideObject().GetOutputDataObject(2)
+    expect(tank.GetNumberOfLines() == 12, "%s: the Domain output has %d lines"
+           % (preset, tank.GetNumberOfLines()))
+    expect_tank_in_view(view, tank, preset + " frame 0")
+    scene.UpdateAnimationUsingDataTimeSteps()
+    scene.AnimationTime = keeper.TimestepValues[-1]
+    simple.Render(view)
+    expect_tank_in_view(view, tank, preset + " last frame")
+    last = fluid.GetClientSideObject().GetOutputDataObject(0)
+    speeds = numpy.linalg.norm(
+        numpy_support.vtk_to_numpy(last.GetPointData().GetArray("velocity")), axis=1)
+    lut = simple.GetColorTransferFunction("velocity")
+    low, high = lut.RGBPoints[0], lut.RGBPoints[-4]
+    # ParaView stores the range it grew to; 1e-6 relative is the rounding of that range.
+    expect(low <= speeds.min() + 1e-6 and high >= speeds.max() * (1 - 1e-6),
+           "%s: the color map runs %g..%g; the last frame's speeds %g..%g"
+           % (preset, low, high, speeds.min(), speeds.max()))
+    simple.SaveScreenshot(os.path.join(os.environ.get("PBF_GUI_OUTPUT", os.getcwd()),
+                                       "pbf_gui_%s.png" % preset), view,
+                          ImageResolution=[800, 450])
+    fluid.ParticleSpacing = 0.05
+    simple.Render(view)
+    radius = simple.GetDisplayProperties(fluid, view).GaussianRadius
+    expect(abs(radius - 0.025) <= 0.1 * 0.025,
+           "%s: spacing 0.05 gave a Point Gaussian radius of %g" % (preset, radius))
+    simple.Delete(fluid)
+    del fluid
+    print("pbf_gui: %s: tank in view at frames 0 and last, %d particles, speeds up to %.2f m/s"
+          % (preset, last.GetNumberOfPoints(), speeds.max()))
 
 source = simple.PositionBasedFluids()
 frames = os.environ.get("PBF_GUI_FRAMES")
@@ -50,7 +109,7 @@ expect(list(display.ColorArrayName) == ["POINTS", "velocity"],
        "colored by %s, not by velocity" % list(display.ColorArrayName))
 lut = simple.GetColorTransferFunction("velocity")
 expect(lut.VectorMode == "Magnitude", "velocity is colored by its %s" % lut.VectorMode)
-# The plugin's GUI defaults (Plugin/pqPBFRepresentationDefaults.h): touching spheres, and a color
+# The plugin's display defaults (Plugin/vtkPBFDisplayDefaults.h): touching spheres, and a color
 # map that follows the speeds as they grow from rest.
 expect(display.GaussianRadius == 0.5 * source.ParticleSpacing,
        "Point Gaussian radius %g, expected half the spacing" % display.GaussianRadius)

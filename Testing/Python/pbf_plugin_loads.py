@@ -88,11 +88,12 @@ def check_proxy(proxy, label):
            representation.GetAttribute("type") in ("Point Gaussian", "Points"),
            "%s: no RepresentationType hint that shows particles" % label)
 
-    # Two output ports: the particles, and the diagnostics table, which Apply shows in no view
-    # (issue 17: a chart opened on Apply split the layout and drew a single row); a Line Chart
-    # View plots it when its eye is clicked (pbf_diagnostics.py checks what Apply does).
+    # Three output ports: the particles; the diagnostics table, which Apply shows in no view
+    # (issue 17: a chart opened on Apply split the layout and drew a single row), a Line Chart
+    # View plots it when its eye is clicked (pbf_diagnostics.py checks what Apply does); the
+    # domain's outline, shown with the particles so that the camera frames the tank.
     ports = [sm.GetOutputPortName(i) for i in range(sm.GetNumberOfOutputPorts())]
-    expect(ports == ["Particles", "Diagnostics"], "%s: output ports %s" % (label, ports))
+    expect(ports == ["Particles", "Diagnostics", "Domain"], "%s: output ports %s" % (label, ports))
     views = [hints.GetNestedElement(i) for i in range(hints.GetNumberOfNestedElements())
              if hints.GetNestedElement(i).GetName() == "View"]
     expect([(v.GetAttribute("type"), v.GetAttribute("port")) for v in views] ==
