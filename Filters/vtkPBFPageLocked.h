@@ -1,6 +1,6 @@
 // Page-locked ("pinned") host memory for the output arrays when the solver runs on CUDA: the GPU
 // copies into it at the full bus speed, where ordinary (pageable) memory is staged by the driver
-// at a fraction of it (Testing/Benchmarks/PIPELINE.md has both). Internal to PBF::Filters.
+// at a fraction of it (Documentation/Performance.md has both). Internal to PBF::Filters.
 //
 // VTK releases an array's memory through a plain function pointer (SetArrayFreeFunction) that
 // only gets the pointer, so the pool is one per process: a released buffer is kept for the next

@@ -134,7 +134,7 @@ sanitize "memcheck --leak-check full" "$bench" "${small[@]}"
 sanitize memcheck "$bench" "${small[@]}" --precision double --neighbors walk --graphs 0
 sanitize memcheck "$run" --backend cuda --scene stream --spacing 0.01 --steps 20 --report 10
 sanitize racecheck "$bench" "${small[@]}"
-# Every shipped scene at small size under memcheck, racecheck and initcheck (issue 6).
+# Every shipped scene at small size under memcheck, racecheck and initcheck.
 for scene in dam_break double_dam_break blob stream; do
   for tool in memcheck racecheck initcheck; do
     sanitize "$tool" "$run" --backend cuda --scene "$scene" --spacing 0.05 --steps 6 --report 3
@@ -172,7 +172,7 @@ grep -E "Stage|Duration|Throughput|Achieved Occupancy|Issue Slots Busy|thread_in
 fi
 
 if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
-  # The resolution issue's runs (Testing/Validation/README.md, "Resolution"): CSVs of every frame
+  # The resolution runs (Documentation/Validation.md, "Resolution"): CSVs of every frame
   # into $out/resolution, the summary tables into the log. PBF_GPU_RESOLUTION=1: the 1.15M and
   # 9.2M dam breaks and the Martin & Moyce fronts; 2: the smoothing ratios, the CFL halving and
   # the CPU (OpenMP) dam breaks; 3: both; 5: the refined benchmark (pbf_bench --refined).
@@ -201,7 +201,7 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
     done
   fi
   if [[ $PBF_GPU_RESOLUTION == 5 ]]; then
-    # The benchmark of the scene users run (Testing/Benchmarks/README.md, first table): 144k and
+    # The benchmark of the scene users run (Documentation/Performance.md): 144k and
     # 1.15M to 2 s, 9.2M to 0.5 s, fixed steps, automatic with 4 projections and the defaults.
     refine bench_refined 200 --backend cuda --refined 0.01,0.005 --until 2
     refine bench_refined_9M 200 --backend cuda --refined 0.0025 --until 0.5

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Decomposed runs on GPUs (issue 7), in one call of the device tool (carry [".deps"], made here by
+# Decomposed runs on GPUs, in one call of the device tool (carry [".deps"], made here by
 # Utilities/gpu-deps.sh):
 #   1. build Solver/ with CUDA (sm_90) and MPI, and its tests, without ParaView (all cores)
 #   2. the CUDA sub-domain tests (CudaSubdomain.*), the 1-2-3-rank 10-step test under
@@ -8,19 +8,13 @@
 #   3. pbf_bench_mpi --backend cuda, one rank per GPU (its local rank's): strong scaling at P
 #      particles (default 32M) and weak scaling at Q per GPU (default 16M) on 1, 2, 4 GPUs (counts
 #      the machine lacks are skipped), and pbf_bench's single-GPU CudaStepper at Q and P, the
-#      reference a decomposed run has to beat; strong 4 GPUs once more with
-#      PBF_CUDA_SUBDOMAIN_ONE_STREAM=1 (the refreshes' copies back on the compute stream), an A/B
+#      reference a decomposed run has to beat; strong 4 GPUs once more (the run-to-run spread)
 # Every phase has a time limit inside PBF_GPU_BUDGET seconds (default 560), so the short table
 # comes last within the device tool's 10 minutes. Logs and JSON go under $OUT (else
 # output/gpu-scaling). Options: --particles P --per-gpu Q --steps S --no-ctest --sanitize --quick
-# (--quick: no CudaStepper references and no one-stream row; strong 1, 2 and 4 GPUs and weak 1 and
-# 4, strong 4 twice, each time followed by an A/B row with the step set-up's waits and copies as
-# at 1fb8409 (PBF_CUDA_SUBDOMAIN_COUNT_DRAINS=1: the count drains, the holes filled before the
-# migration's exchange, the lengths agreed by all ranks; PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1: the
-# refreshes' messages copied on the host; the border stream stays on), and once with
-# PBF_CUDA_SUBDOMAIN_BORDER_STREAM=0 (the border launches back on the compute stream))
-# --ab "VAR=VALUE[ VAR=VALUE...]" (repeatable, with --quick): these A/B rows instead, each run
-# after strong 4 and again after its repeat, with the given environment.
+# (--quick: no CudaStepper references; strong 1, 2 and 4 GPUs, strong 4 twice, and weak 1 and 4)
+# --ab "VAR=VALUE[ VAR=VALUE...]" (repeatable, with --quick): extra rows of strong 4 with the
+# given environment (an experiment's switch), each run after strong 4 and again after its repeat.
 set -uo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 out=${OUT:-$root/output/gpu-scaling}
@@ -150,17 +144,7 @@ for n in 2 4; do
             (export ${ab[$k]}; run "strong-4-ab$k$again" 40 4 --particles "$particles" --warmup 3 --steps "$steps")
           done
         done
-      elif ((quick)); then
-        PBF_CUDA_SUBDOMAIN_COUNT_DRAINS=1 PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1 \
-          run "strong-4-before" 40 4 --particles "$particles" --warmup 3 --steps "$steps"
-        run "strong-4-again" 40 4 --particles "$particles" --warmup 3 --steps "$steps"
-        PBF_CUDA_SUBDOMAIN_COUNT_DRAINS=1 PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1 \
-          run "strong-4-before-again" 40 4 --particles "$particles" --warmup 3 --steps "$steps"
-        PBF_CUDA_SUBDOMAIN_BORDER_STREAM=0 \
-          run "strong-4-no-border-stream" 40 4 --particles "$particles" --warmup 3 --steps "$steps"
       else
-        PBF_CUDA_SUBDOMAIN_ONE_STREAM=1 run "strong-4-one-stream" 40 4 --particles "$particles" \
-          --warmup 3 --steps "$steps"
         run "strong-4-again" 40 4 --particles "$particles" --warmup 3 --steps "$steps"
       fi
     fi
@@ -193,9 +177,6 @@ print("| GPUs | ms/step (p10-p90) | speed-up vs 1 GPU | vs CudaStepper | ghost m
 print("|---:|---:|---:|---:|---:|---:|---|---:|")
 base = ms(load("strong-1"))
 for n, name in ((1, "strong-1"), (2, "strong-2"), (4, "strong-4"), ("4, again", "strong-4-again"),
-                ("4, one stream (A/B)", "strong-4-one-stream"), ("4, count drains and host copies back (A/B)", "strong-4-before"),
-                ("4, count drains and host copies back (A/B), again", "strong-4-before-again"),
-                ("4, border launches on the compute stream (A/B)", "strong-4-no-border-stream"),
                 *[(f"4, A/B {open(os.path.join(out, f)).read().strip()}{' (again)' if 'again' in f else ''}", f[:-6])
                   for f in sorted(os.listdir(out)) if f.endswith(".label")]):
     d = load(name)
@@ -221,8 +202,7 @@ for n in (1, 2, 4):
 print(f"CudaStepper (single GPU, CUDA graphs) at {per_gpu:,}: {ms(ref_weak)} ms/step")
 print()
 print("Per rank, medians in ms: own step; waiting for its device's border fields; in the refreshes' exchanges; host time from the step's start to the passes")
-for name in ("strong-2", "strong-4", "strong-4-again", "strong-4-one-stream", "strong-4-before",
-             "strong-4-before-again", "strong-4-no-border-stream", "weak-2", "weak-4",
+for name in ("strong-2", "strong-4", "strong-4-again", "weak-2", "weak-4",
              *[f[:-6] for f in sorted(os.listdir(out)) if f.endswith(".label")]):
     d = load(name)
     if d is None or "own_ms_per_rank" not in d: continue

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Where the decomposed CUDA stepper's GPUs wait (issue 7), in one call of the device tool on a
+# Where the decomposed CUDA stepper's GPUs wait, in one call of the device tool on a
 # machine with several GPUs (carry [".deps"]): builds pbf_bench_mpi without ParaView and the CUPTI
 # tracer (Utilities/cupti_trace.cpp: the GPU machine has no Nsight Systems), runs pbf_bench_mpi
 # with the tracer injected at P particles on N ranks and on 1 rank, and prints,

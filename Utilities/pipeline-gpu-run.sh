@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The pipeline timing (issue 4): how much the VTK layer adds to the solver on the GPU machine,
+# The pipeline timing: how much the VTK layer adds to the solver on the GPU machine,
 # which has no ParaView and no VTK. Two halves:
 #
 #   Utilities/pipeline-gpu-run.sh prepare [BUILD]   # here: build pbf_pipeline (the CUDA backend is
@@ -9,13 +9,13 @@
 #                                                   # kissfft; not glibc), into .pipeline/ (ignored)
 #   Utilities/pipeline-gpu-run.sh run               # there (device tool, carry [".pipeline"]):
 #                                                   # runs it with LD_LIBRARY_PATH=.pipeline/lib
-#   Utilities/pipeline-gpu-run.sh fault             # there: only the device-fault checks (issue 6):
+#   Utilities/pipeline-gpu-run.sh fault             # there: only the device-fault checks:
 #                                                   # pbf_cuda_fault_tests, one test per process,
 #                                                   # and pbf_device_fault auto and cuda
 #
 # The run times 1M particles at 4 substeps per frame (the target: delivery <= 10% of the frame's
 # simulation), page-locked then pageable output memory, without checkpoints, in double
-# precision, and 4M particles; logs go to $OUT (else output/pipeline). Testing/Benchmarks/PIPELINE.md
+# precision, and 4M particles; logs go to $OUT (else output/pipeline). Documentation/Performance.md
 # records the figures.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Scaling of the domain-decomposed solver (issue 7) over MPI ranks on the CPU: builds Solver/ and
+# Scaling of the domain-decomposed solver over MPI ranks on the CPU: builds Solver/ and
 # pbf_bench_mpi alone (no ParaView, no CUDA) and runs strong scaling (a fixed particle count over
 # 1, 2, 4, ... ranks) and weak scaling (a fixed count per rank), one OpenMP thread per rank.
 #

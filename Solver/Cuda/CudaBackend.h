@@ -38,7 +38,7 @@ struct Options
   // but fewer rebuilds within a step. Results do not depend on it. On the H200's dam break the
   // largest correction of a million particles outgrows any skin up to 0.1 h in nearly every
   // iteration, so the masks are rebuilt at nearly every pass anyway and a thin skin is fastest
-  // (Testing/Benchmarks/README.md: 1M particles, 3.07 ms a step at 0.02 h, 2.98 at 0.002 h).
+  // (Documentation/Performance.md: 1M particles, 2.861 ms a step at 0.002 h, 2.947 at 0.02 h).
   // 0.002 h still lets a calm fluid, whose corrections are far smaller, reuse its masks.
   double skin = 0.002;
   // Replay each step as one CUDA graph (no launch gaps); off: launch the kernels one by one.

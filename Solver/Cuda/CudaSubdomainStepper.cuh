@@ -4,12 +4,10 @@
 // ghost refreshes' copies (downloadAside, uploadAside) run on a second stream, ordered against
 // the compute stream by events, so that the interior pass does not queue behind the border
 // fields' copy to the host nor the next pass behind the neighbours' fields' copy to the device.
-// PBF_CUDA_SUBDOMAIN_ONE_STREAM=1 (a diagnostic, for A/B runs) puts them back on the compute
-// stream: the same order of work, as before the second stream. The passes' border launches and
-// the packing of their fields run on a third stream of the highest priority, forked from the
-// compute stream before them and joined after the interior launch, so that the border particles
-// (a small launch) run beside the interior ones instead of before them and their fields leave
-// sooner; PBF_CUDA_SUBDOMAIN_BORDER_STREAM=0 (A/B) puts them back on the compute stream.
+// The passes' border launches and the packing of their fields run on a third stream of the
+// highest priority, forked from the compute stream before them and joined after the interior
+// launch, so that the border particles (a small launch) run beside the interior ones instead of
+// before them and their fields leave sooner.
 #pragma once
 
 #include "CudaRuntime.cuh"
@@ -57,27 +55,11 @@ public:
     check(cudaGetDeviceProperties(&properties, device_), "cudaGetDeviceProperties");
     name_ = std::string(properties.name) + " (device " + std::to_string(device_) + ")";
     check(cudaStreamCreate(&stream_), "cudaStreamCreate");
-    const char* one = std::getenv("PBF_CUDA_SUBDOMAIN_ONE_STREAM");
-    if (one && std::strcmp(one, "1") == 0)
-    {
-      copyStream_ = stream_;
-    }
-    else
-    {
-      check(cudaStreamCreate(&copyStream_), "cudaStreamCreate");
-    }
-    const char* border = std::getenv("PBF_CUDA_SUBDOMAIN_BORDER_STREAM");
-    if (border && std::strcmp(border, "0") == 0)
-    {
-      borderStream_ = stream_;
-    }
-    else
-    {
-      int least = 0, greatest = 0;
-      check(cudaDeviceGetStreamPriorityRange(&least, &greatest), "cudaDeviceGetStreamPriorityRange");
-      check(cudaStreamCreateWithPriority(&borderStream_, cudaStreamDefault, greatest),
-        "cudaStreamCreateWithPriority");
-    }
+    check(cudaStreamCreate(&copyStream_), "cudaStreamCreate");
+    int least = 0, greatest = 0;
+    check(cudaDeviceGetStreamPriorityRange(&least, &greatest), "cudaDeviceGetStreamPriorityRange");
+    check(cudaStreamCreateWithPriority(&borderStream_, cudaStreamDefault, greatest),
+      "cudaStreamCreateWithPriority");
     for (cudaEvent_t* e : { &event_, &packed_, &uploaded_, &forked_, &joined_ })
     {
       check(cudaEventCreateWithFlags(e, cudaEventDisableTiming), "cudaEventCreate");
@@ -99,14 +81,8 @@ public:
     cudaEventDestroy(uploaded_);
     cudaEventDestroy(forked_);
     cudaEventDestroy(joined_);
-    if (borderStream_ != stream_)
-    {
-      cudaStreamDestroy(borderStream_);
-    }
-    if (copyStream_ != stream_)
-    {
-      cudaStreamDestroy(copyStream_);
-    }
+    cudaStreamDestroy(borderStream_);
+    cudaStreamDestroy(copyStream_);
     cudaStreamDestroy(stream_);
   }
 
@@ -120,20 +96,14 @@ public:
   // The border stream starts after the work queued so far on the compute stream.
   void forkBorder()
   {
-    if (borderStream_ != stream_)
-    {
-      check(cudaEventRecord(forked_, stream_), "cudaEventRecord");
-      check(cudaStreamWaitEvent(borderStream_, forked_, 0), "cudaStreamWaitEvent");
-    }
+    check(cudaEventRecord(forked_, stream_), "cudaEventRecord");
+    check(cudaStreamWaitEvent(borderStream_, forked_, 0), "cudaStreamWaitEvent");
   }
   // The compute stream's work queued from now on waits for the border stream's.
   void joinBorder()
   {
-    if (borderStream_ != stream_)
-    {
-      check(cudaEventRecord(joined_, borderStream_), "cudaEventRecord");
-      check(cudaStreamWaitEvent(stream_, joined_, 0), "cudaStreamWaitEvent");
-    }
+    check(cudaEventRecord(joined_, borderStream_), "cudaEventRecord");
+    check(cudaStreamWaitEvent(stream_, joined_, 0), "cudaStreamWaitEvent");
   }
 
   void* allocate(std::size_t bytes)
@@ -238,8 +208,8 @@ private:
   int block_;
   std::string name_;
   cudaStream_t stream_ = nullptr;
-  cudaStream_t copyStream_ = nullptr; // stream_ itself under PBF_CUDA_SUBDOMAIN_ONE_STREAM=1
-  cudaStream_t borderStream_ = nullptr; // stream_ itself under PBF_CUDA_SUBDOMAIN_BORDER_STREAM=0
+  cudaStream_t copyStream_ = nullptr;
+  cudaStream_t borderStream_ = nullptr;
   cudaEvent_t event_ = nullptr, packed_ = nullptr, uploaded_ = nullptr;
   cudaEvent_t forked_ = nullptr, joined_ = nullptr;
   void* temp_ = nullptr;

@@ -1,4 +1,4 @@
-// One rank's share of a domain-decomposed run with the particles kept on a GPU (issue 7): the
+// One rank's share of a domain-decomposed run with the particles kept on a GPU: the
 // algorithm and the ghost protocol of distributed::SubdomainStepper (read that first), with the
 // stages of StepSchedule.h and SubdomainSchedule.h. Written over a Device policy, so the same
 // code runs on CUDA (CudaSubdomainStepper.cu) and, for the tests, on the host
@@ -24,8 +24,6 @@
 //      and last columns go to the neighbours (one wait for their bytes, then the exchange with
 //      the neighbours only, from and into page-locked memory where the Communicator exchanges
 //      in place), and theirs are appended.
-//   (PBF_CUDA_SUBDOMAIN_COUNT_DRAINS=1, for A/B runs: the waits for the counts, the holes
-//   filled before the exchange and the lengths agreed by all ranks, as before.)
 //   4. one stable radix sort by cell of owned + ghosts (StepSchedule's sortAndGather). Then the
 //      lists, by selection over the sorted keys: what each neighbour mirrors (this slab's border
 //      columns) and where its ghosts are (the columns beyond). Both sides list a border column in
@@ -40,9 +38,8 @@
 //      the border fields' copy to the host, and the neighbours' fields go up while it runs.
 //      The border launches and the packing run on the policy's border stream (forkBorder,
 //      joinBorder), beside the interior launch. The refreshes' messages go from and into the
-//      page-locked staging directly where the Communicator exchanges in place (MPI;
-//      PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1 copies them, and the ghosts' seeds, through byte
-//      vectors, as for a Communicator without it). Density pass, refresh density+lambda (one
+//      page-locked staging directly where the Communicator exchanges in place (MPI; otherwise
+//      they, and the ghosts' seeds, go through byte vectors). Density pass, refresh density+lambda (one
 //      round); the fused correction, refresh positions (and velocities after the last one);
 //      vorticity+XSPH, refresh omega; confinement; then the owned particles are gathered back,
 //      in cell order.
@@ -113,12 +110,7 @@ public:
     checkBatch(parameters_, everything);
     constants_ = makeStepConstants<Real>(parameters_, skin, masks);
     lattice_ = calibrateLattice(parameters_);
-    {
-      const char* drains = std::getenv("PBF_CUDA_SUBDOMAIN_COUNT_DRAINS");
-      countDrains_ = drains && std::strcmp(drains, "1") == 0;
-      const char* copies = std::getenv("PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE");
-      inPlace_ = communicator_.exchangesInPlace() && !(copies && std::strcmp(copies, "1") == 0);
-    }
+    inPlace_ = communicator_.exchangesInPlace();
     // The masks are rebuilt at every pass: a ghost moves by its owner's corrections, which this
     // rank learns only with the positions, and a pass runs its border particles before the
     // interior ones have their max |delta p|. The single-GPU schedule rebuilds at every pass of
@@ -829,11 +821,6 @@ private:
     }
     device_->download(
       setupCounts_, ownerCounts_, (ranks + 1) * subdomain::kCounterCopies * sizeof(std::uint32_t));
-    if (countDrains_)
-    {
-      device_->synchronize(); // A/B: the wait these counts used to take
-      checkOwnerCounts(owners.data());
-    }
     if (owners[0] > n)
     {
       throw std::logic_error("decomposed CUDA step: more particles stay than there are");
@@ -873,10 +860,6 @@ private:
       subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, vec_[r.v]);
       subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, id_);
     }
-    if (countDrains_)
-    {
-      device_->synchronize(); // A/B: as before, the holes filled before the exchange
-    }
     device_->waitEvent();
     checkOwnerCounts(owners.data());
     std::size_t offset = 0;
@@ -891,20 +874,13 @@ private:
       out_[to].assign(staging + offset, staging + offset + bytes);
       offset += bytes;
     }
-    if (countDrains_)
+    // Every rank knows what each sends it (the cut's counts): point-to-point with the ranks
+    // that send or receive, no collective over all ranks.
+    for (std::size_t from = 0; from < ranks; ++from)
     {
-      communicator_.exchangeInto(out_, in_); // A/B: the lengths agreed by all ranks, as before
+      inSizes_[from] = std::size_t(arrivingFrom_[from]) * sizeof(Record);
     }
-    else
-    {
-      // Every rank knows what each sends it (the cut's counts): point-to-point with the ranks
-      // that send or receive, no collective over all ranks.
-      for (std::size_t from = 0; from < ranks; ++from)
-      {
-        inSizes_[from] = std::size_t(arrivingFrom_[from]) * sizeof(Record);
-      }
-      communicator_.exchangeKnownSizes(out_, in_, inSizes_);
-    }
+    communicator_.exchangeKnownSizes(out_, in_, inSizes_);
     for (std::size_t from = 0; from < ranks; ++from)
     {
       if (in_[from].size() != std::size_t(arrivingFrom_[from]) * sizeof(Record))
@@ -959,11 +935,6 @@ private:
     const std::uint32_t sent[2] = { sendLeft_, sendRight_ };
     device_->download(
       setupCounts_ + (ranks + 1) * subdomain::kCounterCopies, selected_, 2 * sizeof(std::uint32_t));
-    if (countDrains_)
-    {
-      device_->synchronize(); // A/B: the wait these counts used to take
-      checkGhostCounts(sent);
-    }
     if (sendLeft_ > n || sendRight_ > n) // one column may go both ways (a slab one column wide)
     {
       throw std::logic_error("decomposed CUDA step: more ghosts to send than particles");
@@ -983,7 +954,7 @@ private:
     const std::uint32_t ghosts = ghostLeft_ + ghostRight_;
     reserve(std::size_t(n) + ghosts, n);
     unsigned char* recv = recvBuffer(ghosts * sizeof(Seed));
-    if (inPlace_ && !countDrains_)
+    if (inPlace_)
     {
       // From the page-locked seeds to the neighbours and from theirs into the page-locked
       // staging of the upload, no host copy (~1 ms of a 32M step on 4 GPUs went to copying the
@@ -1033,24 +1004,17 @@ private:
       out_[static_cast<std::size_t>(me + 1)].assign(
         staging + sendLeft_ * sizeof(Seed), staging + sendBytes);
     }
-    if (countDrains_)
+    // Both sides know the lengths: with the neighbours only, no collective over all ranks.
+    std::fill(inSizes_.begin(), inSizes_.end(), std::size_t(0));
+    if (me > 0)
     {
-      communicator_.exchangeInto(out_, in_); // A/B: the lengths agreed by all ranks, as before
+      inSizes_[static_cast<std::size_t>(me - 1)] = ghostLeft_ * sizeof(Seed);
     }
-    else
+    if (me < last)
     {
-      // Both sides know the lengths: with the neighbours only, no collective over all ranks.
-      std::fill(inSizes_.begin(), inSizes_.end(), std::size_t(0));
-      if (me > 0)
-      {
-        inSizes_[static_cast<std::size_t>(me - 1)] = ghostLeft_ * sizeof(Seed);
-      }
-      if (me < last)
-      {
-        inSizes_[static_cast<std::size_t>(me + 1)] = ghostRight_ * sizeof(Seed);
-      }
-      communicator_.exchangeKnownSizes(out_, in_, inSizes_);
+      inSizes_[static_cast<std::size_t>(me + 1)] = ghostRight_ * sizeof(Seed);
     }
+    communicator_.exchangeKnownSizes(out_, in_, inSizes_);
     for (std::size_t from = 0; from < in_.size(); ++from)
     {
       const bool left = static_cast<int>(from) == me - 1;
@@ -1232,8 +1196,8 @@ private:
   }
 
   // receiveRefresh's exchange through the Communicator's byte vectors (a Communicator that does
-  // not exchange in place, or PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1 for A/B): the messages copied
-  // out of and into the page-locked staging on the host.
+  // not exchange in place): the messages copied out of and into the page-locked staging on the
+  // host.
   void exchangeCopied(std::size_t record, std::size_t sendBytes, unsigned char* recv)
   {
     const int me = communicator_.rank();
@@ -1586,7 +1550,7 @@ private:
   std::vector<const unsigned char*> sendAt_;
   std::vector<std::size_t> sendSizes_;
   std::vector<unsigned char*> receiveAt_;
-  bool inPlace_ = false; // the Communicator exchanges in place, not PBF_CUDA_SUBDOMAIN_COPY_EXCHANGE=1
+  bool inPlace_ = false; // the Communicator exchanges in place
   std::vector<double> columnsMine_;       // the cut's column counts, this rank's and everyone's
   std::vector<std::uint64_t> columnsAll_;
   // The predicted positions' column counts, this rank's and everyone's (the cut's), and the
@@ -1598,7 +1562,6 @@ private:
   // The device's own counts of the migration ([0, ranks]) and the ghosts sent ([ranks + 1,
   // ranks + 2]), page-locked, checked after the next wait.
   std::uint32_t* setupCounts_ = nullptr;
-  bool countDrains_ = false; // PBF_CUDA_SUBDOMAIN_COUNT_DRAINS=1: wait for them at once (A/B)
 
   StepReport report_;
   distributed::ExchangeReport exchange_;

@@ -1,5 +1,5 @@
 // One solver step of the CUDA backend as a sequence of per-particle stages, written once over an
-// executor: CudaStepper.cu runs it with kernels, CUB and CUDA graphs; the tests run it on the host,
+// executor: CudaStepper.cuh runs it with kernels, CUB and CUDA graphs; the tests run it on the host,
 // where it must reproduce the serial backend bit for bit (Testing/Cuda/StepScheduleTest.cpp).
 //
 // It is CpuStepper::step() with the memory of a GPU in mind:

@@ -1,5 +1,5 @@
 // The per-particle stages that one rank of a domain-decomposed run adds to StepSchedule.h on a
-// GPU (issue 7): the column histogram for the cut, the owner of each particle, packing the
+// GPU: the column histogram for the cut, the owner of each particle, packing the
 // particles that leave and the border particles that others mirror, and gathering and
 // scattering the fields of the ghost refreshes. Written over the same executor as StepSchedule.h
 // (plus selectIf, below), so the tests run them on the host; DeviceSubdomainStepper.h strings

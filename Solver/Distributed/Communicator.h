@@ -1,4 +1,4 @@
-// How the ranks of a domain-decomposed run talk (issue 7). The solver needs only this interface;
+// How the ranks of a domain-decomposed run talk. The solver needs only this interface;
 // an implementation over MPI (ParaView's vtkMultiProcessController, or MPI itself in a
 // solver-only driver) and one over threads (ThreadCluster.h, for tests on one machine) plug in.
 #pragma once

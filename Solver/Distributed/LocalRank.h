@@ -1,4 +1,4 @@
-// Which GPU a rank takes (issue 7: "each rank picks its GPU by its local rank"): ranks on the
+// Which GPU a rank takes: each rank picks its GPU by its local rank; ranks on the
 // same host are numbered 0, 1, ... in rank order. Found through the Communicator alone (an
 // allGather of a hash of the host name), so it works the same under any MPI launcher and with
 // ThreadCluster, without reading launcher-specific environment variables.

@@ -1,4 +1,4 @@
-// One rank's share of a domain-decomposed PBF run (issue 7), on the CPU: the particles of its slab
+// One rank's share of a domain-decomposed PBF run, on the CPU: the particles of its slab
 // (Slabs.h) plus ghosts, the particles of the one grid column beyond each border, refreshed from
 // their owners before every pass that reads them: positions before each density pass, density and
 // lambda before each correction pass, velocities before XSPH and vorticity, vorticities before

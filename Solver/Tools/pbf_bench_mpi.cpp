@@ -1,4 +1,4 @@
-// pbf_bench_mpi: scaling of the domain-decomposed solver (issue 7) over MPI ranks. Run it under
+// pbf_bench_mpi: scaling of the domain-decomposed solver over MPI ranks. Run it under
 // mpiexec; every rank builds the dam break scaled to the particle count (pbf_bench's scene), keeps
 // its slab (Distributed/SubdomainStepper.h) and steps in lockstep with the others.
 //

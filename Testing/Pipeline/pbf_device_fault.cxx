@@ -1,5 +1,5 @@
 // pbf_device_fault: a GPU that fails in the middle of a run, seen from the VTK layer as ParaView
-// drives it (issue 6). The CUDA backend's test hook (PBF_CUDA_FAULT_AT_STEP) makes one step launch
+// drives it. The CUDA backend's test hook (PBF_CUDA_FAULT_AT_STEP) makes one step launch
 // a kernel that traps, which CUDA reports as an unspecified launch failure and which loses the
 // context for the rest of the process, as a device that fell off the bus does.
 //

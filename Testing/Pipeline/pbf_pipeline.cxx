@@ -3,7 +3,7 @@
 // pbf_bench times) or on a scene file, and prints per frame the simulation time (the solver steps'
 // AdvanceReport milliseconds, GPU synchronisation included) against the rest of the request:
 // the diagnostics (Stepper::statistics), the checkpoints and the delivery (copy back from the
-// device into the VTK arrays, output assembly). The target (issue 4): delivery at most 10% of the
+// device into the VTK arrays, output assembly). The target: delivery at most 10% of the
 // frame's simulation time for 1M particles at 4 substeps per frame on the H200.
 //
 //   pbf_pipeline [--particles N] [--scene FILE] [--spacing S] [--frames F] [--warmup W]
@@ -11,7 +11,7 @@
 //                [--checkpoint-interval C] [--pageable] [--compare-pageable F2] [--work DIR]
 //
 // Not a test (no pass/fail exit on speed): Utilities/pipeline-gpu-run.sh runs it on the GPU
-// machine and Testing/Benchmarks/PIPELINE.md records the figures. It does check that the frames
+// machine and Documentation/Performance.md records the figures. It does check that the frames
 // it delivers are sane (ids a permutation, finite values) and exits non-zero if not.
 #include "vtkPBFSimulation.h"
 

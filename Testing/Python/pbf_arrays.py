@@ -73,7 +73,7 @@ check_structure(source, 0.0, "Double")
 # Frame 0, double precision: the density is poly6 summed over the lattice with the particle mass
 # and h of the field data. The solver evaluates it on these very positions, so only rounding
 # differs (1e-9 relative). Particles within h of a wall are left out: walls may add mirror
-# images of neighbours (Solver/Equations.h), which no particle farther than h from them sees.
+# images of neighbours (Solver/Physics/Equations.h), which no particle farther than h from them sees.
 data = T.output_at(source, 0.0)
 initial = T.frame(source, 0.0)
 h = T.field_value(data, "SmoothingLength")

@@ -72,7 +72,7 @@ for what, path, changes, needles in CASES:
     source.SceneFile = ""
     source.Gravity = [0.0, -9.81, 0.0]
 
-# A blow-up is reported in the GUI's words (issue 17): the properties that exist (Substeps Per
+# A blow-up is reported in the GUI's words: the properties that exist (Substeps Per
 # Frame, Frame Interval, Time Stepping), never the solver's field names (timeStep). Fixed steps of
 # 0.05 s with light XSPH pile the fluid up within a few steps (DivergenceTest.cpp).
 source.TimeStepping = "Fixed"

@@ -1,4 +1,4 @@
-"""ParaView's GUI client (run by smTestDriver) connected to a pvserver of 2 MPI ranks (issue 7),
+"""ParaView's GUI client (run by smTestDriver) connected to a pvserver of 2 MPI ranks,
 all under one private Xvfb (the server ranks render too): it creates the source, plays a short
 animation, and the particles it renders, colored by rank, come from both ranks, each particle once.
 The server loads the plugin too (--plugins reaches both)."""

@@ -26,7 +26,7 @@ source = PositionBasedFluids(ParticleSpacing=T.QUICK_SPACING, NumberOfFrames=12,
                              AdaptiveIterations=0, SolverIterations=4, MaxTimeStep=0.002)
 expect(source.SMProxy.GetOutputPortName(1) == "Diagnostics",
        "output port 1 is named %r" % source.SMProxy.GetOutputPortName(1))
-# What Apply does with the two ports (issue 17, items 1-2): the particles go to the active render
+# What Apply does with the two ports: the particles go to the active render
 # view, the Diagnostics to no view at all, so a first Apply opens no second view and draws no
 # chart of a single row ("Attempted to paint a line with <2 points"); a Line Chart View shows
 # them when its eye is clicked.

@@ -84,7 +84,7 @@ BAD = [
     ("NaN coordinate", "x[5, 1] = float('nan')", ["input point 5", "nan", "finite"]),
     ("point outside the domain", "x[7] = [5.0, 0.2, 0.3]",
      ["position of particle 7", "(5, 0.2, 0.3)", "outside the domain"]),
-    # Input the solver would tear apart is named before any step (issue 17): packed at 0.4 of the
+    # Input the solver would tear apart is named before any step: packed at 0.4 of the
     # spacing, or lying on the floor, which the floor's mirror image doubles.
     ("points packed denser than the spacing", "x = (x - x.mean(axis=0)) * 0.4 + x.mean(axis=0)",
      ["64 points in", "per cell where the fluid holds 1", "Set Particle Spacing to about"]),
@@ -101,7 +101,7 @@ for what, edit, needles in BAD:
         expect(needle in errors[0], "%s: the error %r does not name %r" % (what, errors[0], needle))
     T.expect_identical(T.frame(fluid, 0.0), moving, "%s: the output after the error" % what)
 
-# The inputs a new user tried (issue 17, item 7), each named before any step and within 2 s:
+# The inputs a new user tried, each named before any step and within 2 s:
 # dense random clouds (the number density against the spacing), a lattice at exactly the spacing
 # starting on the walls (the wall mirrors it), a single point. 2 s is what a user waits without
 # wondering; each check is one pass over the points (200,000 here).

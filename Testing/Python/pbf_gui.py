@@ -51,7 +51,7 @@ def expect_tank_in_view(view, tank, when):
     expect(not off, "%s: tank corners off the view (corner, pixel): %s" % (when, off))
 
 
-# Each preset as a new user sees it (issue 17): Apply, Play to the last frame; the whole tank in
+# Each preset as a new user sees it: Apply, Play to the last frame; the whole tank in
 # view throughout, colors that cover the last frame's speeds, spheres that follow the spacing.
 # 0.04 m and PBF_GUI_FRAMES frames keep this to seconds a preset; the screenshots are
 # Plugin/README.md's.
@@ -227,7 +227,7 @@ expect(len(colored) > 200 and len(columns) > 300,
        "the chart shows %d colored line pixels over %d columns: no plotted line"
        % (len(colored), len(columns)))
 
-# The radius follows the spacing (issue 17, item 5): at another spacing the spheres touch again;
+# The radius follows the spacing: at another spacing the spheres touch again;
 # a radius the user set stays. (Last: it recomputes the source, and the diagnostics above count
 # the frames played.)
 source.ParticleSpacing = 0.08
@@ -240,7 +240,7 @@ simple.Render(view)
 expect(display.GaussianRadius == 0.03,
        "a radius the user set was replaced by %g" % display.GaussianRadius)
 
-# The color map starts again with another scene (issue 17, item 4): the dam break's range, grown
+# The color map starts again with another scene: the dam break's range, grown
 # over the whole animation, would leave the blob's slower fluid in one color.
 grown = lut.RGBPoints[-4]
 source.Preset = "blob"

@@ -1,4 +1,4 @@
-"""Domain decomposition under mpiexec -n N pvbatch (issue 7): each rank simulates a slab of the
+"""Domain decomposition under mpiexec -n N pvbatch: each rank simulates a slab of the
 fluid and outputs its own particles. Checked against the same source with DecomposeAcrossRanks off
 (rank 0 runs it whole, the single-rank reference), matched by particle id, in double precision:
 
@@ -84,7 +84,7 @@ expect(info.GetNumberOfPoints() == a["n"], "data information counts %d particles
 fetched(split, 1)
 T.expect_identical(fetched(split, 2), a, "frame 2 asked again after frame 1")
 
-# Checkpoints thinned together (issue 16): a budget so small that thinning starts at once. The
+# Checkpoints thinned together: a budget so small that thinning starts at once. The
 # ranks' slabs hold different byte counts, so each rank deciding from its own would keep different
 # frames (rank 0 0, 2, 4, ..., rank 1 0, 4, 8) and going back to frame 7 would resume the ranks
 # from different frames: wrong particles and ids, no error. Now frame 7 after frame 10 is the

@@ -1,4 +1,4 @@
-"""Abort in a decomposed run (issue 7): under mpiexec -n 2 pvbatch only rank 0 sees the Cancel
+"""Abort in a decomposed run: under mpiexec -n 2 pvbatch only rank 0 sees the Cancel
 (a ProgressEvent observer on its algorithm sets AbortExecute, as the button would), yet every rank
 stops at the same step: the ranks agree after each step, so none is left waiting for another in an
 exchange (without that agreement this test hangs until CTest's timeout). Every rank keeps its

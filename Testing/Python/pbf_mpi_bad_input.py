@@ -1,4 +1,4 @@
-"""Bad input in a decomposed run (issue 7): under mpiexec -n 2 pvbatch every rank meets the same bad
+"""Bad input in a decomposed run: under mpiexec -n 2 pvbatch every rank meets the same bad
 parameter, fails the request with the same error and keeps its previous output, and nothing hangs
 (each rank fails before the first exchange, so none waits for another); the next valid request
 works on all ranks. The expected error is printed by every rank, so this test's CTest entry has no

@@ -1,5 +1,5 @@
-"""A pvbatch test that fails under mpiexec must fail every rank within seconds (issue 16: a review
-saw `mpiexec -n 2 pvbatch` on a failing script wait in a barrier until CTest's 600 s timeout).
+"""A pvbatch test that fails under mpiexec must fail every rank within seconds, not leave
+`mpiexec -n 2 pvbatch` waiting in a barrier until CTest's 600 s timeout.
 This script fails on purpose after a decomposed frame and a fetch; CTest expects the failure's
 text within a short timeout (pbf.mpi.pvbatch_failure_ends_every_rank). Here (OpenMPI 4.1,
 ParaView 5.11, rank 0 running the script) it ends in about 6 s with or without pbf_testing's

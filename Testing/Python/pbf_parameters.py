@@ -1,5 +1,5 @@
-"""The proxy's defaults are pbf::Parameters' defaults (read from Solver/Parameters.h, so the two
-cannot drift), every field of pbf::Parameters has a property, and every property reaches the
+"""The proxy's defaults are pbf::Parameters' defaults (read from Solver/Physics/Parameters.h, so
+the two cannot drift), every field of pbf::Parameters has a property, and every property reaches the
 solver: the frame's field data holds the values the solver ran with."""
 import os
 import re
@@ -64,7 +64,7 @@ def solver_defaults(header):
     return defaults
 
 
-header = os.path.join(os.environ.get("PBF_SOURCE_DIR", ""), "Solver", "Parameters.h")
+header = os.path.join(os.environ.get("PBF_SOURCE_DIR", ""), "Solver", "Physics", "Parameters.h")
 defaults = solver_defaults(header)
 
 unexposed = sorted(set(defaults) - set(FIELDS) - SCENE_FIELDS)
@@ -155,7 +155,7 @@ expect(T.field_value(data, "StepCount") == 5, "frame 1 at 5 substeps ran %d step
 expect(T.field_value(data, "SmoothingLength") == 2.5 * 0.05, "h = %r"
        % T.field_value(data, "SmoothingLength"))
 
-# Labels read as words (issue 17): ParaView splits a name without a label at every capital, so
+# Labels read as words: ParaView splits a name without a label at every capital, so
 # XSPHViscosity read "X SPHViscosity". No label may hold a lone capital before an acronym or a
 # word run together from an acronym.
 labels = {}

@@ -89,7 +89,7 @@ def check_proxy(proxy, label):
            "%s: no RepresentationType hint that shows particles" % label)
 
     # Three output ports: the particles; the diagnostics table, which Apply shows in no view
-    # (issue 17: a chart opened on Apply split the layout and drew a single row), a Line Chart
+    # (a chart opened on Apply would split the layout and draw a single row), a Line Chart
     # View plots it when its eye is clicked (pbf_diagnostics.py checks what Apply does); the
     # domain's outline, shown with the particles so that the camera frames the tank.
     ports = [sm.GetOutputPortName(i) for i in range(sm.GetNumberOfOutputPorts())]

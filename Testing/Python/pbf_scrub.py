@@ -1,4 +1,4 @@
-"""Scrubbing beyond the dam break on OpenMP in single precision (issue 16): the stream scene, whose
+"""Scrubbing beyond the dam break on OpenMP in single precision: the stream scene, whose
 emitter adds particles every frame, on the Serial backend in double precision, and the dam break
 on Serial in double. Every frame asked forwards, backwards and by jumps (from checkpoints every 2
 frames, or stepped on) is bit-identical to a straight run's, with as many vertex cells as points

@@ -1,4 +1,4 @@
-"""Scripting as the README shows (issue 17, item 6): Show(fluid) in pvbatch, the animation set to a
+"""Scripting as the README shows: Show(fluid) in pvbatch, the animation set to a
 later time, Render. The plugin's display defaults (Plugin/vtkPBFDisplayDefaults.h) hold outside
 the GUI too: spheres of half the spacing, a velocity color map that grows as the fluid speeds up,
 a radius that follows the spacing, and the Domain outline (port 2) that frames the tank.

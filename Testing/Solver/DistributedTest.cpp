@@ -1,4 +1,4 @@
-// Domain decomposition (issue 7) with the ranks as threads (Distributed/ThreadCluster.h): N ranks
+// Domain decomposition with the ranks as threads (Distributed/ThreadCluster.h): N ranks
 // against one rank and against the serial backend, matched by particle id.
 #include "Distributed/LocalRank.h"
 #include "Distributed/Slabs.h"

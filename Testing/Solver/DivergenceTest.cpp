@@ -226,7 +226,7 @@ TEST(Divergence, PointsFarDenserThanTheLatticeAreRefusedNamingTheirPacking)
 {
   // At half the spacing (8 x rho_0) the first correction flung particles out at 83 m/s, and the
   // divergence check blamed the time step. Now the cause is named before any step: 8 points per
-  // cell of the spacing, and the spacing they fit (issue 17, item 7).
+  // cell of the spacing, and the spacing they fit.
   Parameters p = coarse();
   p.gravity = { 0, 0, 0 };
   try

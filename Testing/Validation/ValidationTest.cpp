@@ -1,4 +1,4 @@
-// The validation report's figures (Testing/Validation/README.md) at sizes CI can afford: the
+// The validation measurements (Documentation/Validation.md) at sizes CI can afford: the
 // Martin & Moyce dam break at 10 and 20 particles across the column, the density error of a
 // small hydrostatic tank and of the moving dam break per iteration count, and the adaptive mode.
 // Tests named ...Regression are gates at recorded values (any change of the flow fails them and
@@ -24,9 +24,9 @@ std::vector<FrontSample> experiment()
   return readExperiment(PBF_VALIDATION_DIR "/martin_moyce_1952_surge_front_n2.csv");
 }
 
-// The time-origin shift T0 of the resolution issue's criteria: fitted once, by least squares on T
-// over points 2-15 of the 80-across GPU run (Testing/Validation/resolution.py, README section
-// 0), and applied unchanged at every resolution.
+// The time-origin shift T0 of the Martin & Moyce criteria: fitted once, by least squares on T
+// over points 2-15 of the 80-across GPU run (Testing/Validation/resolution.py,
+// Documentation/Validation.md), and applied unchanged at every resolution.
 constexpr double kReportTimeShift = PBF_REPORT_TIME_SHIFT;
 
 struct DamBreakRun
@@ -138,10 +138,10 @@ TEST(MartinMoyceRegression, TenAcrossRmsAtItsRecordedValue)
 
 TEST(MartinMoyce, TwentyAcrossMeetsTheExperimentCriteria)
 {
-  // Judged as the resolution issue decided (the 1952 release is not modelled): the late front
-  // speed dZ/dT within 5 % of the experiment's, and the RMS over points 2-15 after one time
-  // origin shift T0 (fitted once on the 80-across GPU run, Testing/Validation/README.md) at most
-  // 5 %. The issue asks them at 40 and 80 across (GPU runs, README section 0); 20 across is what
+  // Judged on three things because the 1952 release is not modelled: the late front speed
+  // dZ/dT within 5 % of the experiment's, and the RMS over points 2-15 after one time origin
+  // shift T0 (fitted once on the 80-across GPU run, Documentation/Validation.md) at most 5 %.
+  // The criteria are set at 40 and 80 across (GPU runs, Documentation/Validation.md); 20 across is what
   // CI affords, measured 1.7 % and 4.5 %. The unshifted RMS is reported, not judged.
   const auto data = experiment();
   const DamBreakRun run = damBreak(20);
@@ -246,9 +246,9 @@ TEST(Incompressibility, AdaptiveModeKeepsMovingDamBreakWithinTolerance)
   EXPECT_LT(r.iterationsPerStep, 100.0);
 }
 
-// The resolution issue's checks at CI's sizes, with the defaults (automatic steps, adaptive
+// The resolution checks at CI's sizes, with the defaults (automatic steps, adaptive
 // iterations): the answer must not depend on the time step, the smoothing ratio or the depth
-// in particles. The full-size figures are in README.md ("Resolution").
+// in particles. The full-size figures are in Documentation/Validation.md ("Resolution").
 
 TEST(Resolution, HalvingTheStepMovesTheFrontByAtMostTwoPercent)
 {

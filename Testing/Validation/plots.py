@@ -1,4 +1,6 @@
-"""Figures and tables of the validation report from results/ (see validate.py)."""
+"""Figures and tables of validate.py's runs. Reads the runs' CSVs and summaries from the results
+folder (output/validation/) and writes the figures beside them: they record one machine's runs,
+so they stay out of the tree like the data they are drawn from."""
 import glob
 import os
 
@@ -51,8 +53,8 @@ def rms_relative(front, exp, shift, first=0):
     return float(np.sqrt(np.mean(relative(front, exp, shift)[first:] ** 2)))
 
 
-def save(fig, name):
-    path = os.path.join(HERE, name)
+def save(fig, results, name):
+    path = os.path.join(results, name)
     fig.savefig(path, dpi=DPI)
     plt.close(fig)
     print("wrote %s (%d kB)" % (os.path.relpath(path), os.path.getsize(path) // 1024))
@@ -103,7 +105,7 @@ def martin_moyce(results, exp):
         ax.legend(fontsize=7, loc="upper left")
     axes[0].set_ylabel("Z = x_front / a")
     fig.tight_layout()
-    save(fig, "martin_moyce_front.png")
+    save(fig, results, "martin_moyce_front.png")
 
     # The lead per tabulated point, and the time-step / s_corr check at 20 across.
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
@@ -142,7 +144,7 @@ def martin_moyce(results, exp):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="upper left")
     fig.tight_layout()
-    save(fig, "martin_moyce_checks.png")
+    save(fig, results, "martin_moyce_checks.png")
     return shift
 
 
@@ -196,7 +198,7 @@ def tank(results):
     axes[1].legend(fontsize=7)
     axes[1].grid(alpha=0.3)
     fig.tight_layout()
-    save(fig, "hydrostatic_tank.png")
+    save(fig, results, "hydrostatic_tank.png")
 
 
 def dam_break_density(results):
@@ -234,7 +236,7 @@ def dam_break_density(results):
     axes[0].legend(fontsize=7, title="iterations", title_fontsize=7)
     axes[0].set_title("dam break, 20 across: density error while it moves", fontsize=9)
     fig.tight_layout()
-    save(fig, "dam_break_density.png")
+    save(fig, results, "dam_break_density.png")
 
 
 def stability(results):
@@ -265,7 +267,7 @@ def stability(results):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    save(fig, "stability_energy.png")
+    save(fig, results, "stability_energy.png")
 
 
 def main(results):

@@ -1,9 +1,10 @@
 #!/usr/bin/python3
-"""Regenerates the validation report's data and figures (Testing/Validation/README.md).
+"""The long validation runs on the CPU (Documentation/Validation.md, "CTest and the long runs").
 
-  validate.py run [GROUP...]   run the solver's tools, writing results/*.csv and *.txt
+  validate.py run [GROUP...]   run the solver's tools, writing output/validation/*.csv and *.txt
                                (a run whose .txt exists is skipped; --force reruns it)
-  validate.py plot             draw the figures (*.png) and print the tables from results/
+  validate.py plot             draw the figures (*.png, into output/validation/) and print the
+                               tables from output/validation/
 
 Groups: mm (Martin & Moyce at 10/20/40/80 across), mmdt (time-step and s_corr check at 20 across),
 mmit (dam-break density error per iteration count at 20 across), tank (hydrostatic tank),
@@ -20,7 +21,8 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-RESULTS = os.path.join(HERE, "results")
+# Generated data stays out of the tree: output/ is git-ignored.
+RESULTS = os.path.join(ROOT, "output", "validation")
 # The table as the project received it (shared/validation/), copied here so tests and CI have it.
 EXPERIMENT_CANDIDATES = [
     os.path.join(HERE, "martin_moyce_1952_surge_front_n2.csv"),
@@ -41,7 +43,7 @@ def experiment_path():
 
 
 def runs(build):
-    """(group, name, argv): every run the report uses. Outputs go to results/NAME.*"""
+    """(group, name, argv): every run. Outputs go to output/validation/NAME.*"""
     mm = os.path.join(build, "Testing", "Validation", "pbf_martin_moyce")
     vr = os.path.join(build, "Testing", "Validation", "pbf_validation_run")
     r = lambda name: os.path.join(RESULTS, name)

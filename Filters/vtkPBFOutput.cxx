@@ -1,0 +1,301 @@
+#include "vtkPBFOutput.h"
+#include "vtkPBFPageLocked.h"
+
+#include "vtkAbstractArray.h"
+#include "vtkCellArray.h"
+#include "vtkDoubleArray.h"
+#include "vtkFieldData.h"
+#include "vtkFloatArray.h"
+#include "vtkIdTypeArray.h"
+#include "vtkNew.h"
+#include "vtkOutlineSource.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
+#include "vtkPolyData.h"
+#include "vtkStringArray.h"
+#include "vtkTable.h"
+
+#include "Parameters.h"
+#include "Playback.h"
+#include "Simulation.h"
+#include "Stepper.h"
+
+#include <cstdint>
+#include <initializer_list>
+#include <type_traits>
+
+namespace
+{
+
+template <class Real>
+using RealArray =
+  typename std::conditional<std::is_same<Real, float>::value, vtkFloatArray, vtkDoubleArray>::type;
+
+template <class Array>
+vtkSmartPointer<Array> NewArray(const char* name, int components, vtkIdType tuples)
+{
+  auto array = vtkSmartPointer<Array>::New();
+  if (name)
+  {
+    array->SetName(name);
+  }
+  array->SetNumberOfComponents(components);
+  array->SetNumberOfTuples(tuples);
+  return array;
+}
+
+// Vertex cells 0..n-1 depend on the particle count only: built once per count and shared by the
+// frames (outputs are never modified downstream), instead of 16 bytes per particle per frame.
+vtkSmartPointer<vtkCellArray> VertexCells(vtkIdType n)
+{
+  auto offsets = NewArray<vtkIdTypeArray>(nullptr, 1, n + 1);
+  auto connectivity = NewArray<vtkIdTypeArray>(nullptr, 1, n);
+  vtkIdType* o = offsets->GetPointer(0);
+  vtkIdType* c = connectivity->GetPointer(0);
+  for (vtkIdType i = 0; i < n; ++i)
+  {
+    o[i] = i;
+    c[i] = i;
+  }
+  o[n] = n;
+  auto cells = vtkSmartPointer<vtkCellArray>::New();
+  cells->SetData(offsets, connectivity);
+  return cells;
+}
+
+// An output array of the given size, in page-locked memory when asked and available (the GPU
+// then copies into it at the full bus speed); the array gives the memory back to the pool.
+template <class Array>
+vtkSmartPointer<Array> NewOutputArray(
+  const char* name, int components, vtkIdType tuples, bool pinned)
+{
+  using Value = typename Array::ValueType;
+  const auto values = static_cast<std::size_t>(tuples) * static_cast<std::size_t>(components);
+  void* memory = pinned ? vtkPBFPageLocked::Allocate(values * sizeof(Value)) : nullptr;
+  if (!memory)
+  {
+    return NewArray<Array>(name, components, tuples);
+  }
+  auto array = vtkSmartPointer<Array>::New();
+  if (name)
+  {
+    array->SetName(name);
+  }
+  array->SetNumberOfComponents(components);
+  array->SetArray(static_cast<Value*>(memory), static_cast<vtkIdType>(values), /*save=*/0,
+    Array::VTK_DATA_ARRAY_USER_DEFINED);
+  array->SetArrayFreeFunction(&vtkPBFPageLocked::Release);
+  return array;
+}
+
+// The particles in the solver's (cell-sorted) order, read by the stepper straight into the VTK
+// arrays' memory: pbf::Vec3 is three packed reals, as VTK's interleaved arrays are, and the ids
+// are 64-bit like vtkIdType. No per-point call, no copy in between.
+template <class Real>
+void FillParticlesOf(const pbf::Stepper& stepper, bool pinned,
+  vtkSmartPointer<vtkCellArray>& vertices, vtkPolyData* output)
+{
+  static_assert(sizeof(pbf::Vec3<Real>) == 3 * sizeof(Real), "pbf::Vec3 must be 3 packed reals");
+  static_assert(sizeof(vtkIdType) == sizeof(std::int64_t), "particle ids are 64-bit vtkIdTypes");
+  const auto n = static_cast<vtkIdType>(stepper.size());
+  auto coordinates = NewOutputArray<RealArray<Real>>(nullptr, 3, n, pinned);
+  auto velocity = NewOutputArray<RealArray<Real>>("velocity", 3, n, pinned);
+  auto density = NewOutputArray<RealArray<Real>>("density", 1, n, pinned);
+  auto lambda = NewOutputArray<RealArray<Real>>("lambda", 1, n, pinned);
+  auto id = NewOutputArray<vtkIdTypeArray>("id", 1, n, pinned);
+  if (n > 0)
+  {
+    pbf::SnapshotView<Real> view;
+    view.position = reinterpret_cast<pbf::Vec3<Real>*>(coordinates->GetPointer(0));
+    view.velocity = reinterpret_cast<pbf::Vec3<Real>*>(velocity->GetPointer(0));
+    view.density = density->GetPointer(0);
+    view.lambda = lambda->GetPointer(0);
+    view.id = reinterpret_cast<std::int64_t*>(id->GetPointer(0));
+    stepper.readInto(view);
+  }
+  if (!vertices || vertices->GetNumberOfCells() != n)
+  {
+    vertices = VertexCells(n);
+  }
+
+  vtkNew<vtkPoints> points;
+  points->SetData(coordinates);
+  output->SetPoints(points);
+  output->SetVerts(vertices);
+
+  vtkPointData* pointData = output->GetPointData();
+  pointData->AddArray(density);
+  pointData->AddArray(lambda);
+  // Active scalars and vectors, so that a view colors by |velocity| on first show.
+  pointData->SetScalars(velocity);
+  pointData->SetVectors(velocity);
+  pointData->SetGlobalIds(id);
+}
+
+} // namespace
+
+//------------------------------------------------------------------------------
+void vtkPBFOutput::AddValue(vtkFieldData* fieldData, const char* name, double value)
+{
+  vtkNew<vtkDoubleArray> array;
+  array->SetName(name);
+  array->SetNumberOfTuples(1);
+  array->SetValue(0, value);
+  fieldData->AddArray(array);
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFOutput::AddInteger(vtkFieldData* fieldData, const char* name, vtkIdType value)
+{
+  vtkNew<vtkIdTypeArray> array;
+  array->SetName(name);
+  array->SetNumberOfTuples(1);
+  array->SetValue(0, value);
+  fieldData->AddArray(array);
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFOutput::AddText(vtkFieldData* fieldData, const char* name, const std::string& value)
+{
+  vtkNew<vtkStringArray> array;
+  array->SetName(name);
+  array->SetNumberOfValues(1);
+  array->SetValue(0, value);
+  fieldData->AddArray(array);
+}
+
+//------------------------------------------------------------------------------
+vtkSmartPointer<vtkFieldData> vtkPBFOutput::FrameFieldData(
+  const pbf::Simulation& simulation, int frame, double frameInterval, int substeps)
+{
+  const pbf::Parameters& p = simulation.parameters();
+  auto fieldData = vtkSmartPointer<vtkFieldData>::New();
+  AddValue(fieldData, "SmoothingLength", p.smoothingLength());
+  AddValue(fieldData, "RestDensity", p.restDensity);
+  AddValue(fieldData, "ParticleMass", pbf::calibratedParticleMass(p));
+  AddValue(fieldData, "ParticleSpacing", p.particleSpacing);
+  AddValue(fieldData, "SmoothingRatio", p.smoothingRatio);
+  AddInteger(fieldData, "SolverIterations", p.solverIterations);
+  AddInteger(fieldData, "AdaptiveIterations", p.densityErrorTolerance > 0 ? 1 : 0);
+  AddValue(fieldData, "DensityErrorTolerance", p.densityErrorTolerance);
+  AddValue(fieldData, "MaxDensityErrorTolerance", p.maxDensityErrorTolerance);
+  AddValue(fieldData, "RelaxationEpsilon", p.relaxation);
+  AddValue(fieldData, "SCorrK", p.sCorrK);
+  AddValue(fieldData, "SCorrN", p.sCorrN);
+  AddValue(fieldData, "SCorrDeltaQ", p.sCorrDeltaQ);
+  AddValue(fieldData, "XSPHViscosity", p.xsphViscosity);
+  AddValue(fieldData, "XSPHKinematicViscosity", p.xsphNu());
+  AddValue(fieldData, "VorticityEpsilon", p.vorticityEpsilon);
+  AddInteger(fieldData, "Unilateral", p.unilateral ? 1 : 0);
+  AddInteger(fieldData, "MirrorWalls", p.mirrorWalls ? 1 : 0);
+  vtkNew<vtkDoubleArray> gravity;
+  gravity->SetName("Gravity");
+  gravity->SetNumberOfComponents(3);
+  gravity->InsertNextTuple3(p.gravity.x, p.gravity.y, p.gravity.z);
+  fieldData->AddArray(gravity);
+  vtkNew<vtkDoubleArray> domain;
+  domain->SetName("Domain");
+  domain->SetNumberOfComponents(6);
+  const double bounds[6] = { p.domain.min.x, p.domain.max.x, p.domain.min.y, p.domain.max.y,
+    p.domain.min.z, p.domain.max.z };
+  domain->InsertNextTuple(bounds);
+  fieldData->AddArray(domain);
+  const bool automatic = p.timeStepping == pbf::TimeStepping::Automatic;
+  AddText(fieldData, "TimeStepping", automatic ? "Automatic" : "Fixed");
+  AddValue(fieldData, "TimeStep", automatic ? simulation.stepper().timeStep() : p.timeStep);
+  AddValue(fieldData, "MaxTimeStep", p.timeStep);
+  AddValue(fieldData, "CFLNumber", p.cflNumber);
+  AddValue(fieldData, "FrameInterval", frameInterval);
+  AddInteger(fieldData, "SubstepsPerFrame", substeps);
+  AddInteger(fieldData, "Frame", frame);
+  AddInteger(fieldData, "StepCount", static_cast<vtkIdType>(simulation.stepCount()));
+  AddValue(fieldData, "Time", simulation.time());
+  AddText(fieldData, "Backend", simulation.stepper().description());
+  AddText(fieldData, "Precision", pbf::toString(simulation.stepper().precision()));
+  AddText(fieldData, "Scene", simulation.scene().name);
+  return fieldData;
+}
+
+
+//------------------------------------------------------------------------------
+void vtkPBFOutput::FillParticles(const pbf::Stepper& stepper, bool pinned,
+  vtkSmartPointer<vtkCellArray>& vertices, vtkPolyData* output)
+{
+  if (stepper.precision() == pbf::Precision::Double)
+  {
+    FillParticlesOf<double>(stepper, pinned, vertices, output);
+  }
+  else
+  {
+    FillParticlesOf<float>(stepper, pinned, vertices, output);
+  }
+}
+
+//------------------------------------------------------------------------------
+vtkSmartPointer<vtkTable> vtkPBFOutput::DiagnosticsTable(
+  const std::map<int, pbf::FrameRow>& rows, bool loadImbalance)
+{
+  const auto count = static_cast<vtkIdType>(rows.size());
+  auto time = NewArray<vtkDoubleArray>("Time", 1, count);
+  auto frame = NewArray<vtkIdTypeArray>("Frame", 1, count);
+  auto averageError = NewArray<vtkDoubleArray>("AverageDensityError", 1, count);
+  auto maxError = NewArray<vtkDoubleArray>("MaxDensityError", 1, count);
+  auto neighbors = NewArray<vtkDoubleArray>("AverageNeighbors", 1, count);
+  auto iterations = NewArray<vtkDoubleArray>("SolverIterations", 1, count);
+  auto milliseconds = NewArray<vtkDoubleArray>("MillisecondsPerStep", 1, count);
+  auto substeps = NewArray<vtkDoubleArray>("Substeps", 1, count);
+  auto minTimeStep = NewArray<vtkDoubleArray>("MinTimeStep", 1, count);
+  auto maxTimeStep = NewArray<vtkDoubleArray>("MaxTimeStep", 1, count);
+  auto maxSpeed = NewArray<vtkDoubleArray>("MaxSpeed", 1, count);
+  auto kinetic = NewArray<vtkDoubleArray>("KineticEnergy", 1, count);
+  auto particles = NewArray<vtkIdTypeArray>("Particles", 1, count);
+  auto imbalance = NewArray<vtkDoubleArray>("LoadImbalance", 1, count);
+  vtkNew<vtkStringArray> backend;
+  backend->SetName("Backend");
+  backend->SetNumberOfValues(count);
+  vtkIdType r = 0;
+  for (const auto& entry : rows)
+  {
+    const pbf::FrameRow& row = entry.second;
+    time->SetValue(r, row.time);
+    frame->SetValue(r, entry.first);
+    averageError->SetValue(r, row.averageDensityError);
+    maxError->SetValue(r, row.maxDensityError);
+    neighbors->SetValue(r, row.averageNeighbors);
+    iterations->SetValue(r, row.solverIterations);
+    milliseconds->SetValue(r, row.millisecondsPerStep);
+    substeps->SetValue(r, row.substeps);
+    minTimeStep->SetValue(r, row.minTimeStep);
+    maxTimeStep->SetValue(r, row.maxTimeStep);
+    maxSpeed->SetValue(r, row.maxSpeed);
+    kinetic->SetValue(r, row.kineticEnergy);
+    particles->SetValue(r, static_cast<vtkIdType>(row.particles));
+    imbalance->SetValue(r, row.loadImbalance);
+    backend->SetValue(r, row.backend);
+    ++r;
+  }
+  auto table = vtkSmartPointer<vtkTable>::New();
+  for (vtkAbstractArray* column :
+    std::initializer_list<vtkAbstractArray*>{ time, frame, averageError, maxError, neighbors,
+      iterations, milliseconds, substeps, minTimeStep, maxTimeStep, maxSpeed, kinetic, particles,
+      backend })
+  {
+    table->AddColumn(column);
+  }
+  if (loadImbalance)
+  {
+    table->AddColumn(imbalance);
+  }
+  return table;
+}
+
+//------------------------------------------------------------------------------
+vtkSmartPointer<vtkPolyData> vtkPBFOutput::DomainOutline(const pbf::Box& box, const std::string& scene)
+{
+  vtkNew<vtkOutlineSource> outline;
+  outline->SetBounds(box.min.x, box.max.x, box.min.y, box.max.y, box.min.z, box.max.z);
+  outline->Update();
+  vtkSmartPointer<vtkPolyData> domain = outline->GetOutput();
+  AddText(domain->GetFieldData(), "Scene", scene);
+  return domain;
+}

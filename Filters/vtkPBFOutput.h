@@ -1,0 +1,60 @@
+/**
+ * @class   vtkPBFOutput
+ * @brief   the VTK data of vtkPBFSimulation: a frame's particles and field data, the
+ *          diagnostics table, the domain's outline
+ *
+ * Static helpers (the algorithm holds no state here): FillParticles writes the stepper's
+ * particles straight into the output arrays' memory (page-locked for the GPU when asked), the
+ * vertex cells shared from frame to frame while the count stays; FrameFieldData records every
+ * parameter that made the frame; DiagnosticsTable and DomainOutline build ports 1 and 2.
+ */
+#ifndef vtkPBFOutput_h
+#define vtkPBFOutput_h
+
+#include "vtkSmartPointer.h"
+#include "vtkType.h"
+
+#include <map>
+#include <string>
+
+class vtkCellArray;
+class vtkFieldData;
+class vtkPolyData;
+class vtkTable;
+
+namespace pbf
+{
+class Simulation;
+class Stepper;
+struct Box;
+struct FrameRow;
+}
+
+class vtkPBFOutput
+{
+public:
+  // The particles in the solver's (cell-sorted) order with point arrays density, lambda,
+  // velocity (the active scalars and vectors) and id (the GlobalIds); `vertices` is reused
+  // while the particle count stays.
+  static void FillParticles(const pbf::Stepper& stepper, bool pinned,
+    vtkSmartPointer<vtkCellArray>& vertices, vtkPolyData* output);
+
+  // The parameters that produced the frame, as the solver saw them (domain included), so that a
+  // reader of the output alone can recompute the density with poly6 of h and the particle mass.
+  static vtkSmartPointer<vtkFieldData> FrameFieldData(
+    const pbf::Simulation& simulation, int frame, double frameInterval, int substeps);
+
+  // One row per frame (Time, Frame, the density errors, ..., Backend); LoadImbalance too for a
+  // decomposed run.
+  static vtkSmartPointer<vtkTable> DiagnosticsTable(
+    const std::map<int, pbf::FrameRow>& rows, bool loadImbalance);
+
+  // The 12 edges of the domain, with field data Scene.
+  static vtkSmartPointer<vtkPolyData> DomainOutline(const pbf::Box& box, const std::string& scene);
+
+  static void AddValue(vtkFieldData* fieldData, const char* name, double value);
+  static void AddInteger(vtkFieldData* fieldData, const char* name, vtkIdType value);
+  static void AddText(vtkFieldData* fieldData, const char* name, const std::string& value);
+};
+
+#endif

@@ -1,0 +1,130 @@
+#include "vtkPBFTranslate.h"
+
+#include "vtkDataArray.h"
+#include "vtkPointData.h"
+#include "vtkPointSet.h"
+
+#include "Parameters.h"
+
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <sstream>
+#include <utility>
+
+namespace
+{
+
+std::string FormatPoint(const double x[3])
+{
+  std::ostringstream text;
+  text << "(" << x[0] << ", " << x[1] << ", " << x[2] << ")";
+  return text.str();
+}
+
+} // namespace
+
+//------------------------------------------------------------------------------
+pbf::ParticleBatch vtkPBFBatchFromInput(vtkPointSet* input)
+{
+  const vtkIdType n = input->GetNumberOfPoints();
+  if (n < 2)
+  {
+    // One particle has no neighbour: no density to constrain, nothing that behaves as a fluid.
+    throw pbf::InvalidInput("input number of points = " + std::to_string(n) +
+      ": the filter needs at least 2 points to become the fluid (a particle alone has no "
+      "neighbour within the smoothing length, so it only falls)");
+  }
+  vtkDataArray* velocity = input->GetPointData()->GetArray("velocity");
+  if (velocity && velocity->GetNumberOfComponents() != 3)
+  {
+    throw pbf::InvalidInput("input point array \"velocity\" has " +
+      std::to_string(velocity->GetNumberOfComponents()) +
+      " components: an initial velocity needs 3 (rename the array to ignore it)");
+  }
+  pbf::ParticleBatch batch;
+  batch.position.resize(static_cast<std::size_t>(n));
+  batch.velocity.resize(static_cast<std::size_t>(n), pbf::Vec3d{ 0, 0, 0 });
+  batch.id.resize(static_cast<std::size_t>(n));
+  for (vtkIdType i = 0; i < n; ++i)
+  {
+    double x[3];
+    input->GetPoint(i, x);
+    if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]))
+    {
+      throw pbf::InvalidInput("input point " + std::to_string(i) + " = " + FormatPoint(x) +
+        ": coordinates must be finite");
+    }
+    const auto k = static_cast<std::size_t>(i);
+    batch.position[k] = pbf::Vec3d{ x[0], x[1], x[2] };
+    if (velocity)
+    {
+      double v[3];
+      velocity->GetTuple(i, v);
+      if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
+      {
+        throw pbf::InvalidInput("input velocity of point " + std::to_string(i) + " = " +
+          FormatPoint(v) + ": must be finite");
+      }
+      batch.velocity[k] = pbf::Vec3d{ v[0], v[1], v[2] };
+    }
+    batch.id[k] = static_cast<std::int64_t>(i);
+  }
+  return batch;
+}
+
+
+//------------------------------------------------------------------------------
+std::string vtkPBFInUserTerms(std::string text)
+{
+  const std::pair<const char*, const char*> phrases[] = {
+    { "lower timeStep (more substeps per frame) or use automatic time stepping",
+      "raise Substeps Per Frame (or lower Frame Interval), or set Time Stepping to Automatic" },
+    { "lower cflNumber or the largest time step", "lower CFL Number or Max Time Step" },
+    { "lower timeStep first",
+      "lower the time step first (Time Stepping Automatic, a smaller CFL Number or Max Time Step; "
+      "with Fixed steps more Substeps Per Frame)" },
+    { "raise relaxation", "raise Relaxation Epsilon" },
+  };
+  for (const auto& phrase : phrases)
+  {
+    for (std::size_t at = text.find(phrase.first); at != std::string::npos;
+         at = text.find(phrase.first, at + std::strlen(phrase.second)))
+    {
+      text.replace(at, std::strlen(phrase.first), phrase.second);
+    }
+  }
+  const std::pair<const char*, const char*> fields[] = {
+    { "maxDensityErrorTolerance", "Max Density Error Tolerance" },
+    { "densityErrorTolerance", "Density Error Tolerance" },
+    { "particleSpacing", "Particle Spacing" },
+    { "smoothingRatio", "Smoothing Ratio" },
+    { "solverIterations", "Solver Iterations" },
+    { "restDensity", "Rest Density" },
+    { "cflNumber", "CFL Number" },
+    { "xsphViscosity", "XSPH Viscosity" },
+    { "vorticityEpsilon", "Vorticity Epsilon" },
+    { "sCorrDeltaQ", "S Corr Delta Q" },
+    { "sCorrK", "S Corr K" },
+    { "sCorrN", "S Corr N" },
+    { "timeStep", "the time step" },
+  };
+  auto isWordCharacter = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+  for (const auto& field : fields)
+  {
+    const std::size_t length = std::strlen(field.first);
+    for (std::size_t at = text.find(field.first); at != std::string::npos;
+         at = text.find(field.first, at + 1))
+    {
+      const bool whole = (at == 0 || !isWordCharacter(text[at - 1])) &&
+        (at + length == text.size() || !isWordCharacter(text[at + length]));
+      if (whole)
+      {
+        text.replace(at, length, field.second);
+      }
+    }
+  }
+  return text;
+}
+
