@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# pbf_bench of this tree against a baseline tree in the same call of the device tool, so that a
+# change can be held to "within N % of before" on the same GPU, driver and clocks:
+#   git archive <commit> | (mkdir -p .baseline && tar -x -C .baseline)     # here
+#   bash Utilities/gpu-compare.sh .baseline                                 # there, carry .deps and .baseline
+# Builds pbf_bench of both (sm_90, Release; this tree's build is gpu-run.sh's when it exists),
+# then runs 1M single, 1M double and 10M single twice each, alternating baseline and this tree so
+# that a drift of the clocks hits both alike, and prints the median ms/step of each and the
+# change. JSON under $OUT (else output/gpu-compare). .baseline/ is git-ignored.
+set -uo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+baseline=$(cd "${1:?usage: gpu-compare.sh BASELINE_TREE}" && pwd)
+out=${OUT:-$root/output/gpu-compare}
+mkdir -p "$out"
+generator=()
+command -v ninja >/dev/null && generator=(-G Ninja)
+
+build() { # build TREE DIR: pbf_bench of TREE into DIR
+  cmake -S "$1" -B "$2" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DPBF_SOLVER_ONLY=ON \
+    -DCMAKE_CUDA_ARCHITECTURES=90 -DPBF_JSON_INCLUDE_DIR="$root/.deps/json" \
+    -DPBF_GTEST_SOURCE_DIR="$root/.deps/googletest" >"$out/configure-$(basename "$2").log" 2>&1 &&
+    cmake --build "$2" -j "$(nproc)" --target pbf_bench >"$out/build-$(basename "$2").log" 2>&1
+}
+this_build=${PBF_GPU_BUILD:-/tmp/pbf-gpu-build}
+[[ -x $this_build/Solver/Tools/pbf_bench ]] || build "$root" "$this_build" || { echo "this tree: build FAILED"; exit 1; }
+build "$baseline" /tmp/pbf-gpu-baseline || { tail -20 "$out"/build-pbf-gpu-baseline.log; echo "baseline: build FAILED"; exit 1; }
+
+configs=("1M_f32:--particles 1000000 --warmup 20 --steps 100"
+  "1M_f64:--precision double --particles 1000000 --warmup 20 --steps 100"
+  "10M_f32:--particles 10000000 --warmup 10 --steps 50")
+for round in 1 2; do
+  for config in "${configs[@]}"; do
+    name=${config%%:*}
+    for tree in baseline this; do
+      binary=/tmp/pbf-gpu-baseline/Solver/Tools/pbf_bench
+      [[ $tree == this ]] && binary=$this_build/Solver/Tools/pbf_bench
+      # shellcheck disable=SC2086
+      timeout 60 "$binary" --backend cuda ${config#*:} --json "$out/$name-$tree-$round.json" \
+        --label "$name-$tree" >/dev/null 2>&1 || echo "$name $tree round $round: FAILED"
+    done
+  done
+done
+
+python3 - "$out" <<'PY'
+import glob, json, os, statistics, sys
+out = sys.argv[1]
+print("| run | baseline ms/step | this tree ms/step | change |")
+print("|---|---:|---:|---:|")
+for name in ("1M_f32", "1M_f64", "10M_f32"):
+    def median(tree):
+        values = [json.load(open(p))["runs"][0]["median_ms"]
+                  for p in sorted(glob.glob(os.path.join(out, f"{name}-{tree}-*.json")))]
+        return statistics.median(values) if values else float("nan")
+    a, b = median("baseline"), median("this")
+    print(f"| {name} | {a:.3f} | {b:.3f} | {100 * (b / a - 1):+.1f} % |")
+PY
