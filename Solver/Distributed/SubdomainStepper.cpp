@@ -60,29 +60,16 @@ Vec3<Real> takeVec(const Bytes& b, std::size_t& offset)
 template <class Real>
 SubdomainStepper<Real>::SubdomainStepper(Communicator& communicator, bool parallel,
   const Parameters& parameters, const ParticleBatch& everything)
-  : communicator_(communicator)
-  , parallel_(parallel)
-  , parameters_(parameters)
+  : HostStepper<DecomposedStepper, Real>(parallel, parameters)
+  , communicator_(communicator)
 {
-  parameters_.validate();
-  checkBatch(parameters_, everything);
-  coefficients_ = Coefficients<Real>::make(parameters_);
-  lattice_ = calibrateLattice(parameters_);
-  setTimeStep(parameters_.timeStep);
-  geometry_ = makeGridGeometry<Real>(parameters_.domain, parameters_.smoothingLength());
-  cellOffsets_.assign(std::size_t(geometry_.cellCount()) + 1, 0);
+  checkBatch(fluid_.parameters, everything);
   const auto ranks = static_cast<std::size_t>(communicator_.size());
   sendIndex_.resize(ranks);
   ghostIndex_.resize(ranks);
-  slabs_ = Slabs::balanced(std::vector<std::uint64_t>(static_cast<std::size_t>(geometry_.nx), 1),
+  slabs_ = Slabs::balanced(std::vector<std::uint64_t>(static_cast<std::size_t>(fluid_.geometry.nx), 1),
     communicator_.size());
   append(everything);
-}
-
-template <class Real>
-Precision SubdomainStepper<Real>::precision() const
-{
-  return sizeof(Real) == sizeof(float) ? Precision::Single : Precision::Double;
 }
 
 template <class Real>
@@ -105,7 +92,7 @@ std::string SubdomainStepper<Real>::description() const
 template <class Real>
 void SubdomainStepper<Real>::append(const ParticleBatch& batch)
 {
-  checkBatch(parameters_, batch);
+  checkBatch(fluid_.parameters, batch);
   // Every rank holds the whole batch: each keeps the particles in its slab, so each particle is
   // kept once, and the new cut then balances the counts.
   for (std::size_t i = 0; i < batch.position.size(); ++i)
@@ -113,13 +100,13 @@ void SubdomainStepper<Real>::append(const ParticleBatch& batch)
     const Vec3<Real> q = Vec3<Real>::from(batch.position[i]);
     if (slabs_.owner(column(q)) == communicator_.rank())
     {
-      x_.push_back(q);
-      v_.push_back(Vec3<Real>::from(batch.velocity[i]));
-      id_.push_back(batch.id[i]);
+      fluid_.x.push_back(q);
+      fluid_.v.push_back(Vec3<Real>::from(batch.velocity[i]));
+      fluid_.id.push_back(batch.id[i]);
     }
   }
-  density_.resize(x_.size());
-  lambda_.resize(x_.size());
+  fluid_.density.resize(fluid_.x.size());
+  fluid_.lambda.resize(fluid_.x.size());
   cut();
   evaluateAtRest();
 }
@@ -129,10 +116,10 @@ void SubdomainStepper<Real>::evaluateAtRest()
 {
   // As CpuStepper reports them before a step: no ghosts are refreshed after the density pass,
   // since nothing reads theirs.
-  p_ = x_;
+  fluid_.p = fluid_.x;
   receiveGhosts();
   sortByCell();
-  const FluidView<Real> f = view();
+  const FluidView<Real> f = fluid_.view();
   forOwned([&](std::uint32_t i) { densityAndLambda(i, f); });
   dropGhosts();
 }
@@ -140,7 +127,7 @@ void SubdomainStepper<Real>::evaluateAtRest()
 template <class Real>
 int SubdomainStepper<Real>::column(const Vec3<Real>& q) const
 {
-  return geometry_.clampedCell(q.x, geometry_.origin.x, geometry_.nx);
+  return fluid_.geometry.clampedCell(q.x, fluid_.geometry.origin.x, fluid_.geometry.nx);
 }
 
 template <class Real>
@@ -156,77 +143,51 @@ void SubdomainStepper<Real>::forOwned(Stage&& stage)
 }
 
 template <class Real>
-void SubdomainStepper<Real>::setTimeStep(double dt)
-{
-  checkTimeStep(dt);
-  dt_ = dt;
-  time_ = StepTime<Real>::make(parameters_, lattice_, dt);
-}
-
-template <class Real>
-FluidView<Real> SubdomainStepper<Real>::view(bool tensile)
-{
-  FluidView<Real> f{};
-  f.x = x_.data();
-  f.p = p_.data();
-  f.v = v_.data();
-  f.density = density_.data();
-  f.lambda = lambda_.data();
-  f.scratch = scratch_.data();
-  f.omega = omega_.data();
-  f.grid = GridView<Real>{ geometry_, cellOffsets_.data(), keys_.data() };
-  f.c = coefficients_;
-  f.time = &time_;
-  f.tensile = tensile;
-  return f;
-}
-
-template <class Real>
 void SubdomainStepper<Real>::migrate(bool byPrediction)
 {
   const auto start = std::chrono::steady_clock::now();
   const int me = communicator_.rank();
   std::vector<Bytes> out(static_cast<std::size_t>(communicator_.size()));
   std::size_t kept = 0;
-  for (std::size_t i = 0; i < x_.size(); ++i)
+  for (std::size_t i = 0; i < fluid_.x.size(); ++i)
   {
-    const int owner = slabs_.owner(column(byPrediction ? p_[i] : x_[i]));
+    const int owner = slabs_.owner(column(byPrediction ? fluid_.p[i] : fluid_.x[i]));
     if (owner == me)
     {
-      x_[kept] = x_[i];
-      p_[kept] = p_[i];
-      v_[kept] = v_[i];
-      id_[kept] = id_[i];
-      density_[kept] = density_[i];
-      lambda_[kept] = lambda_[i];
+      fluid_.x[kept] = fluid_.x[i];
+      fluid_.p[kept] = fluid_.p[i];
+      fluid_.v[kept] = fluid_.v[i];
+      fluid_.id[kept] = fluid_.id[i];
+      fluid_.density[kept] = fluid_.density[i];
+      fluid_.lambda[kept] = fluid_.lambda[i];
       ++kept;
       continue;
     }
     Bytes& b = out[static_cast<std::size_t>(owner)];
-    putVec(b, x_[i]);
-    putVec(b, p_[i]);
-    putVec(b, v_[i]);
-    put(b, id_[i]);
-    put(b, density_[i]);
-    put(b, lambda_[i]);
+    putVec(b, fluid_.x[i]);
+    putVec(b, fluid_.p[i]);
+    putVec(b, fluid_.v[i]);
+    put(b, fluid_.id[i]);
+    put(b, fluid_.density[i]);
+    put(b, fluid_.lambda[i]);
   }
-  x_.resize(kept);
-  p_.resize(kept);
-  v_.resize(kept);
-  id_.resize(kept);
-  density_.resize(kept);
-  lambda_.resize(kept);
+  fluid_.x.resize(kept);
+  fluid_.p.resize(kept);
+  fluid_.v.resize(kept);
+  fluid_.id.resize(kept);
+  fluid_.density.resize(kept);
+  fluid_.lambda.resize(kept);
   const std::vector<Bytes> in = communicator_.exchange(out);
   for (const Bytes& b : in)
   {
     for (std::size_t offset = 0; offset < b.size();)
     {
-      x_.push_back(takeVec<Real>(b, offset));
-      p_.push_back(takeVec<Real>(b, offset));
-      v_.push_back(takeVec<Real>(b, offset));
-      id_.push_back(take<std::int64_t>(b, offset));
-      density_.push_back(take<Real>(b, offset));
-      lambda_.push_back(take<Real>(b, offset));
+      fluid_.x.push_back(takeVec<Real>(b, offset));
+      fluid_.p.push_back(takeVec<Real>(b, offset));
+      fluid_.v.push_back(takeVec<Real>(b, offset));
+      fluid_.id.push_back(take<std::int64_t>(b, offset));
+      fluid_.density.push_back(take<Real>(b, offset));
+      fluid_.lambda.push_back(take<Real>(b, offset));
       ++exchange_.migrated;
     }
   }
@@ -239,13 +200,13 @@ void SubdomainStepper<Real>::receiveGhosts()
   const auto start = std::chrono::steady_clock::now();
   const int me = communicator_.rank();
   const auto ranks = static_cast<std::size_t>(communicator_.size());
-  const std::size_t owned = x_.size();
+  const std::size_t owned = fluid_.x.size();
   // Which owned particles each rank mirrors, by index before the sort (mapped after it).
   std::vector<std::vector<std::uint32_t>> sendOriginal(ranks);
   std::vector<Bytes> out(ranks);
   for (std::size_t i = 0; i < owned; ++i)
   {
-    const int c = column(p_[i]);
+    const int c = column(fluid_.p[i]);
     const int left = c > 0 ? slabs_.owner(c - 1) : me;
     const int right = c + 1 < slabs_.columns() ? slabs_.owner(c + 1) : me;
     for (int to : { left, right })
@@ -256,8 +217,8 @@ void SubdomainStepper<Real>::receiveGhosts()
       }
       sendOriginal[static_cast<std::size_t>(to)].push_back(static_cast<std::uint32_t>(i));
       Bytes& b = out[static_cast<std::size_t>(to)];
-      putVec(b, p_[i]);
-      put(b, id_[i]);
+      putVec(b, fluid_.p[i]);
+      put(b, fluid_.id[i]);
     }
   }
   const std::vector<Bytes> in = communicator_.exchange(out);
@@ -267,20 +228,20 @@ void SubdomainStepper<Real>::receiveGhosts()
     for (std::size_t offset = 0; offset < in[r].size();)
     {
       const Vec3<Real> q = takeVec<Real>(in[r], offset);
-      x_.push_back(q);
-      p_.push_back(q);
-      v_.push_back(Vec3<Real>{ Real(0), Real(0), Real(0) });
-      id_.push_back(take<std::int64_t>(in[r], offset));
+      fluid_.x.push_back(q);
+      fluid_.p.push_back(q);
+      fluid_.v.push_back(Vec3<Real>{ Real(0), Real(0), Real(0) });
+      fluid_.id.push_back(take<std::int64_t>(in[r], offset));
       from.push_back(static_cast<std::int32_t>(r));
     }
   }
-  const std::size_t n = x_.size();
+  const std::size_t n = fluid_.x.size();
   exchange_.ghosts = n - owned;
-  density_.resize(n);
-  lambda_.resize(n);
-  scratch_.resize(n);
-  omega_.resize(n);
-  keys_.resize(n);
+  fluid_.density.resize(n);
+  fluid_.lambda.resize(n);
+  fluid_.scratch.resize(n);
+  fluid_.omega.resize(n);
+  fluid_.keys.resize(n);
   tag_.resize(n);
   for (std::size_t i = 0; i < n; ++i)
   {
@@ -299,27 +260,27 @@ void SubdomainStepper<Real>::receiveGhosts()
 template <class Real>
 void SubdomainStepper<Real>::sortByCell()
 {
-  const std::size_t n = x_.size();
+  const std::size_t n = fluid_.x.size();
   for (std::size_t i = 0; i < n; ++i)
   {
-    keys_[i] = geometry_.keyOf(p_[i]);
+    fluid_.keys[i] = fluid_.geometry.keyOf(fluid_.p[i]);
   }
-  countingSortByCell(keys_, cellOffsets_, order_, cursor_);
+  countingSortByCell(fluid_.keys, fluid_.cellOffsets, fluid_.order, fluid_.cursor);
   // Into scratch kept from step to step, as CpuStepper gathers: nothing allocated once the
   // arrays have their size.
   auto gather = [&](auto& array, auto& scratch) {
     scratch.resize(n);
     for (std::size_t k = 0; k < n; ++k)
     {
-      scratch[k] = array[order_[k]];
+      scratch[k] = array[fluid_.order[k]];
     }
     array.swap(scratch);
   };
-  gather(x_, gatherVec_);
-  gather(p_, gatherVec_);
-  gather(v_, gatherVec_);
-  gather(id_, gatherId_);
-  gather(keys_, gatherIndex_);
+  gather(fluid_.x, fluid_.gatherVec);
+  gather(fluid_.p, fluid_.gatherVec);
+  gather(fluid_.v, fluid_.gatherVec);
+  gather(fluid_.id, fluid_.gatherId);
+  gather(fluid_.keys, gatherIndex_);
   gather(tag_, gatherIndex_);
   gather(ghostFrom_, gatherFrom_);
   // Sorted index of each pre-sort index; ghosts keep their arrival order per rank, which is the
@@ -392,12 +353,12 @@ void SubdomainStepper<Real>::dropGhosts()
     }
     array.resize(owned);
   };
-  keep(x_);
-  keep(p_);
-  keep(v_);
-  keep(id_);
-  keep(density_);
-  keep(lambda_);
+  keep(fluid_.x);
+  keep(fluid_.p);
+  keep(fluid_.v);
+  keep(fluid_.id);
+  keep(fluid_.density);
+  keep(fluid_.lambda);
   ghostFrom_.assign(owned, -1);
 }
 
@@ -407,10 +368,10 @@ Compression SubdomainStepper<Real>::compression()
   // In fixed blocks per rank, then the ranks in order: deterministic, though summed in another
   // order than the serial backend's blocks.
   double sum = 0.0, largest = 0.0;
-  const double inverseRho0 = 1.0 / parameters_.restDensity;
+  const double inverseRho0 = 1.0 / fluid_.parameters.restDensity;
   for (std::uint32_t i : owned_)
   {
-    const double e = std::max(double(density_[i]) * inverseRho0 - 1.0, 0.0);
+    const double e = std::max(double(fluid_.density[i]) * inverseRho0 - 1.0, 0.0);
     sum += e;
     largest = std::max(largest, e);
   }
@@ -441,71 +402,58 @@ void SubdomainStepper<Real>::stepAlone()
   report_ = StepReport{};
   cut();
   {
-    owned_.resize(x_.size());
+    owned_.resize(fluid_.x.size());
     for (std::size_t i = 0; i < owned_.size(); ++i)
     {
       owned_[i] = static_cast<std::uint32_t>(i);
     }
-    p_.resize(x_.size());
-    scratch_.resize(x_.size());
-    omega_.resize(x_.size());
-    keys_.resize(x_.size());
-    const FluidView<Real> f = view();
+    fluid_.p.resize(fluid_.x.size());
+    fluid_.scratch.resize(fluid_.x.size());
+    fluid_.omega.resize(fluid_.x.size());
+    fluid_.keys.resize(fluid_.x.size());
+    const FluidView<Real> f = fluid_.view();
     forOwned([&](std::uint32_t i) { predictPosition(i, f); });
   }
   migrate(true);
   receiveGhosts();
   // Neighbours are found once per step, on the predicted positions (Algorithm 1, line 7).
   sortByCell();
-  const FluidView<Real> f = view();
-  const FluidView<Real> first = view(true); // the first projection adds s_corr
-  const bool adaptive = parameters_.densityErrorTolerance > 0;
-  for (int iteration = 0; iteration < parameters_.solverIterations; ++iteration)
-  {
-    forOwned([&](std::uint32_t i) { densityAndLambda(i, f); });
-    refreshGhosts([&](std::uint32_t i) -> Real& { return density_[i]; });
-    refreshGhosts([&](std::uint32_t i) -> Real& { return lambda_[i]; });
-    if (adaptive)
+  auto refresh = [&](HostField field) {
+    switch (field)
     {
-      const Compression c = compression();
-      report_.densityError = c.mean;
-      if (iteration > 0 &&
-        c.within(parameters_.densityErrorTolerance, parameters_.maxDensityErrorTolerance))
-      {
+      case HostField::DensityAndLambda:
+        refreshGhosts([&](std::uint32_t i) -> Real& { return fluid_.density[i]; });
+        refreshGhosts([&](std::uint32_t i) -> Real& { return fluid_.lambda[i]; });
         break;
-      }
+      case HostField::Predicted:
+        refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.p[i]; });
+        break;
+      case HostField::Velocity:
+        refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.v[i]; });
+        break;
+      case HostField::Vorticity:
+        refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.omega[i]; });
+        break;
     }
-    const FluidView<Real>& pass = iteration == 0 ? first : f;
-    forOwned([&](std::uint32_t i) { positionCorrection(i, pass); });
-    forOwned([&](std::uint32_t i) { applyCorrection(i, f); });
-    refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return p_[i]; });
-    ++report_.iterations;
-  }
-  if (!adaptive)
-  {
-    report_.densityError = std::numeric_limits<double>::quiet_NaN();
-  }
-  forOwned([&](std::uint32_t i) { updateVelocity(i, f); });
-  refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return v_[i]; });
-  forOwned([&](std::uint32_t i) { vorticityAndXsph(i, f); });
-  refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return omega_[i]; });
-  forOwned([&](std::uint32_t i) { vorticityConfinement(i, f); });
-  forOwned([&](std::uint32_t i) { commitPosition(i, f, x_.data()); });
+  };
+  projectAndUpdate(
+    fluid_, [&](auto&& stage) { forOwned(stage); }, refresh, [&] { return compression(); },
+    report_);
   dropGhosts();
 }
 
 template <class Real>
 std::vector<std::uint64_t> SubdomainStepper<Real>::particlesPerRank() const
 {
-  return countsPerRank(communicator_, x_.size());
+  return countsPerRank(communicator_, fluid_.x.size());
 }
 
 template <class Real>
 void SubdomainStepper<Real>::cut()
 {
   const auto start = std::chrono::steady_clock::now();
-  std::vector<double> mine(static_cast<std::size_t>(geometry_.nx), 0.0);
-  for (const Vec3<Real>& q : x_)
+  std::vector<double> mine(static_cast<std::size_t>(fluid_.geometry.nx), 0.0);
+  for (const Vec3<Real>& q : fluid_.x)
   {
     mine[static_cast<std::size_t>(column(q))] += 1.0;
   }
@@ -521,59 +469,20 @@ void SubdomainStepper<Real>::cut()
   exchange_.cutMoved = balanced.first != slabs_.first;
   slabs_ = balanced;
   exchange_.migrationMilliseconds += millisecondsSince(start);
-  p_.resize(x_.size());
+  fluid_.p.resize(fluid_.x.size());
   migrate(false);
 }
 
 template <class Real>
 Health SubdomainStepper<Real>::health() const
 {
-  return reduceHealth(communicator_, parameters_, particles());
-}
-
-template <class Real>
-template <class In>
-void SubdomainStepper<Real>::loadState(const Snapshot<In>& state)
-{
-  loadFromSnapshot(state, particles());
-  // The next step cuts the slabs from this state, as the run that took it did.
-}
-
-template <class Real>
-template <class Out>
-void SubdomainStepper<Real>::copyOut(Snapshot<Out>& out) const
-{
-  copyToSnapshot(particles(), out);
+  return reduceHealth(communicator_, fluid_.parameters, fluid_.particles());
 }
 
 template <class Real>
 Statistics SubdomainStepper<Real>::statistics() const
 {
-  return reduceStatistics(communicator_, parameters_, particles());
-}
-
-template <class Real>
-void SubdomainStepper<Real>::read(Snapshot<float>& out) const
-{
-  copyOut(out);
-}
-
-template <class Real>
-void SubdomainStepper<Real>::read(Snapshot<double>& out) const
-{
-  copyOut(out);
-}
-
-template <class Real>
-void SubdomainStepper<Real>::load(const Snapshot<float>& state)
-{
-  loadState(state);
-}
-
-template <class Real>
-void SubdomainStepper<Real>::load(const Snapshot<double>& state)
-{
-  loadState(state);
+  return reduceStatistics(communicator_, fluid_.parameters, fluid_.particles());
 }
 
 std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backend backend,

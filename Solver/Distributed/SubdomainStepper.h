@@ -19,8 +19,7 @@
 #pragma once
 
 #include "Communicator.h"
-#include "Equations.h"
-#include "HostParticles.h"
+#include "HostStepper.h"
 #include "Slabs.h"
 #include "Stepper.h"
 
@@ -64,7 +63,7 @@ public:
 };
 
 template <class Real>
-class SubdomainStepper final : public DecomposedStepper
+class SubdomainStepper final : public HostStepper<DecomposedStepper, Real>
 {
 public:
   // Every rank passes the whole initial fluid and keeps the particles of its slab.
@@ -75,23 +74,16 @@ public:
   // Every rank passes the whole batch (Simulation emits the same on every rank).
   void append(const ParticleBatch& batch) override;
 
-  std::size_t size() const override { return x_.size(); } // this rank's particles
-  Backend backend() const override { return parallel_ ? Backend::OpenMP : Backend::Serial; }
-  Precision precision() const override;
+  // size() and read(): this rank's particles.
   std::string description() const override;
-
-  void read(Snapshot<float>& out) const override;
-  void read(Snapshot<double>& out) const override;
   // Over every rank's particles, summed in rank order (the same bits on every rank).
   // averageNeighbors is not computed across ranks (NaN).
   Statistics statistics() const override;
   Health health() const override;
-  void setTimeStep(double dt) override;
-  double timeStep() const override { return dt_; }
-  StepReport lastStep() const override { return report_; }
-  // This rank's particles as read() gave them, at a step where the ranks were as now.
-  void load(const Snapshot<float>& state) override;
-  void load(const Snapshot<double>& state) override;
+  // This rank's particles as read() gave them, at a step where the ranks were as now. The next
+  // step cuts the slabs from this state, as the run that took it did.
+  void load(const Snapshot<float>& state) override { loadFromSnapshot(state, fluid_.particles()); }
+  void load(const Snapshot<double>& state) override { loadFromSnapshot(state, fluid_.particles()); }
 
   // Collective: the particles of each rank.
   std::vector<std::uint64_t> particlesPerRank() const override;
@@ -102,15 +94,8 @@ public:
 
 private:
   void stepAlone();
-  template <class Out>
-  void copyOut(Snapshot<Out>& out) const;
-  template <class In>
-  void loadState(const Snapshot<In>& state);
   template <class Stage>
   void forOwned(Stage&& stage);
-  FluidView<Real> view(bool tensile = false);
-  HostParticles<Real> particles() { return { x_, v_, density_, lambda_, id_ }; }
-  ConstHostParticles<Real> particles() const { return { x_, v_, density_, lambda_, id_ }; }
   int column(const Vec3<Real>& q) const;
   void cut();                          // balanced slabs from the global column counts
   void migrate(bool byPrediction);     // to the owners of their columns
@@ -122,34 +107,21 @@ private:
   void evaluateAtRest();               // density and lambda of the current positions
   Compression compression();           // collective
 
-  Communicator& communicator_;
-  bool parallel_;
-  Parameters parameters_;
-  Coefficients<Real> coefficients_;
-  LatticeCalibration lattice_;
-  double dt_ = 0;
-  StepTime<Real> time_{};
-  GridGeometry<Real> geometry_;
-  Slabs slabs_;
-
+  using HostStepper<DecomposedStepper, Real>::parallel_;
   // Owned particles first; during a step ghosts are appended, then all are sorted by cell.
-  std::vector<Vec3<Real>> x_, p_, v_, scratch_, omega_;
-  std::vector<Real> density_, lambda_;
-  std::vector<std::int64_t> id_;
-  std::vector<CellKey> keys_;
+  using HostStepper<DecomposedStepper, Real>::fluid_;
+  using HostStepper<DecomposedStepper, Real>::report_;
+  Communicator& communicator_;
+  Slabs slabs_;
   std::vector<std::int32_t> ghostFrom_;        // the rank a ghost mirrors; -1 for owned
   std::vector<std::uint32_t> tag_;            // index before the sort
   std::vector<std::uint32_t> owned_;          // sorted indices of owned particles
   std::vector<std::vector<std::uint32_t>> sendIndex_;  // per rank: sorted indices it mirrors
   std::vector<std::vector<std::uint32_t>> ghostIndex_; // per rank: sorted indices of its ghosts
-  std::vector<std::uint32_t> cellOffsets_, order_, cursor_;
-  // Gather targets and the sorted index of each particle, kept to avoid allocating every step.
-  std::vector<Vec3<Real>> gatherVec_;
-  std::vector<std::int64_t> gatherId_;
+  // Gather targets of the sort's index and ghost arrays, kept to avoid allocating every step.
   std::vector<std::uint32_t> gatherIndex_;
   std::vector<std::int32_t> gatherFrom_;
 
-  StepReport report_;
   ExchangeReport exchange_;
 };
 

@@ -1,0 +1,153 @@
+// The particles and per-step constants of a stepper that keeps its particles in host arrays: the
+// serial and OpenMP stepper (CpuStepper) and one rank's CPU sub-domain (SubdomainStepper, which
+// appends its ghosts to the same arrays during a step). The two differ in which particles they
+// run the stages over and in what they exchange; what the particles are, how the step's constants
+// follow from the parameters and dt, and how the stages of Equations.h see the arrays is here.
+#pragma once
+
+#include "CellSort.h"
+#include "Equations.h"
+#include "HostParticles.h"
+#include "Stepper.h"
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace pbf
+{
+
+template <class Real>
+struct HostFluid
+{
+  // Validates the parameters and derives the constants; dt = parameters.timeStep.
+  explicit HostFluid(const Parameters& p)
+    : parameters(p)
+  {
+    parameters.validate();
+    coefficients = Coefficients<Real>::make(parameters);
+    lattice = calibrateLattice(parameters);
+    setTimeStep(parameters.timeStep);
+    geometry = makeGridGeometry<Real>(parameters.domain, parameters.smoothingLength());
+    cellOffsets.assign(std::size_t(geometry.cellCount()) + 1, 0);
+  }
+
+  void setTimeStep(double step)
+  {
+    checkTimeStep(step);
+    dt = step;
+    time = StepTime<Real>::make(parameters, lattice, step);
+  }
+
+  // The arrays as the stages see them; `tensile`: this projection adds s_corr.
+  FluidView<Real> view(bool tensile = false)
+  {
+    FluidView<Real> f{};
+    f.x = x.data();
+    f.p = p.data();
+    f.v = v.data();
+    f.density = density.data();
+    f.lambda = lambda.data();
+    f.scratch = scratch.data();
+    f.omega = omega.data();
+    f.grid = GridView<Real>{ geometry, cellOffsets.data(), keys.data() };
+    f.c = coefficients;
+    f.time = &time;
+    f.tensile = tensile;
+    return f;
+  }
+
+  HostParticles<Real> particles() { return { x, v, density, lambda, id }; }
+  ConstHostParticles<Real> particles() const { return { x, v, density, lambda, id }; }
+
+  // The work arrays that follow the particle count (x, v and id are the state).
+  void resizeWork(std::size_t n)
+  {
+    p.resize(n);
+    scratch.resize(n);
+    omega.resize(n);
+    density.resize(n);
+    lambda.resize(n);
+    keys.resize(n);
+  }
+
+  static Precision precision()
+  {
+    return sizeof(Real) == sizeof(float) ? Precision::Single : Precision::Double;
+  }
+
+  Parameters parameters;
+  Coefficients<Real> coefficients;
+  LatticeCalibration lattice;
+  double dt = 0;
+  StepTime<Real> time{};
+  GridGeometry<Real> geometry;
+
+  std::vector<Vec3<Real>> x, p, v, scratch, omega;
+  std::vector<Real> density, lambda;
+  std::vector<std::int64_t> id;
+  std::vector<CellKey> keys;
+  std::vector<std::uint32_t> cellOffsets, order, cursor;
+  // Gather targets of the cell sort, kept to avoid allocating every step.
+  std::vector<Vec3<Real>> gatherVec;
+  std::vector<std::int64_t> gatherId;
+};
+
+// The fields a stepper that does not own every particle it reads (a sub-domain, whose ghosts are
+// owned by its neighbours) refreshes between the stages of a step.
+enum class HostField
+{
+  DensityAndLambda, // after the density pass
+  Predicted,        // p, after each position correction
+  Velocity,         // after the velocity update
+  Vorticity         // omega, before the confinement
+};
+
+// The constraint projections and the velocity passes of one step (Algorithm 1, lines 8-23) over
+// particles already predicted and sorted by cell, once for every host stepper:
+// forEach(stage) runs a stage over the particles the stepper owns, refresh(field) brings that
+// field of the particles it does not own up to date (nothing to do when it owns them all), and
+// compression() is the mean and largest compression of the whole fluid (for the adaptive stop).
+template <class Real, class ForEach, class Refresh, class Compress>
+void projectAndUpdate(HostFluid<Real>& fluid, ForEach&& forEach, Refresh&& refresh,
+  Compress&& compression, StepReport& report)
+{
+  const FluidView<Real> f = fluid.view();
+  const FluidView<Real> first = fluid.view(true); // the first projection adds s_corr
+  const Parameters& parameters = fluid.parameters;
+  const bool adaptive = parameters.densityErrorTolerance > 0;
+  for (int iteration = 0; iteration < parameters.solverIterations; ++iteration)
+  {
+    forEach([&](std::uint32_t i) { densityAndLambda(i, f); });
+    refresh(HostField::DensityAndLambda);
+    if (adaptive)
+    {
+      // The constraint already holds well enough: no need to project again. The first
+      // projection always runs: it carries the step's tensile push.
+      const Compression c = compression();
+      report.densityError = c.mean;
+      if (iteration > 0 &&
+        c.within(parameters.densityErrorTolerance, parameters.maxDensityErrorTolerance))
+      {
+        break;
+      }
+    }
+    const FluidView<Real>& pass = iteration == 0 ? first : f;
+    forEach([&](std::uint32_t i) { positionCorrection(i, pass); });
+    forEach([&](std::uint32_t i) { applyCorrection(i, f); });
+    refresh(HostField::Predicted);
+    ++report.iterations;
+  }
+  if (!adaptive)
+  {
+    report.densityError = std::numeric_limits<double>::quiet_NaN();
+  }
+  forEach([&](std::uint32_t i) { updateVelocity(i, f); });
+  refresh(HostField::Velocity);
+  forEach([&](std::uint32_t i) { vorticityAndXsph(i, f); });
+  refresh(HostField::Vorticity);
+  forEach([&](std::uint32_t i) { vorticityConfinement(i, f); });
+  forEach([&](std::uint32_t i) { commitPosition(i, f, fluid.x.data()); });
+}
+
+} // namespace pbf
