@@ -1,5 +1,5 @@
 // Entry points of the decomposed CUDA stepper: the precision switch and the device count.
-#include "CudaSubdomainStepper.cuh"
+#include "CudaDevicePolicy.cuh"
 
 #include <cuda_runtime.h>
 

@@ -1,6 +1,6 @@
 // The decomposed CUDA stepper in double precision (one precision per translation unit, so that
 // they compile in parallel).
-#include "CudaSubdomainStepper.cuh"
+#include "CudaDevicePolicy.cuh"
 
 namespace pbf
 {
