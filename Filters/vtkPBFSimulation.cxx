@@ -121,6 +121,8 @@ public:
   FrameRequest ParseRequest(vtkPBFSimulation* self, vtkInformation* request,
     vtkInformationVector* outputVector) const;
   pbf::PlaybackKey MakeKey(vtkPBFSimulation* self, vtkPointSet* input, const FrameRequest& r);
+  // Makes `key` the playback's and applies the checkpoint settings.
+  void Adopt(vtkPBFSimulation* self, const pbf::PlaybackKey& key);
   std::unique_ptr<pbf::Simulation> Build(
     vtkPBFSimulation* self, const pbf::PlaybackKey& key, vtkPointSet* input);
   void OnDeviceFault(vtkPBFSimulation* self, const pbf::DeviceFault& fault, int frame);
@@ -351,14 +353,7 @@ int vtkPBFSimulation::RequestFrame(
   pbf::Playback& playback = internals.Playback;
   try
   {
-    const pbf::PlaybackKey key = internals.MakeKey(this, input, r);
-    if (playback.adopt(key) && !playback.deviceFaulted())
-    {
-      internals.LastFrame = -1; // another run: nothing delivered belongs to it
-      internals.DeviceFaultText.clear();
-    }
-    playback.configureCheckpoints(this->CheckpointInterval,
-      static_cast<std::size_t>(std::min(this->CheckpointMemoryMB * 1048576.0, 1e18)));
+    internals.Adopt(this, internals.MakeKey(this, input, r));
     if (internals.LastFrame == r.Frame)
     {
       internals.DeliverAgain(r, output, table);
@@ -514,6 +509,18 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(
     vtkOutputWindowDisplayText(text.str().c_str());
   }
   return key;
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::vtkInternals::Adopt(vtkPBFSimulation* self, const pbf::PlaybackKey& key)
+{
+  if (this->Playback.adopt(key) && !this->Playback.deviceFaulted())
+  {
+    this->LastFrame = -1; // another run: nothing delivered belongs to it
+    this->DeviceFaultText.clear();
+  }
+  this->Playback.configureCheckpoints(self->CheckpointInterval,
+    static_cast<std::size_t>(std::min(self->CheckpointMemoryMB * 1048576.0, 1e18)));
 }
 
 //------------------------------------------------------------------------------
@@ -736,25 +743,8 @@ void vtkPBFSimulation::RequestDomain(vtkInformationVector* outputVector)
 //------------------------------------------------------------------------------
 std::string vtkPBFSimulation::InvalidTimeProperty() const
 {
-  std::ostringstream text;
-  if (!std::isfinite(this->FrameInterval) || this->FrameInterval <= 0.0)
-  {
-    text << "Frame Interval = " << this->FrameInterval << ": must be > 0 (seconds between frames)";
-  }
-  else if (this->NumberOfFrames < 0)
-  {
-    text << "Number Of Frames = " << this->NumberOfFrames << ": must be >= 0";
-  }
-  else if (this->TimeStepping == TIME_STEPPING_FIXED && this->SubstepsPerFrame < 1)
-  {
-    text << "Substeps Per Frame = " << this->SubstepsPerFrame << ": must be >= 1";
-  }
-  else if (this->TimeStepping == TIME_STEPPING_AUTOMATIC &&
-    (!std::isfinite(this->MaxTimeStep) || this->MaxTimeStep <= 0.0))
-  {
-    text << "Max Time Step = " << this->MaxTimeStep << ": must be > 0 (seconds)";
-  }
-  return text.str();
+  return vtkPBFInvalidTimeProperty(this->FrameInterval, this->NumberOfFrames,
+    this->TimeStepping == TIME_STEPPING_AUTOMATIC, this->SubstepsPerFrame, this->MaxTimeStep);
 }
 
 //------------------------------------------------------------------------------

@@ -128,3 +128,26 @@ std::string vtkPBFInUserTerms(std::string text)
   return text;
 }
 
+//------------------------------------------------------------------------------
+std::string vtkPBFInvalidTimeProperty(double frameInterval, int numberOfFrames, bool automatic,
+  int substepsPerFrame, double maxTimeStep)
+{
+  std::ostringstream text;
+  if (!std::isfinite(frameInterval) || frameInterval <= 0.0)
+  {
+    text << "Frame Interval = " << frameInterval << ": must be > 0 (seconds between frames)";
+  }
+  else if (numberOfFrames < 0)
+  {
+    text << "Number Of Frames = " << numberOfFrames << ": must be >= 0";
+  }
+  else if (!automatic && substepsPerFrame < 1)
+  {
+    text << "Substeps Per Frame = " << substepsPerFrame << ": must be >= 1";
+  }
+  else if (automatic && (!std::isfinite(maxTimeStep) || maxTimeStep <= 0.0))
+  {
+    text << "Max Time Step = " << maxTimeStep << ": must be > 0 (seconds)";
+  }
+  return text.str();
+}

@@ -20,4 +20,9 @@ pbf::ParticleBatch vtkPBFBatchFromInput(vtkPointSet* input);
 // then every remaining field name becomes its property's label.
 std::string vtkPBFInUserTerms(std::string text);
 
+// What is wrong with the time properties, in the GUI's words and with the value as typed; empty
+// when nothing is. MaxTimeStep matters with automatic steps, SubstepsPerFrame with fixed ones.
+std::string vtkPBFInvalidTimeProperty(double frameInterval, int numberOfFrames, bool automatic,
+  int substepsPerFrame, double maxTimeStep);
+
 #endif

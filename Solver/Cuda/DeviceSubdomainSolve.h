@@ -171,11 +171,11 @@ void DeviceSubdomainStepper<Real, Device>::keepOwned(const Vec3<Real>* x,
     {
       if (vec_[i] == x)
       {
-        x_ = i;
+        xBuffer_ = i;
       }
       if (vec_[i] == v)
       {
-        v_ = i;
+        vBuffer_ = i;
       }
     }
     return;
@@ -190,17 +190,17 @@ void DeviceSubdomainStepper<Real, Device>::keepOwned(const Vec3<Real>* x,
   std::swap(density_, densityAlt_);
   std::swap(lambda_, lambdaAlt_);
   std::swap(id_, idAlt_);
-  x_ = toX;
-  v_ = toV;
+  xBuffer_ = toX;
+  vBuffer_ = toV;
 }
 
 template <class Real, class Device>
 void DeviceSubdomainStepper<Real, Device>::evaluateAtRest()
 {
   auto exec = device_->executor();
-  const int p = freeBuffer(x_, v_, -1);
-  exec.copy(vec_[p], vec_[x_], n_ * sizeof(Vec3<Real>));
-  Roles4 r{ x_, p, v_, otherBuffer(x_, p, v_) };
+  const int p = freeBuffer(xBuffer_, vBuffer_, -1);
+  exec.copy(vec_[p], vec_[xBuffer_], n_ * sizeof(Vec3<Real>));
+  Roles4 r{ xBuffer_, p, vBuffer_, otherBuffer(xBuffer_, p, vBuffer_) };
   r = migrate(r);
   r = receiveGhosts(r);
   const CellKey* keys = sortByCell(r);

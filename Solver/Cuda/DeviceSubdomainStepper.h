@@ -228,78 +228,7 @@ public:
     distributed::together(communicator_, [&] { loadState(state); });
   }
 
-  void stepAlone()
-  {
-    device_->activate();
-    const auto stepStart = Clock::now();
-    exchange_ = distributed::ExchangeReport{};
-    report_ = StepReport{};
-    {
-      // x, v and the predicted positions in the free buffer. The prediction does not depend on
-      // the cut, so it runs first and the cut's one wait also brings back the predicted
-      // positions' column counts, from which the migration's and the ghosts' counts follow.
-      const int p = freeBuffer(x_, v_, -1);
-      auto exec = device_->executor();
-      subdomain::predict(exec, constants_, count(n_), vec_[x_], vec_[v_], vec_[p]);
-      cut(x_, p);
-      Roles4 r{ x_, p, v_, otherBuffer(x_, p, v_) };
-      r = migrate(r);
-      r = receiveGhosts(r);
-      const CellKey* keys = sortByCell(r);
-      exchange_.beforePassesMilliseconds = since(stepStart);
-      // Now vec[r.x] = x, vec[r.p] = x*, vec[r.v] = v in cell order; vec[r.free] is free.
-      solve(r, keys);
-    }
-    if (constants_.tolerance <= 0)
-    {
-      report_.iterations = constants_.iterations;
-      report_.densityError = std::numeric_limits<double>::quiet_NaN();
-    }
-  }
-
-  // Every rank sets the same dt (Simulation chooses it from reduced maxima).
-  void setTimeStepAlone(double dt)
-  {
-    checkTimeStep(dt);
-    device_->activate();
-    const StepTime<Real> time = StepTime<Real>::make(parameters_, lattice_, dt);
-    device_->upload(deviceTime_, &time, sizeof time);
-    device_->synchronize(); // `time` dies here
-    dt_ = dt;
-  }
   double timeStep() const override { return dt_; }
-
-  // Every rank passes the whole batch; each keeps the particles of its slab.
-  void appendAlone(const ParticleBatch& batch)
-  {
-    checkBatch(parameters_, batch);
-    device_->activate();
-    std::vector<Vec3<Real>> x, v;
-    std::vector<std::int64_t> id;
-    const GridGeometry<Real>& g = constants_.geometry;
-    for (std::size_t i = 0; i < batch.position.size(); ++i)
-    {
-      const Vec3<Real> q = Vec3<Real>::from(batch.position[i]);
-      if (slabs_.owner(subdomain::columnOf(g, q)) == communicator_.rank())
-      {
-        x.push_back(q);
-        v.push_back(Vec3<Real>::from(batch.velocity[i]));
-        id.push_back(batch.id[i]);
-      }
-    }
-    const std::size_t n = n_ + x.size();
-    reserve(n, n_);
-    if (!x.empty())
-    {
-      device_->upload(vec_[x_] + n_, x.data(), x.size() * sizeof(Vec3<Real>));
-      device_->upload(vec_[v_] + n_, v.data(), v.size() * sizeof(Vec3<Real>));
-      device_->upload(id_ + n_, id.data(), id.size() * sizeof(std::int64_t));
-      device_->synchronize(); // the host vectors die here
-    }
-    n_ = n;
-    cut(x_, -1); // evaluateAtRest predicts nothing: p = x
-    evaluateAtRest();
-  }
 
   std::size_t size() const override { return n_; }
   Backend backend() const override { return Backend::CUDA; }
@@ -316,6 +245,33 @@ public:
       " along x)";
   }
 
+  StepReport lastStep() const override { return report_; }
+  void synchronize() const override
+  {
+    device_->activate();
+    device_->synchronize();
+  }
+
+  std::vector<std::uint64_t> particlesPerRank() const override
+  {
+    return distributed::countsPerRank(communicator_, n_);
+  }
+  const distributed::Slabs& slabs() const override { return slabs_; }
+  const distributed::ExchangeReport& lastExchange() const override { return exchange_; }
+  int rank() const override { return communicator_.rank(); }
+  int ranks() const override { return communicator_.size(); }
+  // Mask builds since construction (diagnostics).
+  std::uint64_t maskBuilds() const
+  {
+    unsigned long long builds = 0;
+    device_->activate();
+    device_->download(&builds, maskBuilds_, sizeof builds);
+    device_->synchronize();
+    return builds;
+  }
+
+  // What health() runs on each rank. Public only because nvcc allows no extended __host__
+  // __device__ lambda in a private member function.
   // The divergence check's scan and the automatic step's fastest particle, every step: three
   // maxima over the owned particles on the device (largest speed^2, largest compression, any
   // non-finite value), 24 bytes back, then reduced over the ranks so that every rank reaches the
@@ -327,8 +283,8 @@ public:
     auto exec = device_->executor();
     exec.fillZero(healthBits_, 3 * sizeof(unsigned long long));
     const std::uint32_t n = count(n_);
-    const Vec3<Real>* x = vec_[x_];
-    const Vec3<Real>* v = vec_[v_];
+    const Vec3<Real>* x = vec_[xBuffer_];
+    const Vec3<Real>* v = vec_[vBuffer_];
     const Real* density = density_;
     const double inverseRho0 = 1.0 / parameters_.restDensity;
     exec.forEachMax(GatherStage{}, n, healthBits_, [=] PBF_HD(std::uint32_t i) -> double {
@@ -359,32 +315,81 @@ public:
     }
     return all;
   }
-  StepReport lastStep() const override { return report_; }
-  void synchronize() const override
-  {
-    device_->activate();
-    device_->synchronize();
-  }
-
-  std::vector<std::uint64_t> particlesPerRank() const override
-  {
-    return distributed::countsPerRank(communicator_, n_);
-  }
-  const distributed::Slabs& slabs() const override { return slabs_; }
-  const distributed::ExchangeReport& lastExchange() const override { return exchange_; }
-  int rank() const override { return communicator_.rank(); }
-  int ranks() const override { return communicator_.size(); }
-  // Mask builds since construction (diagnostics).
-  std::uint64_t maskBuilds() const
-  {
-    unsigned long long builds = 0;
-    device_->activate();
-    device_->download(&builds, maskBuilds_, sizeof builds);
-    device_->synchronize();
-    return builds;
-  }
 
 private:
+  // What the public calls above run on each rank, inside distributed::together.
+  void stepAlone()
+  {
+    device_->activate();
+    const auto stepStart = Clock::now();
+    exchange_ = distributed::ExchangeReport{};
+    report_ = StepReport{};
+    {
+      // x, v and the predicted positions in the free buffer. The prediction does not depend on
+      // the cut, so it runs first and the cut's one wait also brings back the predicted
+      // positions' column counts, from which the migration's and the ghosts' counts follow.
+      const int p = freeBuffer(xBuffer_, vBuffer_, -1);
+      auto exec = device_->executor();
+      subdomain::predict(exec, constants_, count(n_), vec_[xBuffer_], vec_[vBuffer_], vec_[p]);
+      cut(xBuffer_, p);
+      Roles4 r{ xBuffer_, p, vBuffer_, otherBuffer(xBuffer_, p, vBuffer_) };
+      r = migrate(r);
+      r = receiveGhosts(r);
+      const CellKey* keys = sortByCell(r);
+      exchange_.beforePassesMilliseconds = since(stepStart);
+      // Now vec[r.x] = x, vec[r.p] = x*, vec[r.v] = v in cell order; vec[r.free] is free.
+      solve(r, keys);
+    }
+    if (constants_.tolerance <= 0)
+    {
+      report_.iterations = constants_.iterations;
+      report_.densityError = std::numeric_limits<double>::quiet_NaN();
+    }
+  }
+
+  // Every rank sets the same dt (Simulation chooses it from reduced maxima).
+  void setTimeStepAlone(double dt)
+  {
+    checkTimeStep(dt);
+    device_->activate();
+    const StepTime<Real> time = StepTime<Real>::make(parameters_, lattice_, dt);
+    device_->upload(deviceTime_, &time, sizeof time);
+    device_->synchronize(); // `time` dies here
+    dt_ = dt;
+  }
+
+  // Every rank passes the whole batch; each keeps the particles of its slab.
+  void appendAlone(const ParticleBatch& batch)
+  {
+    checkBatch(parameters_, batch);
+    device_->activate();
+    std::vector<Vec3<Real>> x, v;
+    std::vector<std::int64_t> id;
+    const GridGeometry<Real>& g = constants_.geometry;
+    for (std::size_t i = 0; i < batch.position.size(); ++i)
+    {
+      const Vec3<Real> q = Vec3<Real>::from(batch.position[i]);
+      if (slabs_.owner(subdomain::columnOf(g, q)) == communicator_.rank())
+      {
+        x.push_back(q);
+        v.push_back(Vec3<Real>::from(batch.velocity[i]));
+        id.push_back(batch.id[i]);
+      }
+    }
+    const std::size_t n = n_ + x.size();
+    reserve(n, n_);
+    if (!x.empty())
+    {
+      device_->upload(vec_[xBuffer_] + n_, x.data(), x.size() * sizeof(Vec3<Real>));
+      device_->upload(vec_[vBuffer_] + n_, v.data(), v.size() * sizeof(Vec3<Real>));
+      device_->upload(id_ + n_, id.data(), id.size() * sizeof(std::int64_t));
+      device_->synchronize(); // the host vectors die here
+    }
+    n_ = n;
+    cut(xBuffer_, -1); // evaluateAtRest predicts nothing: p = x
+    evaluateAtRest();
+  }
+
   // Which of the four Vec3 buffers hold what during a step.
   struct Roles4
   {
@@ -630,8 +635,8 @@ private:
     s.id.resize(n_);
     if (n_ > 0)
     {
-      device_->download(s.x.data(), vec_[x_], n_ * sizeof(Vec3<Real>));
-      device_->download(s.v.data(), vec_[v_], n_ * sizeof(Vec3<Real>));
+      device_->download(s.x.data(), vec_[xBuffer_], n_ * sizeof(Vec3<Real>));
+      device_->download(s.v.data(), vec_[vBuffer_], n_ * sizeof(Vec3<Real>));
       device_->download(s.density.data(), density_, n_ * sizeof(Real));
       device_->download(s.lambda.data(), lambda_, n_ * sizeof(Real));
       device_->download(s.id.data(), id_, n_ * sizeof(std::int64_t));
@@ -651,12 +656,12 @@ private:
     const std::size_t n = s.id.size();
     n_ = 0;
     reserve(n, 0);
-    x_ = 0;
-    v_ = 1;
+    xBuffer_ = 0;
+    vBuffer_ = 1;
     if (n > 0)
     {
-      device_->upload(vec_[x_], s.x.data(), n * sizeof(Vec3<Real>));
-      device_->upload(vec_[v_], s.v.data(), n * sizeof(Vec3<Real>));
+      device_->upload(vec_[xBuffer_], s.x.data(), n * sizeof(Vec3<Real>));
+      device_->upload(vec_[vBuffer_], s.v.data(), n * sizeof(Vec3<Real>));
       device_->upload(density_, s.density.data(), n * sizeof(Real));
       device_->upload(lambda_, s.lambda.data(), n * sizeof(Real));
       device_->upload(id_, s.id.data(), n * sizeof(std::int64_t));
@@ -675,12 +680,12 @@ private:
   distributed::Slabs slabs_;
 
   // Per-particle device arrays (capacity_ each); owned particles in [0, n_) between steps, with
-  // x in vec_[x_] and v in vec_[v_].
+  // x in vec_[xBuffer_] and v in vec_[vBuffer_].
   std::vector<void*> particleArrays_;
   std::size_t capacity_ = 0;
   std::size_t n_ = 0;
   std::size_t total_ = 0; // owned + ghosts during a step
-  int x_ = 0, v_ = 1;
+  int xBuffer_ = 0, vBuffer_ = 1;
   Vec3<Real>* vec_[4] = {};
   Real *density_ = nullptr, *lambda_ = nullptr, *densityAlt_ = nullptr, *lambdaAlt_ = nullptr;
   AdaptiveState* adaptive_ = nullptr; // adaptive mode: this rank's reduction
