@@ -1,0 +1,64 @@
+// Solids as signed distance fields: the distance to the solid's surface in metres, negative
+// inside. A field is sampled once, on a regular grid of nodes in the solid's own frame, and read
+// by trilinear interpolation: one lookup per particle per solid, the same on the CPU and the GPU.
+// This is how FleX and PhysX hold triangle-mesh colliders, and what the volume maps of Bender et
+// al. (2019) are built on.
+#pragma once
+
+#include "Parameters.h"
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace pbf
+{
+
+struct DistanceGrid
+{
+  Vec3d origin{ 0, 0, 0 }; // the first node [m]
+  double cell = 0;         // node spacing [m]
+  int nx = 0, ny = 0, nz = 0;
+  std::vector<float> phi; // node values [m], x fastest, then y, then z
+
+  float& node(int i, int j, int k) { return phi[index(i, j, k)]; }
+  float node(int i, int j, int k) const { return phi[index(i, j, k)]; }
+  std::size_t index(int i, int j, int k) const
+  {
+    return (static_cast<std::size_t>(k) * ny + static_cast<std::size_t>(j)) * nx +
+      static_cast<std::size_t>(i);
+  }
+  Vec3d nodePosition(int i, int j, int k) const
+  {
+    return origin + Vec3d{ i * cell, j * cell, k * cell };
+  }
+  // The field at x, trilinear between the nodes. Beyond the grid: the value at the nearest point
+  // of the grid plus the distance to it, which stays positive far from the solid.
+  double at(const Vec3d& x) const;
+  // The gradient of the trilinear field at x (about the outward normal near the surface).
+  Vec3d gradient(const Vec3d& x) const;
+};
+
+struct TriangleMesh
+{
+  std::vector<Vec3d> points;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+};
+
+// The signed distance of a triangle mesh on a grid over the mesh's bounds padded by `margin`,
+// nodes `cell` apart. The magnitude is the distance to the nearest triangle; the sign comes from
+// the generalized winding number (inside where its magnitude is above 1/2), so a closed mesh
+// needs no particular orientation and nearly coincident points do not flip it. A mesh is closed
+// when every edge is shared by exactly two triangles; an open one is InvalidInput naming `what`
+// and an edge, unless `thickness` > 0: then the solid is the shell within thickness / 2 of the
+// surface (a plate, a sheet of a model). Empty meshes, indices out of range and non-finite points
+// are InvalidInput naming `what`.
+DistanceGrid meshDistance(const TriangleMesh& mesh, double cell, double margin, double thickness,
+  const std::string& what);
+
+// Exact fields of the simple solids, on the same kind of grid.
+DistanceGrid sphereDistance(const Vec3d& centre, double radius, double cell, double margin);
+DistanceGrid boxDistance(const Box& box, double cell, double margin);
+
+} // namespace pbf

@@ -1,0 +1,213 @@
+// Solids as signed distance fields (Solver/Scene/SignedDistance.h): a triangulated sphere and box
+// against their exact fields, the sign independent of orientation, open surfaces refused unless
+// given a thickness, and bad input named.
+#include "SignedDistance.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <string>
+
+using namespace pbf;
+
+namespace
+{
+
+// A unit icosahedron subdivided `levels` times and pushed onto the sphere of `radius` about c:
+// every triangle's corners are on the sphere, so its faces lie at most r (1 - cos(theta / 2))
+// inside it, theta the largest edge's angle.
+TriangleMesh icosphere(const Vec3d& c, double radius, int levels)
+{
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Vec3d> p = { { -1, t, 0 }, { 1, t, 0 }, { -1, -t, 0 }, { 1, -t, 0 }, { 0, -1, t },
+    { 0, 1, t }, { 0, -1, -t }, { 0, 1, -t }, { t, 0, -1 }, { t, 0, 1 }, { -t, 0, -1 },
+    { -t, 0, 1 } };
+  std::vector<std::array<std::uint32_t, 3>> f = { { 0, 11, 5 }, { 0, 5, 1 }, { 0, 1, 7 },
+    { 0, 7, 10 }, { 0, 10, 11 }, { 1, 5, 9 }, { 5, 11, 4 }, { 11, 10, 2 }, { 10, 7, 6 },
+    { 7, 1, 8 }, { 3, 9, 4 }, { 3, 4, 2 }, { 3, 2, 6 }, { 3, 6, 8 }, { 3, 8, 9 }, { 4, 9, 5 },
+    { 2, 4, 11 }, { 6, 2, 10 }, { 8, 6, 7 }, { 9, 8, 1 } };
+  for (Vec3d& q : p)
+  {
+    q = q * (1.0 / length(q));
+  }
+  for (int level = 0; level < levels; ++level)
+  {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> middle;
+    auto mid = [&](std::uint32_t a, std::uint32_t b) {
+      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+      auto it = middle.find(key);
+      if (it != middle.end())
+      {
+        return it->second;
+      }
+      const Vec3d m = (p[a] + p[b]) * 0.5;
+      p.push_back(m * (1.0 / length(m)));
+      return middle[key] = static_cast<std::uint32_t>(p.size() - 1);
+    };
+    std::vector<std::array<std::uint32_t, 3>> g;
+    for (const auto& tri : f)
+    {
+      const std::uint32_t a = mid(tri[0], tri[1]), b = mid(tri[1], tri[2]), d = mid(tri[2], tri[0]);
+      g.push_back({ tri[0], a, d });
+      g.push_back({ tri[1], b, a });
+      g.push_back({ tri[2], d, b });
+      g.push_back({ a, b, d });
+    }
+    f = g;
+  }
+  TriangleMesh mesh;
+  for (const Vec3d& q : p)
+  {
+    mesh.points.push_back(c + q * radius);
+  }
+  mesh.triangles = f;
+  return mesh;
+}
+
+TriangleMesh boxMesh(const Box& b)
+{
+  TriangleMesh m;
+  for (int k = 0; k < 8; ++k)
+  {
+    m.points.push_back({ k & 1 ? b.max.x : b.min.x, k & 2 ? b.max.y : b.min.y,
+      k & 4 ? b.max.z : b.min.z });
+  }
+  // Two triangles per face, outward: -x, +x, -y, +y, -z, +z.
+  m.triangles = { { 0, 4, 6 }, { 0, 6, 2 }, { 1, 3, 7 }, { 1, 7, 5 }, { 0, 1, 5 }, { 0, 5, 4 },
+    { 2, 6, 7 }, { 2, 7, 3 }, { 0, 2, 3 }, { 0, 3, 1 }, { 4, 5, 7 }, { 4, 7, 6 } };
+  return m;
+}
+
+// Largest |field - exact| over points on a lattice through the grid (between its nodes too).
+template <class Exact>
+double largestError(const DistanceGrid& g, Exact&& exact)
+{
+  double worst = 0;
+  for (double x = g.origin.x; x <= g.origin.x + (g.nx - 1) * g.cell; x += 0.37 * g.cell)
+  {
+    for (double y = g.origin.y; y <= g.origin.y + (g.ny - 1) * g.cell; y += 0.41 * g.cell)
+    {
+      for (double z = g.origin.z; z <= g.origin.z + (g.nz - 1) * g.cell; z += 0.43 * g.cell)
+      {
+        const Vec3d p{ x, y, z };
+        worst = std::max(worst, std::abs(g.at(p) - exact(p)));
+      }
+    }
+  }
+  return worst;
+}
+
+std::string errorOf(const TriangleMesh& mesh, double thickness)
+{
+  try
+  {
+    meshDistance(mesh, 0.02, 0.02, thickness, "obstacle \"part.stl\"");
+  }
+  catch (const InvalidInput& error)
+  {
+    return error.what();
+  }
+  return "";
+}
+
+} // namespace
+
+TEST(SignedDistance, ATriangulatedSphereMatchesTheExactField)
+{
+  const Vec3d c{ 0.3, 0.2, 0.1 };
+  const double r = 0.1, cell = 0.01;
+  const TriangleMesh mesh = icosphere(c, r, 3); // 1,280 triangles, edges of 0.079 rad
+  const DistanceGrid g = meshDistance(mesh, cell, 2 * cell, 0.0, "sphere mesh");
+  // Facets lie up to r (1 - cos(0.079 / 2)) = 0.08 mm inside the sphere. Trilinear
+  // interpolation of |p - c| - r errs by at most cell^2 / (4 rho) at rho = |p - c| (its Hessian
+  // is (I - n n^T) / rho): 0.5 mm from r / 2 = 5 cm out. Near the centre, where the field has its
+  // kink, the error grows as 1 / rho and nothing reads it (particles are outside the solid), so
+  // the comparison covers rho >= r / 2, where the fluid meets the sphere: 1 mm bounds both parts.
+  const auto exact = [&](const Vec3d& p) { return length(p - c) - r; };
+  const auto awayFromTheCentre = [&](const DistanceGrid& field) {
+    return largestError(field, [&](const Vec3d& p) {
+      return length(p - c) < 0.5 * r ? field.at(p) : exact(p);
+    });
+  };
+  EXPECT_LT(awayFromTheCentre(g), 1e-3);
+  EXPECT_LT(g.at(c), -0.099);
+  EXPECT_NEAR(g.at(c + Vec3d{ 0.15, 0, 0 }), 0.05, 1e-3);
+  // Away from the grid the field keeps growing: positive far outside.
+  EXPECT_NEAR(g.at(c + Vec3d{ 1.0, 0, 0 }), 0.9, 0.01);
+  // The gradient is the outward normal near the surface. On a cell face the trilinear gradient
+  // is a one-sided difference, whose tangential part is up to cell / (2 rho) = 0.05 here.
+  const Vec3d n = g.gradient(c + Vec3d{ 0, 0.105, 0 });
+  EXPECT_NEAR(n.y, 1.0, 0.02);
+  EXPECT_LT(std::abs(n.x), cell / 0.105);
+  EXPECT_LT(std::abs(n.z), cell / 0.105);
+  // The exact sphere on the same grid: interpolation error alone.
+  const DistanceGrid s = sphereDistance(c, r, cell, 2 * cell);
+  ASSERT_EQ(s.phi.size(), g.phi.size());
+  EXPECT_LT(awayFromTheCentre(s), 1e-3);
+}
+
+TEST(SignedDistance, TheSignDoesNotDependOnTheOrientation)
+{
+  TriangleMesh mesh = icosphere({ 0, 0, 0 }, 0.1, 2);
+  const DistanceGrid outward = meshDistance(mesh, 0.02, 0.02, 0.0, "sphere");
+  for (auto& t : mesh.triangles)
+  {
+    std::swap(t[1], t[2]);
+  }
+  const DistanceGrid inward = meshDistance(mesh, 0.02, 0.02, 0.0, "sphere");
+  EXPECT_EQ(outward.phi, inward.phi); // the same bits: distances are unsigned, |w| decides
+}
+
+TEST(SignedDistance, ATriangulatedBoxMatchesTheExactField)
+{
+  const Box b{ { 0.1, 0.0, 0.2 }, { 0.5, 0.3, 0.4 } };
+  const double cell = 0.025;
+  const DistanceGrid mesh = meshDistance(boxMesh(b), cell, cell, 0.0, "box mesh");
+  const DistanceGrid exact = boxDistance(b, cell, cell);
+  ASSERT_EQ(mesh.phi.size(), exact.phi.size());
+  // At the nodes the two are the same distance computed two ways: float rounding only.
+  double worst = 0;
+  for (std::size_t k = 0; k < mesh.phi.size(); ++k)
+  {
+    worst = std::max(worst, double(std::abs(mesh.phi[k] - exact.phi[k])));
+  }
+  EXPECT_LT(worst, 1e-6);
+  EXPECT_LT(exact.at({ 0.3, 0.15, 0.3 }), -0.099); // 0.1 m from the nearest faces (z)
+  EXPECT_GT(exact.at({ 0.3, 0.15, 0.45 }), 0.049);
+}
+
+TEST(SignedDistance, AnOpenSurfaceIsRefusedUnlessItHasAThickness)
+{
+  TriangleMesh plate = boxMesh({ { 0, 0, 0 }, { 0.2, 0.2, 0.01 } });
+  plate.triangles.pop_back(); // a hole in the +z face
+  const std::string error = errorOf(plate, 0.0);
+  EXPECT_NE(error.find("obstacle \"part.stl\""), std::string::npos) << error;
+  EXPECT_NE(error.find("not closed"), std::string::npos) << error;
+  EXPECT_NE(error.find("thickness"), std::string::npos) << error;
+
+  // A single square as a thin shell of 3 cm: inside within 1.5 cm of it, outside beyond.
+  TriangleMesh sheet;
+  sheet.points = { { 0, 0, 0 }, { 0.2, 0, 0 }, { 0.2, 0.2, 0 }, { 0, 0.2, 0 } };
+  sheet.triangles = { { 0, 1, 2 }, { 0, 2, 3 } };
+  const DistanceGrid g = meshDistance(sheet, 0.005, 0.01, 0.03, "sheet");
+  EXPECT_NEAR(g.at({ 0.1, 0.1, 0.0 }), -0.015, 1e-6);
+  EXPECT_NEAR(g.at({ 0.1, 0.1, 0.01 }), -0.005, 1e-6);
+  EXPECT_NEAR(g.at({ 0.1, 0.1, -0.025 }), 0.01, 1e-6);
+}
+
+TEST(SignedDistance, BadInputIsNamed)
+{
+  const TriangleMesh sphere = icosphere({ 0, 0, 0 }, 0.1, 1);
+  EXPECT_NE(errorOf(TriangleMesh{}, 0.0).find("no triangles"), std::string::npos);
+  TriangleMesh nan = sphere;
+  nan.points[3].y = std::nan("");
+  EXPECT_NE(errorOf(nan, 0.0).find("point 3 = (0"), std::string::npos) << errorOf(nan, 0.0);
+  TriangleMesh out = sphere;
+  out.triangles[5][1] = 999;
+  EXPECT_NE(errorOf(out, 0.0).find("triangle 5 names point 999"), std::string::npos);
+  EXPECT_THROW(meshDistance(sphere, 0.0, 0.0, 0.0, "s"), InvalidInput);
+  EXPECT_THROW(meshDistance(sphere, 1e-6, 0.0, 0.0, "s"), InvalidInput); // 2e5^3 nodes
+  EXPECT_THROW(sphereDistance({ 0, 0, 0 }, -1.0, 0.01, 0.0), InvalidInput);
+  EXPECT_THROW(boxDistance({ { 0, 0, 0 }, { 0, 1, 1 } }, 0.01, 0.0), InvalidInput);
+}
