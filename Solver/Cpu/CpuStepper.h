@@ -21,6 +21,12 @@ public:
   std::string description() const override;
   Statistics statistics() const override;
   Health health() const override;
+  // Density and lambda are evaluated again at the current positions, with the solids.
+  void setObstacles(const std::vector<DistanceGrid>& obstacles) override
+  {
+    fluid_.setObstacles(obstacles);
+    evaluateDensityAtRest();
+  }
   // Nothing else is state: the next step predicts, re-sorts (stably, from this order) and
   // recomputes every other array.
   void load(const Snapshot<float>& state) override { loadState(state); }

@@ -7,7 +7,9 @@
 
 #include "CellSort.h"
 #include "Equations.h"
+#include "Boundary.h"
 #include "HostParticles.h"
+#include "SignedDistance.h"
 #include "Stepper.h"
 
 #include <cstdint>
@@ -54,7 +56,38 @@ struct HostFluid
     f.c = coefficients;
     f.time = &time;
     f.tensile = tensile;
+    f.obstacles = obstacleViews.data();
+    f.obstacleCount = static_cast<int>(obstacleViews.size());
+    f.boundary = boundary;
     return f;
+  }
+
+  // The solids and the table of their sums (Boundary.h), in this precision.
+  void setObstacles(const std::vector<DistanceGrid>& solids)
+  {
+    obstacles = solids;
+    obstacleViews.clear();
+    for (const DistanceGrid& g : obstacles)
+    {
+      obstacleViews.push_back({ Vec3<Real>::from(g.origin), static_cast<Real>(1.0 / g.cell), g.nx,
+        g.ny, g.nz, g.phi.data() });
+    }
+    const double h = parameters.smoothingLength();
+    const auto k64 = Kernels<double>::make(h);
+    const double dq = parameters.sCorrDeltaQ * h;
+    const BoundaryTableData t = makeBoundaryTable(
+      parameters.particleSpacing, h, parameters.sCorrN, k64.poly6(dq * dq));
+    const auto n = static_cast<std::size_t>(t.samples);
+    boundaryValues.resize(4 * n);
+    for (std::size_t k = 0; k < n; ++k)
+    {
+      boundaryValues[k] = static_cast<Real>(t.poly6[k]);
+      boundaryValues[n + k] = static_cast<Real>(t.spiky[k]);
+      boundaryValues[2 * n + k] = static_cast<Real>(t.spiky2[k]);
+      boundaryValues[3 * n + k] = static_cast<Real>(t.tensile[k]);
+    }
+    boundary = { t.samples, static_cast<Real>((t.samples - 1) / h), boundaryValues.data(),
+      boundaryValues.data() + n, boundaryValues.data() + 2 * n, boundaryValues.data() + 3 * n };
   }
 
   HostParticles<Real> particles() { return { x, v, density, lambda, id }; }
@@ -91,6 +124,11 @@ struct HostFluid
   // Gather targets of the cell sort, kept to avoid allocating every step.
   std::vector<Vec3<Real>> gatherVec;
   std::vector<std::int64_t> gatherId;
+
+  std::vector<DistanceGrid> obstacles;
+  std::vector<DistanceGridView<Real>> obstacleViews;
+  std::vector<Real> boundaryValues;
+  BoundaryTable<Real> boundary{};
 };
 
 // The fields a stepper that does not own every particle it reads (a sub-domain, whose ghosts are

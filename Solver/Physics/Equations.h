@@ -3,6 +3,7 @@
 // Equation numbers refer to the paper. Particles are in cell-sorted order; i and j index it.
 #pragma once
 
+#include "Boundary.h"
 #include "Grid.h"
 #include "HostDevice.h"
 #include "Kernels.h"
@@ -116,7 +117,29 @@ struct FluidView
   // The tensile term is a once-per-step push: positionCorrection adds it in the step's first
   // projection only (so its displacement is k g0 dt^2 whatever the number of iterations).
   bool tensile;
+  // Solid obstacles (Boundary.h): obstacleCount signed distance grids and the table of the
+  // solid's sums. None unless a stepper sets them.
+  const DistanceGridView<Real>* obstacles;
+  int obstacleCount;
+  BoundaryTable<Real> boundary;
 };
+
+// A particle inside an obstacle goes to its surface, along the field's gradient.
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE Vec3<Real> collideWithObstacles(Vec3<Real> q, const FluidView<Real, Neighbors>& f)
+{
+  for (int o = 0; o < f.obstacleCount; ++o)
+  {
+    Vec3<Real> gradient;
+    const Real d = f.obstacles[o].at(q, &gradient);
+    const Real g = length(gradient);
+    if (d < Real(0) && g > Real(0))
+    {
+      q -= gradient * (d / g);
+    }
+  }
+  return q;
+}
 
 // Collision with the domain box: project the particle back inside (the paper's simple response).
 template <class Real>
@@ -225,7 +248,7 @@ PBF_HD PBF_INLINE void predictPosition(std::uint32_t i, const FluidView<Real, Ne
   const Real dt = f.time->dt;
   const Vec3<Real> v = f.v[i] + f.c.gravity * dt;
   f.v[i] = v;
-  f.p[i] = collideWithBox(f.x[i] + v * dt, f.c);
+  f.p[i] = collideWithObstacles(collideWithBox(f.x[i] + v * dt, f.c), f);
 }
 
 // Eq. 2 (poly6 density), eq. 1 (C_i = rho_i / rho_0 - 1), eq. 8 (spiky constraint gradients) and
@@ -251,6 +274,20 @@ PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real, N
       }
     });
   });
+  // Each obstacle within h: its share, the lattice continued beyond its tangent plane (Boundary.h).
+  for (int o = 0; o < f.obstacleCount; ++o)
+  {
+    Vec3<Real> gradient;
+    const Real d = f.obstacles[o].at(pi, &gradient);
+    const Real g = length(gradient);
+    if (d < f.c.kernels.h && g > Real(0))
+    {
+      const BoundarySample<Real> b = sampleBoundary(f.boundary, d);
+      rho += b.poly6;
+      gradI += gradient * (b.spiky * f.c.massOverRho0 / g);
+      sumGradJ2 += b.spiky2 * f.c.massOverRho0 * f.c.massOverRho0;
+    }
+  }
   rho *= f.c.mass;
   Real C = rho * f.c.inverseRestDensity - Real(1);
   if (f.c.unilateral && C < Real(0))
@@ -284,6 +321,18 @@ PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real,
       }
     });
   });
+  // The solid's share carries lambda_i, as a mirror image does (Boundary.h).
+  for (int o = 0; o < f.obstacleCount; ++o)
+  {
+    Vec3<Real> gradient;
+    const Real d = f.obstacles[o].at(pi, &gradient);
+    const Real g = length(gradient);
+    if (d < f.c.kernels.h && g > Real(0))
+    {
+      const BoundarySample<Real> b = sampleBoundary(f.boundary, d);
+      delta += gradient * ((b.spiky * (lambdaI + lambdaI) + tensile * b.tensile) / g);
+    }
+  }
   f.scratch[i] = delta * f.c.massOverRho0;
 }
 
@@ -291,7 +340,7 @@ PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real,
 template <class Real, class Neighbors>
 PBF_HD PBF_INLINE void applyCorrection(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
-  f.p[i] = collideWithBox(f.p[i] + f.scratch[i], f.c);
+  f.p[i] = collideWithObstacles(collideWithBox(f.p[i] + f.scratch[i], f.c), f);
 }
 
 // Algorithm 1, line 21: v_i = (x*_i - x_i) / dt. The density is final now, so the volume that the

@@ -9,6 +9,16 @@
 namespace pbf
 {
 
+void Stepper::setObstacles(const std::vector<DistanceGrid>& obstacles)
+{
+  if (!obstacles.empty())
+  {
+    throw InvalidInput("obstacles: " + std::to_string(obstacles.size()) +
+      " solid(s) given to the " + description() +
+      " backend, which has no solid obstacles yet: choose Serial or CPU (OpenMP)");
+  }
+}
+
 const char* toString(Backend backend)
 {
   switch (backend)

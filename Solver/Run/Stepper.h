@@ -3,6 +3,7 @@
 #pragma once
 
 #include "Parameters.h"
+#include "SignedDistance.h"
 #include "Vec3.h"
 
 #include <cstdint>
@@ -152,6 +153,12 @@ public:
   // arrays of different lengths.
   virtual void load(const Snapshot<float>& state) = 0;
   virtual void load(const Snapshot<double>& state) = 0;
+
+  // Solid obstacles the fluid flows around, as signed distance grids (Scene/SignedDistance.h,
+  // Physics/Boundary.h), replacing any set before; static, part of the configuration like the
+  // parameters. The default throws InvalidInput naming the backend: the serial and OpenMP
+  // steppers have obstacles so far.
+  virtual void setObstacles(const std::vector<DistanceGrid>& obstacles);
 };
 
 // Throws InvalidInput naming the step when dt is not a positive finite number.

@@ -1,0 +1,126 @@
+// Solid obstacles as boundaries of the fluid: what a particle near a solid feels, from the solid's
+// signed distance field (Scene/SignedDistance.h) alone, one lookup per particle per solid.
+//
+// The solid acts as the mirror walls do (Equations.h, WallMirrors): as if the fluid were reflected
+// into it. For a flat solid and a particle at distance d from it on a column of the initial
+// lattice, the reflected lattice has layers at d, d + s, ... inside (the particle's own image
+// first), so its sums depend only on d: they are tabulated once, over d in [0, h]
+// (BoundaryTable), and a curved solid is taken as its tangent plane at the particle. A particle of
+// the initial lattice next to a flat, lattice-aligned solid then reads exactly rho_0 at rest, as
+// next to a mirror wall; the solid's share enters the density, the constraint gradient of eq. 8,
+// lambda's denominator (eq. 11) and the position correction (eq. 14, with lambda_i for the
+// solid's share, as a mirror image carries its particle's lambda, and s_corr), and nothing else:
+// the walls are free-slip, as the mirror walls are. A particle found inside a solid is moved to
+// its surface along the field's gradient, as the box's collision moves it to the wall.
+#pragma once
+
+#include "HostDevice.h"
+#include "Kernels.h"
+#include "Vec3.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace pbf
+{
+
+// A signed distance grid (DistanceGrid) as the stages read it: raw pointers, host or device.
+template <class Real>
+struct DistanceGridView
+{
+  Vec3<Real> origin;
+  Real inverseCell;
+  int nx, ny, nz;
+  const float* phi; // x fastest
+
+  // The trilinear field at q and its gradient, clamped to the grid (a particle beyond the grid is
+  // farther than h from the solid, whose grid is padded by h).
+  PBF_HD PBF_INLINE Real at(const Vec3<Real>& q, Vec3<Real>* gradient) const
+  {
+    const Real u[3] = { (q.x - origin.x) * inverseCell, (q.y - origin.y) * inverseCell,
+      (q.z - origin.z) * inverseCell };
+    const int n[3] = { nx, ny, nz };
+    int i[3];
+    Real t[3];
+    for (int a = 0; a < 3; ++a)
+    {
+      Real c = u[a] < Real(0) ? Real(0) : u[a];
+      c = c > Real(n[a] - 1) ? Real(n[a] - 1) : c;
+      i[a] = static_cast<int>(c);
+      i[a] = i[a] > n[a] - 2 ? n[a] - 2 : i[a];
+      t[a] = c - Real(i[a]);
+    }
+    Real value = Real(0);
+    Real g[3] = { Real(0), Real(0), Real(0) };
+    for (int corner = 0; corner < 8; ++corner)
+    {
+      const int d[3] = { corner & 1, (corner >> 1) & 1, (corner >> 2) & 1 };
+      const Real node = static_cast<Real>(
+        phi[(static_cast<std::size_t>(i[2] + d[2]) * ny + (i[1] + d[1])) * nx + (i[0] + d[0])]);
+      Real w[3];
+      for (int a = 0; a < 3; ++a)
+      {
+        w[a] = d[a] ? t[a] : Real(1) - t[a];
+      }
+      value += w[0] * w[1] * w[2] * node;
+      g[0] += (d[0] ? Real(1) : Real(-1)) * w[1] * w[2] * node;
+      g[1] += (d[1] ? Real(1) : Real(-1)) * w[0] * w[2] * node;
+      g[2] += (d[2] ? Real(1) : Real(-1)) * w[0] * w[1] * node;
+    }
+    if (gradient)
+    {
+      *gradient = Vec3<Real>{ g[0], g[1], g[2] } * inverseCell;
+    }
+    return value;
+  }
+};
+
+// The sums over the reflected lattice beyond a flat surface, for a particle at distance d from it
+// (d in [0, h], `samples` points, linear between them), along the surface's outward normal n:
+//   poly6:   sum W(r)                                   (density, before the mass)
+//   spiky:   sum gradW(r) . n                           (eq. 8 and 14, before m / rho_0)
+//   spiky2:  sum |gradW(r)|^2                           (eq. 11's denominator)
+//   tensile: sum gradW(r) . n (-(W(r) / W(delta_q))^n)  (s_corr, before this step's coefficient)
+// with r from the lattice site to the particle.
+template <class Real>
+struct BoundaryTable
+{
+  int samples;
+  Real inverseStep; // (samples - 1) / h
+  const Real* poly6;
+  const Real* spiky;
+  const Real* spiky2;
+  const Real* tensile;
+};
+
+template <class Real>
+struct BoundarySample
+{
+  Real poly6, spiky, spiky2, tensile;
+};
+
+template <class Real>
+PBF_HD PBF_INLINE BoundarySample<Real> sampleBoundary(const BoundaryTable<Real>& table, Real d)
+{
+  Real u = (d < Real(0) ? Real(0) : d) * table.inverseStep;
+  const Real last = Real(table.samples - 1);
+  u = u > last ? last : u;
+  int k = static_cast<int>(u);
+  k = k > table.samples - 2 ? table.samples - 2 : k;
+  const Real t = u - Real(k);
+  auto lerp = [&](const Real* a) { return a[k] + (a[k + 1] - a[k]) * t; };
+  return { lerp(table.poly6), lerp(table.spiky), lerp(table.spiky2), lerp(table.tensile) };
+}
+
+// The table's values, computed in double on the host: the particle at (0, 0, d) and its lattice
+// column's layers reflected in the plane z = 0 (sites at z = -d, -d - s, ...).
+struct BoundaryTableData
+{
+  std::vector<double> poly6, spiky, spiky2, tensile;
+  int samples = 0;
+  double h = 0;
+};
+BoundaryTableData makeBoundaryTable(double spacing, double h, double sCorrN, double wDeltaQ,
+  int samples = 129);
+
+} // namespace pbf
