@@ -124,6 +124,24 @@ struct FluidView
   BoundaryTable<Real> boundary;
 };
 
+// Calls visit(n, b) for each solid within h of q: n its outward unit normal there (the field's
+// gradient), b the table's sums at q's distance from it.
+template <class Real, class Neighbors, class Visit>
+PBF_HD PBF_INLINE void forEachNearSolid(
+  const Vec3<Real>& q, const FluidView<Real, Neighbors>& f, Visit&& visit)
+{
+  for (int o = 0; o < f.obstacleCount; ++o)
+  {
+    Vec3<Real> gradient;
+    const Real d = f.obstacles[o].at(q, &gradient);
+    const Real g = length(gradient);
+    if (d < f.c.kernels.h && g > Real(0))
+    {
+      visit(gradient * (Real(1) / g), sampleBoundary(f.boundary, d));
+    }
+  }
+}
+
 // A particle inside an obstacle goes to its surface, along the field's gradient.
 template <class Real, class Neighbors>
 PBF_HD PBF_INLINE Vec3<Real> collideWithObstacles(Vec3<Real> q, const FluidView<Real, Neighbors>& f)
@@ -274,20 +292,12 @@ PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real, N
       }
     });
   });
-  // Each obstacle within h: its share, the lattice continued beyond its tangent plane (Boundary.h).
-  for (int o = 0; o < f.obstacleCount; ++o)
-  {
-    Vec3<Real> gradient;
-    const Real d = f.obstacles[o].at(pi, &gradient);
-    const Real g = length(gradient);
-    if (d < f.c.kernels.h && g > Real(0))
-    {
-      const BoundarySample<Real> b = sampleBoundary(f.boundary, d);
-      rho += b.poly6;
-      gradI += gradient * (b.spiky * f.c.massOverRho0 / g);
-      sumGradJ2 += b.spiky2 * f.c.massOverRho0 * f.c.massOverRho0;
-    }
-  }
+  // Each solid within h: its share, the lattice reflected in its tangent plane (Boundary.h).
+  forEachNearSolid(pi, f, [&](const Vec3<Real>& n, const BoundarySample<Real>& b) {
+    rho += b.poly6;
+    gradI += n * (b.spiky * f.c.massOverRho0);
+    sumGradJ2 += b.spiky2 * f.c.massOverRho0 * f.c.massOverRho0;
+  });
   rho *= f.c.mass;
   Real C = rho * f.c.inverseRestDensity - Real(1);
   if (f.c.unilateral && C < Real(0))
@@ -322,17 +332,9 @@ PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real,
     });
   });
   // The solid's share carries lambda_i, as a mirror image does (Boundary.h).
-  for (int o = 0; o < f.obstacleCount; ++o)
-  {
-    Vec3<Real> gradient;
-    const Real d = f.obstacles[o].at(pi, &gradient);
-    const Real g = length(gradient);
-    if (d < f.c.kernels.h && g > Real(0))
-    {
-      const BoundarySample<Real> b = sampleBoundary(f.boundary, d);
-      delta += gradient * ((b.spiky * (lambdaI + lambdaI) + tensile * b.tensile) / g);
-    }
-  }
+  forEachNearSolid(pi, f, [&](const Vec3<Real>& n, const BoundarySample<Real>& b) {
+    delta += n * (b.spiky * (lambdaI + lambdaI) + tensile * b.tensile);
+  });
   f.scratch[i] = delta * f.c.massOverRho0;
 }
 
