@@ -537,13 +537,17 @@ std::unique_ptr<pbf::Simulation> vtkPBFSimulation::vtkInternals::Build(
   {
     ranks->recover();
   }
-  if (input)
+  auto simulation = input
+    ? std::make_unique<pbf::Simulation>(scene, key.parameters, key.backend, key.precision,
+        vtkPBFBatchFromInput(input), ranks)
+    : std::make_unique<pbf::Simulation>(scene, key.parameters, key.backend, key.precision, ranks);
+  if (simulation->seededInsideSolids() > 0 && (!ranks || ranks->rank() == 0))
   {
-    return std::make_unique<pbf::Simulation>(scene, key.parameters, key.backend, key.precision,
-      vtkPBFBatchFromInput(input), ranks);
+    vtkWarningWithObjectMacro(self, << simulation->seededInsideSolids()
+                                    << " initial particles lay inside the scene's obstacles "
+                                       "and were removed before the first step.");
   }
-  return std::make_unique<pbf::Simulation>(
-    scene, key.parameters, key.backend, key.precision, ranks);
+  return simulation;
 }
 
 //------------------------------------------------------------------------------

@@ -48,12 +48,16 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
 }
 
 Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
-  Precision precision, const ParticleBatch& initial, distributed::Communicator* communicator)
+  Precision precision, const ParticleBatch& given, distributed::Communicator* communicator)
   : scene_(scene)
   , parameters_(withSceneDomain(parameters, scene))
   , layersEmitted_(scene.emitters.size(), 0)
 {
   parameters_.validate();
+  // The solids, and the fluid not inside them (seeded inside, it would be thrown out at once).
+  const std::vector<DistanceGrid> solids = solidFields(scene_.solids, parameters_);
+  const ParticleBatch initial =
+    solids.empty() ? given : outsideSolids(given, solids, seededInsideSolids_);
   if (initial.position.empty() && scene_.emitters.empty())
   {
     if (!scene_.boxes.empty() || !scene_.spheres.empty())
@@ -87,6 +91,10 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   stepper_ = communicator
     ? distributed::makeSubdomainStepper(*communicator, backend, precision, parameters_, initial)
     : makeStepper(backend, precision, parameters_, initial);
+  if (!solids.empty())
+  {
+    stepper_->setObstacles(solids);
+  }
   nextId_ = static_cast<std::int64_t>(initial.position.size());
 
   // The divergence limits, from the initial state and the scene.

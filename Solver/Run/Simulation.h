@@ -153,6 +153,9 @@ public:
   SimulationCheckpoint checkpoint() const;
   void restore(const SimulationCheckpoint& checkpoint);
 
+  // Initial particles that lay inside a solid obstacle of the scene and were removed.
+  std::size_t seededInsideSolids() const { return seededInsideSolids_; }
+
   std::uint64_t stepCount() const { return steps_; }
   // Ids run 0..idCount()-1: the initial particles and every one an emitter has released.
   std::int64_t idCount() const { return nextId_; }
@@ -183,6 +186,7 @@ private:
   std::vector<std::int64_t> layersEmitted_; // per emitter
   DivergenceLimits limits_;
   std::uint64_t checkInterval_ = 1;
+  std::size_t seededInsideSolids_ = 0;
   std::uint64_t lastGoodStep_ = 0;
   double lastGoodSpeed_ = 0; // max speed at lastGoodStep_; NaN when not known (after restore)
 };

@@ -129,9 +129,60 @@ bool inside(const Vec3d& p, const Box& box)
     p.y <= box.max.y && p.z <= box.max.z;
 }
 
+// "obstacles": [{"type": "box", "min": [...], "max": [...]}, {"type": "sphere", "center": [...],
+// "radius": r}]. Where they lie against the domain is checked when the run is built (solidFields).
+std::vector<SolidRegion> parseObstacles(const json& obstacles)
+{
+  if (!obstacles.is_array())
+  {
+    reject(".obstacles", obstacles, "must be an array of solids");
+  }
+  // Each solid is one distance lookup per particle per pass: a few describe a scene, hundreds
+  // would be a mesh, which is what a mesh obstacle is for.
+  constexpr std::size_t kMostObstacles = 64;
+  if (obstacles.size() > kMostObstacles)
+  {
+    reject(".obstacles", json(obstacles.size()),
+      "at most " + std::to_string(kMostObstacles) + " obstacles");
+  }
+  std::vector<SolidRegion> solids;
+  for (std::size_t k = 0; k < obstacles.size(); ++k)
+  {
+    const std::string path = ".obstacles[" + std::to_string(k) + "]";
+    const json& item = obstacles[k];
+    if (!item.is_object() || !item.contains("type") || !item["type"].is_string())
+    {
+      reject(path + ".type", item.is_object() && item.contains("type") ? item["type"] : json(),
+        "each obstacle needs a type, \"box\" or \"sphere\"");
+    }
+    const std::string type = item["type"].get<std::string>();
+    SolidRegion solid;
+    if (type == "box")
+    {
+      requireKeys(item, path, { "type", "min", "max" }, { "min", "max" });
+      solid.kind = SolidRegion::Kind::Box;
+      solid.box = { vector3(item, path, "min"), vector3(item, path, "max") };
+      requireOrdered(solid.box.min, solid.box.max, path, item["max"]);
+    }
+    else if (type == "sphere")
+    {
+      requireKeys(item, path, { "type", "center", "radius" }, { "center", "radius" });
+      solid.kind = SolidRegion::Kind::Sphere;
+      solid.center = vector3(item, path, "center");
+      solid.radius = positive(item, path, "radius");
+    }
+    else
+    {
+      reject(path + ".type", item["type"], "must be \"box\" or \"sphere\"");
+    }
+    solids.push_back(solid);
+  }
+  return solids;
+}
+
 Scene parse(const json& root)
 {
-  requireKeys(root, "", { "name", "description", "domain", "fluid", "emitters" },
+  requireKeys(root, "", { "name", "description", "domain", "fluid", "emitters", "obstacles" },
     { "domain", "fluid" });
   Scene scene;
   if (root.contains("name"))
@@ -251,6 +302,10 @@ Scene parse(const json& root)
   if (scene.boxes.empty() && scene.spheres.empty() && scene.emitters.empty())
   {
     reject(".fluid", fluid, "the scene has no fluid region and no emitter");
+  }
+  if (root.contains("obstacles"))
+  {
+    scene.solids = parseObstacles(root["obstacles"]);
   }
   return scene;
 }

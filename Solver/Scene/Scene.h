@@ -4,6 +4,7 @@
 #pragma once
 
 #include "Parameters.h"
+#include "Solids.h"
 #include "Stepper.h"
 #include "Vec3.h"
 
@@ -45,6 +46,7 @@ struct Scene
   std::vector<FluidBox> boxes;
   std::vector<FluidSphere> spheres;
   std::vector<Emitter> emitters;
+  std::vector<SolidRegion> solids; // "obstacles": what the fluid flows around
 };
 
 // Throws InvalidInput naming the key path and value ("fluid[1].radius = -2: must be > 0") for

@@ -209,3 +209,95 @@ TEST(Obstacle, ABackendWithoutObstaclesSaysSo)
   EXPECT_NE(message.find("rank 0 of 1"), std::string::npos) << message; // the backend's description
   EXPECT_NE(message.find("Serial or CPU (OpenMP)"), std::string::npos) << message;
 }
+
+namespace
+{
+
+// The dam break's tank with a sphere standing on the floor in the surge's way and a box wall
+// that cuts into the column's far corner: the fluid inside the box is removed.
+const char* const kSceneWithSolids = R"({
+  "name": "dam_break_solids",
+  "domain": { "min": [0, 0, 0], "max": [1.6, 0.8, 0.6] },
+  "fluid": [ { "type": "box", "min": [0, 0, 0], "max": [0.4, 0.6, 0.6] } ],
+  "obstacles": [
+    { "type": "sphere", "center": [0.9, 0.12, 0.3], "radius": 0.12 },
+    { "type": "box", "min": [0.3, -0.5, -0.5], "max": [0.5, 0.2, 0.2] }
+  ]
+})";
+
+std::string sceneError(const std::string& obstacles)
+{
+  try
+  {
+    parseScene(R"({"domain": {"min": [0, 0, 0], "max": [1, 1, 1]},
+      "fluid": [{"type": "box", "min": [0, 0, 0], "max": [0.5, 0.5, 0.5]}],
+      "obstacles": )" + obstacles + "}");
+  }
+  catch (const InvalidInput& error)
+  {
+    return error.what();
+  }
+  return "";
+}
+
+} // namespace
+
+TEST(Obstacle, ASceneFileNamesItsSolidsAndTheFluidInsideThemIsRemoved)
+{
+  const Scene scene = parseScene(kSceneWithSolids);
+  ASSERT_EQ(scene.solids.size(), 2u);
+  Parameters p;
+  p.particleSpacing = 0.04;
+  Simulation simulation(scene, p, Backend::OpenMP, Precision::Single);
+  // The column is 10 x 15 x 15 sites; the box takes x 0.3..0.4 (2 sites) by y < 0.2 (5) by
+  // z < 0.2 (5) of it: 50 particles.
+  EXPECT_EQ(simulation.seededInsideSolids(), 50u);
+  EXPECT_EQ(simulation.stepper().size(), 10u * 15 * 15 - 50);
+  EXPECT_EQ(simulation.idCount(), static_cast<std::int64_t>(simulation.stepper().size()));
+  simulation.advanceTo(0.5);
+  Snapshot<double> state;
+  simulation.stepper().read(state);
+  double deepest = 0;
+  for (const Vec3d& x : state.position)
+  {
+    deepest = std::min(deepest, length(x - Vec3d{ 0.9, 0.12, 0.3 }) - 0.12);
+    if (x.x > 0.3 && x.x < 0.5 && x.y < 0.2 && x.z < 0.2)
+    {
+      deepest = std::min(deepest, -std::min({ x.x - 0.3, 0.5 - x.x, 0.2 - x.y, 0.2 - x.z }));
+    }
+  }
+  EXPECT_GT(deepest, -0.002); // as for the sphere above: the field's interpolation and rounding
+}
+
+TEST(Obstacle, SceneErrorsNameTheObstacle)
+{
+  EXPECT_NE(sceneError("3").find(".obstacles = 3: must be an array"), std::string::npos)
+    << sceneError("3");
+  EXPECT_NE(sceneError(R"([{"type": "cone"}])").find(".obstacles[0].type"), std::string::npos);
+  EXPECT_NE(sceneError(R"([{"type": "sphere", "center": [0, 0, 0], "radius": -1}])")
+              .find(".obstacles[0].radius = -1: must be > 0"),
+    std::string::npos);
+  EXPECT_NE(sceneError(R"([{"type": "box", "min": [0, 0, 0], "max": [1, 0, 1]}])")
+              .find(".obstacles[0].max"),
+    std::string::npos);
+  EXPECT_NE(sceneError(R"([{"type": "box", "min": [0, 0, 0], "max": [1, 1, 1], "size": 2}])")
+              .find("size"),
+    std::string::npos);
+  // Outside the domain: named when the run is built.
+  Scene scene = parseScene(R"({"domain": {"min": [0, 0, 0], "max": [1, 1, 1]},
+    "fluid": [{"type": "box", "min": [0, 0, 0], "max": [0.5, 0.5, 0.5]}],
+    "obstacles": [{"type": "sphere", "center": [5, 5, 5], "radius": 0.5}]})");
+  Parameters p;
+  p.particleSpacing = 0.05;
+  try
+  {
+    Simulation simulation(scene, p, Backend::Serial, Precision::Single);
+    ADD_FAILURE() << "an obstacle outside the domain was accepted";
+  }
+  catch (const InvalidInput& error)
+  {
+    EXPECT_NE(std::string(error.what()).find("obstacles[0]: lies outside the domain"),
+      std::string::npos)
+      << error.what();
+  }
+}

@@ -1,0 +1,95 @@
+#include "Solids.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+
+namespace pbf
+{
+
+std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, const Parameters& p)
+{
+  const double h = p.smoothingLength();
+  const Box& d = p.domain;
+  std::vector<DistanceGrid> fields;
+  for (std::size_t k = 0; k < solids.size(); ++k)
+  {
+    const SolidRegion& s = solids[k];
+    const Vec3d r{ s.radius, s.radius, s.radius };
+    const Box bounds = s.kind == SolidRegion::Kind::Box ? s.box : Box{ s.center - r, s.center + r };
+    // Only what the fluid can reach: the solid within h of the domain.
+    const Box reach{ { std::max(bounds.min.x, d.min.x - h), std::max(bounds.min.y, d.min.y - h),
+                       std::max(bounds.min.z, d.min.z - h) },
+      { std::min(bounds.max.x, d.max.x + h), std::min(bounds.max.y, d.max.y + h),
+        std::min(bounds.max.z, d.max.z + h) } };
+    if (!(reach.min.x < reach.max.x && reach.min.y < reach.max.y && reach.min.z < reach.max.z))
+    {
+      std::ostringstream text;
+      text << "obstacles[" << k << "]: lies outside the domain (" << d.min.x << ", " << d.min.y
+           << ", " << d.min.z << ") - (" << d.max.x << ", " << d.max.y << ", " << d.max.z << ")";
+      throw InvalidInput(text.str());
+    }
+    // Nodes s/2 apart, or coarser for solids so large that all of them together would pass 2^24
+    // nodes (64 MiB of floats).
+    const Vec3d size = reach.max - reach.min + Vec3d{ 2 * h, 2 * h, 2 * h };
+    const double budget = 16777216.0 / static_cast<double>(solids.size());
+    const double cell =
+      std::max(0.5 * p.particleSpacing, std::cbrt(size.x * size.y * size.z / budget));
+    if (s.kind == SolidRegion::Kind::Sphere)
+    {
+      // The sphere's own grid, as far as the fluid can reach it.
+      DistanceGrid g = sphereDistance(s.center, s.radius, cell, h);
+      fields.push_back(std::move(g));
+    }
+    else
+    {
+      // The box's field is exact everywhere; the grid covers the reachable part of it only.
+      DistanceGrid g = boxDistance(reach, cell, h);
+      const Vec3d centre = (s.box.min + s.box.max) * 0.5, half = (s.box.max - s.box.min) * 0.5;
+      for (int kz = 0; kz < g.nz; ++kz)
+      {
+        for (int j = 0; j < g.ny; ++j)
+        {
+          for (int i = 0; i < g.nx; ++i)
+          {
+            const Vec3d q = g.nodePosition(i, j, kz);
+            const Vec3d a{ std::abs(q.x - centre.x) - half.x, std::abs(q.y - centre.y) - half.y,
+              std::abs(q.z - centre.z) - half.z };
+            const Vec3d out{ std::max(a.x, 0.0), std::max(a.y, 0.0), std::max(a.z, 0.0) };
+            g.node(i, j, kz) =
+              static_cast<float>(length(out) + std::min(std::max({ a.x, a.y, a.z }), 0.0));
+          }
+        }
+      }
+      fields.push_back(std::move(g));
+    }
+  }
+  return fields;
+}
+
+ParticleBatch outsideSolids(
+  const ParticleBatch& batch, const std::vector<DistanceGrid>& fields, std::size_t& removed)
+{
+  ParticleBatch kept;
+  removed = 0;
+  for (std::size_t i = 0; i < batch.position.size(); ++i)
+  {
+    bool inside = false;
+    for (const DistanceGrid& g : fields)
+    {
+      inside = inside || g.at(batch.position[i]) < 0.0;
+    }
+    if (inside)
+    {
+      ++removed;
+      continue;
+    }
+    kept.position.push_back(batch.position[i]);
+    kept.velocity.push_back(batch.velocity[i]);
+    kept.id.push_back(static_cast<std::int64_t>(kept.id.size()));
+  }
+  return kept;
+}
+
+} // namespace pbf
