@@ -306,16 +306,20 @@ DistanceGrid boxDistance(const Box& box, double cell, double margin)
     throw InvalidInput("box " + format(box.min) + " - " + format(box.max) +
       ": needs finite corners with min < max on every axis");
   }
-  DistanceGrid g = gridOver(box.min, box.max, cell, margin, "box");
+  return boxDistanceOn(box, gridOver(box.min, box.max, cell, margin, "box"));
+}
+
+DistanceGrid boxDistanceOn(const Box& box, DistanceGrid grid)
+{
   const Vec3d centre = (box.min + box.max) * 0.5, half = (box.max - box.min) * 0.5;
-  forEachNode(g, [&](const Vec3d& p) {
+  forEachNode(grid, [&](const Vec3d& p) {
     // Outside: the distance to the box; inside: minus the distance to the nearest face.
     const Vec3d q{ std::abs(p.x - centre.x) - half.x, std::abs(p.y - centre.y) - half.y,
       std::abs(p.z - centre.z) - half.z };
     const Vec3d out{ std::max(q.x, 0.0), std::max(q.y, 0.0), std::max(q.z, 0.0) };
     return length(out) + std::min(std::max({ q.x, q.y, q.z }), 0.0);
   });
-  return g;
+  return grid;
 }
 
 } // namespace pbf

@@ -60,5 +60,7 @@ DistanceGrid meshDistance(const TriangleMesh& mesh, double cell, double margin, 
 // Exact fields of the simple solids, on the same kind of grid.
 DistanceGrid sphereDistance(const Vec3d& centre, double radius, double cell, double margin);
 DistanceGrid boxDistance(const Box& box, double cell, double margin);
+// The box's exact field on the nodes of `grid` (which may cover only part of the box).
+DistanceGrid boxDistanceOn(const Box& box, DistanceGrid grid);
 
 } // namespace pbf

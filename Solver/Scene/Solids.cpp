@@ -45,24 +45,7 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
     else
     {
       // The box's field is exact everywhere; the grid covers the reachable part of it only.
-      DistanceGrid g = boxDistance(reach, cell, h);
-      const Vec3d centre = (s.box.min + s.box.max) * 0.5, half = (s.box.max - s.box.min) * 0.5;
-      for (int kz = 0; kz < g.nz; ++kz)
-      {
-        for (int j = 0; j < g.ny; ++j)
-        {
-          for (int i = 0; i < g.nx; ++i)
-          {
-            const Vec3d q = g.nodePosition(i, j, kz);
-            const Vec3d a{ std::abs(q.x - centre.x) - half.x, std::abs(q.y - centre.y) - half.y,
-              std::abs(q.z - centre.z) - half.z };
-            const Vec3d out{ std::max(a.x, 0.0), std::max(a.y, 0.0), std::max(a.z, 0.0) };
-            g.node(i, j, kz) =
-              static_cast<float>(length(out) + std::min(std::max({ a.x, a.y, a.z }), 0.0));
-          }
-        }
-      }
-      fields.push_back(std::move(g));
+      fields.push_back(boxDistanceOn(s.box, boxDistance(reach, cell, h)));
     }
   }
   return fields;
