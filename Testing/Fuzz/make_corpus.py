@@ -54,6 +54,13 @@ write("huge_scorr_n", scene("dam_break") + tail(particleSpacing=0.2, timeStep=0.
 # Found by fuzzing: gravity 1.7e156 made the automatic time step 0 (now InvalidInput naming it).
 write("automatic_step_underflow", scene("stream") + tail(particleSpacing=0.1, gy=1.7164750796028833e156,
                                                          iterations=40, flags=1))
+# Solids: a sphere in the surge's way and a box cutting into the column (its fluid removed).
+write("dam_break_obstacles_coarse", json.dumps({
+    "domain": {"min": [0, 0, 0], "max": [1.6, 0.8, 0.6]},
+    "fluid": [{"type": "box", "min": [0, 0, 0], "max": [0.4, 0.6, 0.6]}],
+    "obstacles": [{"type": "sphere", "center": [0.9, 0.12, 0.3], "radius": 0.12},
+                  {"type": "box", "min": [0.3, -0.5, -0.5], "max": [0.5, 0.2, 0.2]}]}).encode()
+      + tail(particleSpacing=0.1))
 write("not_json", b"domain: [0, 1]\n")
 write("number_beyond_double", b'{"domain": {"min": [0,0,0], "max": [1e400,1,1]}, "fluid": []}')
 write("unknown_key", json.dumps({"domain": {"min": [0, 0, 0], "max": [1, 1, 1]}, "fluid": [],
