@@ -100,6 +100,10 @@ struct StepConstants
   // This step's dt and what follows from it, in the stepper's memory (device memory on a GPU):
   // the stepper writes it before a step, so a captured step reads the current values.
   const StepTime<Real>* time;
+  // Solid obstacles (Physics/Boundary.h), in the stepper's memory; none unless it sets them.
+  const DistanceGridView<Real>* obstacles;
+  int obstacleCount;
+  BoundaryTable<Real> boundary;
 };
 
 // The constants of a step for given parameters: skin is how far beyond h the masks reach, as a
@@ -151,6 +155,9 @@ FluidView<Real> plainView(const StepConstants<Real>& k)
   f.grid = GridView<Real>{ k.geometry, nullptr, nullptr };
   f.c = k.c;
   f.time = k.time;
+  f.obstacles = k.obstacles;
+  f.obstacleCount = k.obstacleCount;
+  f.boundary = k.boundary;
   return f;
 }
 
@@ -200,6 +207,9 @@ FluidView<Real, MaskedNeighbors<Real>> solverView(const StepBuffers<Real>& b,
     b.stride, k.schedule.enabled != 0 };
   f.c = k.c;
   f.time = k.time;
+  f.obstacles = k.obstacles;
+  f.obstacleCount = k.obstacleCount;
+  f.boundary = k.boundary;
   return f;
 }
 
@@ -337,7 +347,9 @@ void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
       {
         updateVelocity(i, apply); // line 21 needs only particle i's own corrected position
       }
-      return static_cast<double>(length(delta));
+      // What the masks must allow for: delta p_i, or more where a solid moved the particle on.
+      const Real moved = f.obstacleCount > 0 ? length(f.scratch[i] - f.p[i]) : Real(0);
+      return static_cast<double>(length(delta) > moved ? length(delta) : moved);
     });
 }
 
