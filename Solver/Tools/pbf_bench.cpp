@@ -66,7 +66,7 @@ double percentile(std::vector<double> v, double q)
 }
 
 Result benchmark(const ToolOptions& options, double particles, int warmup, int steps,
-  const std::string& neighbors, double skin, bool graphs, int block)
+  const std::string& neighbors, double skin, bool graphs, int block, bool solid)
 {
   const Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
   const Parameters parameters = withSceneDomain(options.parameters, scene);
@@ -107,6 +107,18 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
   }
   batch = ParticleBatch{}; // the host copy is not needed any more
   r.device = stepper->description();
+  if (solid)
+  {
+    // A sphere standing on the floor in the surge's way, a fifth of the tank's height across:
+    // what one solid costs a step (its distance lookups in every pass near it).
+    const Box& d = parameters.domain;
+    SolidRegion sphere;
+    sphere.kind = SolidRegion::Kind::Sphere;
+    sphere.radius = 0.2 * (d.max.y - d.min.y);
+    sphere.center = { d.min.x + 0.6 * (d.max.x - d.min.x), d.min.y + sphere.radius,
+      0.5 * (d.min.z + d.max.z) };
+    stepper->setObstacles(solidFields({ sphere }, parameters));
+  }
 
   for (int s = 0; s < warmup; ++s)
   {
@@ -261,6 +273,7 @@ int main(int argc, char** argv)
     { "frame", "--refined: frame interval [s] (default 1/60)" },
     { "modes", "--refined: comma-separated of fixed, fixed4, defaults (default all three)" },
     { "csv", "--refined: a folder for one CSV of frames per run" },
+    { "solid", "1: a sphere solid in the surge's way (what a solid costs; default 0)" },
   };
   try
   {
@@ -314,7 +327,8 @@ int main(int argc, char** argv)
     std::vector<Result> results;
     for (double count : counts)
     {
-      results.push_back(benchmark(options, count, warmup, steps, neighbors, skin, graphs, block));
+      results.push_back(benchmark(
+        options, count, warmup, steps, neighbors, skin, graphs, block, extra("solid", "0") == "1"));
       printRow(results.back());
     }
     if (!results.empty())
