@@ -69,25 +69,11 @@ struct HostFluid
     obstacleViews.clear();
     for (const DistanceGrid& g : obstacles)
     {
-      obstacleViews.push_back({ Vec3<Real>::from(g.origin), static_cast<Real>(1.0 / g.cell), g.nx,
-        g.ny, g.nz, g.phi.data() });
+      obstacleViews.push_back(g.view<Real>(g.phi.data()));
     }
-    const double h = parameters.smoothingLength();
-    const auto k64 = Kernels<double>::make(h);
-    const double dq = parameters.sCorrDeltaQ * h;
-    const BoundaryTableData t = makeBoundaryTable(
-      parameters.particleSpacing, h, parameters.sCorrN, k64.poly6(dq * dq));
-    const auto n = static_cast<std::size_t>(t.samples);
-    boundaryValues.resize(4 * n);
-    for (std::size_t k = 0; k < n; ++k)
-    {
-      boundaryValues[k] = static_cast<Real>(t.poly6[k]);
-      boundaryValues[n + k] = static_cast<Real>(t.spiky[k]);
-      boundaryValues[2 * n + k] = static_cast<Real>(t.spiky2[k]);
-      boundaryValues[3 * n + k] = static_cast<Real>(t.tensile[k]);
-    }
-    boundary = { t.samples, static_cast<Real>((t.samples - 1) / h), boundaryValues.data(),
-      boundaryValues.data() + n, boundaryValues.data() + 2 * n, boundaryValues.data() + 3 * n };
+    const BoundaryTableData table = makeBoundaryTable(parameters);
+    boundaryValues = table.packed<Real>();
+    boundary = table.view(boundaryValues.data());
   }
 
   HostParticles<Real> particles() { return { x, v, density, lambda, id }; }

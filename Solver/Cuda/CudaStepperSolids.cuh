@@ -22,16 +22,12 @@ void CudaStepper<Real>::setObstacles(const std::vector<DistanceGrid>& obstacles)
   constants_.boundary = BoundaryTable<Real>{};
   if (!obstacles.empty())
   {
-    const double h = parameters_.smoothingLength();
-    const auto k64 = Kernels<double>::make(h);
-    const double dq = parameters_.sCorrDeltaQ * h;
-    const BoundaryTableData t = makeBoundaryTable(
-      parameters_.particleSpacing, h, parameters_.sCorrN, k64.poly6(dq * dq));
-    const auto samples = static_cast<std::size_t>(t.samples);
+    const BoundaryTableData t = makeBoundaryTable(parameters_);
+    const std::vector<Real> table = t.packed<Real>();
     // Layout: the views, the table (poly6, spiky, spiky2, tensile), then each grid's nodes.
     auto aligned = [](std::size_t bytes) { return (bytes + 255) / 256 * 256; };
     const std::size_t viewBytes = aligned(obstacles.size() * sizeof(DistanceGridView<Real>));
-    const std::size_t tableBytes = aligned(4 * samples * sizeof(Real));
+    const std::size_t tableBytes = aligned(table.size() * sizeof(Real));
     std::size_t total = viewBytes + tableBytes;
     std::vector<std::size_t> nodesAt;
     for (const DistanceGrid& g : obstacles)
@@ -48,27 +44,17 @@ void CudaStepper<Real>::setObstacles(const std::vector<DistanceGrid>& obstacles)
       check(cudaMemcpy(base + nodesAt[k], g.phi.data(), g.phi.size() * sizeof(float),
               cudaMemcpyHostToDevice),
         "cudaMemcpy (obstacle grid)");
-      views.push_back({ Vec3<Real>::from(g.origin), static_cast<Real>(1.0 / g.cell), g.nx, g.ny,
-        g.nz, reinterpret_cast<const float*>(base + nodesAt[k]) });
+      views.push_back(g.view<Real>(reinterpret_cast<const float*>(base + nodesAt[k])));
     }
     check(cudaMemcpy(base, views.data(), views.size() * sizeof(DistanceGridView<Real>),
             cudaMemcpyHostToDevice),
       "cudaMemcpy (obstacle views)");
-    std::vector<Real> table(4 * samples);
-    for (std::size_t k = 0; k < samples; ++k)
-    {
-      table[k] = static_cast<Real>(t.poly6[k]);
-      table[samples + k] = static_cast<Real>(t.spiky[k]);
-      table[2 * samples + k] = static_cast<Real>(t.spiky2[k]);
-      table[3 * samples + k] = static_cast<Real>(t.tensile[k]);
-    }
     Real* onDevice = reinterpret_cast<Real*>(base + viewBytes);
     check(cudaMemcpy(onDevice, table.data(), table.size() * sizeof(Real), cudaMemcpyHostToDevice),
       "cudaMemcpy (boundary table)");
     constants_.obstacles = reinterpret_cast<const DistanceGridView<Real>*>(base);
     constants_.obstacleCount = static_cast<int>(obstacles.size());
-    constants_.boundary = { t.samples, static_cast<Real>((t.samples - 1) / h), onDevice,
-      onDevice + samples, onDevice + 2 * samples, onDevice + 3 * samples };
+    constants_.boundary = t.view(onDevice);
   }
   // The captured step holds the constants it was captured with.
   if (n_ > 0)

@@ -50,4 +50,12 @@ BoundaryTableData makeBoundaryTable(
   return t;
 }
 
+BoundaryTableData makeBoundaryTable(const Parameters& parameters)
+{
+  const double h = parameters.smoothingLength();
+  const double dq = parameters.sCorrDeltaQ * h;
+  return makeBoundaryTable(parameters.particleSpacing, h, parameters.sCorrN,
+    Kernels<double>::make(h).poly6(dq * dq));
+}
+
 } // namespace pbf

@@ -16,6 +16,7 @@
 
 #include "HostDevice.h"
 #include "Kernels.h"
+#include "Parameters.h"
 #include "Vec3.h"
 
 #include <cstdint>
@@ -119,8 +120,33 @@ struct BoundaryTableData
   std::vector<double> poly6, spiky, spiky2, tensile;
   int samples = 0;
   double h = 0;
+
+  // The four columns one after the other in Real (poly6, spiky, spiky2, tensile), for one copy to
+  // wherever the steps run, and the table's view of such an array there.
+  template <class Real>
+  std::vector<Real> packed() const
+  {
+    std::vector<Real> values;
+    for (const std::vector<double>* column : { &poly6, &spiky, &spiky2, &tensile })
+    {
+      for (double v : *column)
+      {
+        values.push_back(static_cast<Real>(v));
+      }
+    }
+    return values;
+  }
+  template <class Real>
+  BoundaryTable<Real> view(const Real* packedValues) const
+  {
+    const auto n = static_cast<std::size_t>(samples);
+    return { samples, static_cast<Real>((samples - 1) / h), packedValues, packedValues + n,
+      packedValues + 2 * n, packedValues + 3 * n };
+  }
 };
 BoundaryTableData makeBoundaryTable(double spacing, double h, double sCorrN, double wDeltaQ,
   int samples = 129);
+// The table of a run's parameters: its spacing, h, s_corr's n and W(delta_q).
+BoundaryTableData makeBoundaryTable(const Parameters& parameters);
 
 } // namespace pbf

@@ -322,4 +322,9 @@ DistanceGrid boxDistanceOn(const Box& box, DistanceGrid grid)
   return grid;
 }
 
+DistanceGrid gridOver(const Box& over, double cell, double margin, const std::string& what)
+{
+  return gridOver(over.min, over.max, cell, margin, what);
+}
+
 } // namespace pbf

@@ -5,6 +5,7 @@
 // al. (2019) are built on.
 #pragma once
 
+#include "Boundary.h"
 #include "Parameters.h"
 
 #include <array>
@@ -38,6 +39,12 @@ struct DistanceGrid
   double at(const Vec3d& x) const;
   // The gradient of the trilinear field at x (about the outward normal near the surface).
   Vec3d gradient(const Vec3d& x) const;
+  // How the stages read this grid, its node values at `nodes` (host or device memory).
+  template <class Real>
+  DistanceGridView<Real> view(const float* nodes) const
+  {
+    return { Vec3<Real>::from(origin), static_cast<Real>(1.0 / cell), nx, ny, nz, nodes };
+  }
 };
 
 struct TriangleMesh
@@ -62,5 +69,8 @@ DistanceGrid sphereDistance(const Vec3d& centre, double radius, double cell, dou
 DistanceGrid boxDistance(const Box& box, double cell, double margin);
 // The box's exact field on the nodes of `grid` (which may cover only part of the box).
 DistanceGrid boxDistanceOn(const Box& box, DistanceGrid grid);
+// A grid of zeros over `over` padded by `margin`, nodes `cell` apart; InvalidInput naming `what`
+// for a bad cell or margin, or too many nodes.
+DistanceGrid gridOver(const Box& over, double cell, double margin, const std::string& what);
 
 } // namespace pbf

@@ -45,7 +45,7 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
     else
     {
       // The box's field is exact everywhere; the grid covers the reachable part of it only.
-      fields.push_back(boxDistanceOn(s.box, boxDistance(reach, cell, h)));
+      fields.push_back(boxDistanceOn(s.box, gridOver(reach, cell, h, "obstacles")));
     }
   }
   return fields;
