@@ -3,16 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <sstream>
-#include <utility>
 
 namespace pbf
 {
 namespace
 {
 
-constexpr double kPi = 3.14159265358979323846;
 // 2^27 nodes is 512 MiB of floats: beyond that the resolution, not the solid, is wrong.
 constexpr double kMostNodes = 134217728.0;
 
@@ -80,111 +77,6 @@ void forEachNode(DistanceGrid& g, F&& f)
   }
 }
 
-// Squared distance from p to the triangle abc: the closest point by the triangle's Voronoi
-// regions (Ericson, Real-Time Collision Detection, 5.1.5).
-double squaredDistanceToTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c)
-{
-  const Vec3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  auto squared = [&](const Vec3d& q) { return dot(p - q, p - q); };
-  if (d1 <= 0 && d2 <= 0)
-  {
-    return squared(a);
-  }
-  const Vec3d bp = p - b;
-  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3)
-  {
-    return squared(b);
-  }
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0)
-  {
-    return squared(a + ab * (d1 / (d1 - d3)));
-  }
-  const Vec3d cp = p - c;
-  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6)
-  {
-    return squared(c);
-  }
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0)
-  {
-    return squared(a + ac * (d2 / (d2 - d6)));
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-  {
-    return squared(b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
-  }
-  const double denominator = 1.0 / (va + vb + vc);
-  return squared(a + ab * (vb * denominator) + ac * (vc * denominator));
-}
-
-// The solid angle of triangle abc seen from p, signed by its orientation (Van Oosterom and
-// Strackee 1983); over a closed surface they sum to 4 pi inside and 0 outside.
-double solidAngle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c)
-{
-  const Vec3d x = a - p, y = b - p, z = c - p;
-  const double lx = length(x), ly = length(y), lz = length(z);
-  const double numerator = dot(x, cross(y, z));
-  const double denominator = lx * ly * lz + dot(x, y) * lz + dot(x, z) * ly + dot(y, z) * lx;
-  return 2.0 * std::atan2(numerator, denominator);
-}
-
-void checkMesh(const TriangleMesh& mesh, double thickness, const std::string& what)
-{
-  if (mesh.triangles.empty())
-  {
-    throw InvalidInput(what + ": the surface has no triangles (an empty solid)");
-  }
-  for (std::size_t i = 0; i < mesh.points.size(); ++i)
-  {
-    if (!finite(mesh.points[i]))
-    {
-      throw InvalidInput(
-        what + ": point " + std::to_string(i) + " = " + format(mesh.points[i]) + ": must be finite");
-    }
-  }
-  if (!(thickness >= 0) || !std::isfinite(thickness))
-  {
-    std::ostringstream text;
-    text << what << ": thickness = " << thickness << ": must be >= 0";
-    throw InvalidInput(text.str());
-  }
-  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-  {
-    const auto& v = mesh.triangles[t];
-    for (int e = 0; e < 3; ++e)
-    {
-      if (v[e] >= mesh.points.size())
-      {
-        throw InvalidInput(what + ": triangle " + std::to_string(t) + " names point " +
-          std::to_string(v[e]) + " of " + std::to_string(mesh.points.size()));
-      }
-      const std::uint32_t a = v[e], b = v[(e + 1) % 3];
-      ++edges[{ std::min(a, b), std::max(a, b) }];
-    }
-  }
-  if (thickness > 0)
-  {
-    return; // a shell needs no inside
-  }
-  for (const auto& edge : edges)
-  {
-    if (edge.second != 2)
-    {
-      throw InvalidInput(what + ": the surface is not closed: the edge between points " +
-        std::to_string(edge.first.first) + " and " + std::to_string(edge.first.second) +
-        " belongs to " + std::to_string(edge.second) +
-        " triangles, not 2. Close the surface (Fill Holes), or give it a thickness to make it a "
-        "thin shell");
-    }
-  }
-}
-
 } // namespace
 
 double DistanceGrid::at(const Vec3d& x) const
@@ -243,44 +135,6 @@ Vec3d DistanceGrid::gradient(const Vec3d& x) const
     }
   }
   return Vec3d{ g[0], g[1], g[2] } * (1.0 / cell);
-}
-
-DistanceGrid meshDistance(const TriangleMesh& mesh, double cell, double margin, double thickness,
-  const std::string& what)
-{
-  checkMesh(mesh, thickness, what);
-  Vec3d lo = mesh.points[mesh.triangles[0][0]], hi = lo;
-  for (const auto& t : mesh.triangles)
-  {
-    for (std::uint32_t v : t)
-    {
-      const Vec3d& p = mesh.points[v];
-      lo = Vec3d{ std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z) };
-      hi = Vec3d{ std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z) };
-    }
-  }
-  DistanceGrid g = gridOver(lo, hi, cell, margin + 0.5 * thickness, what);
-  forEachNode(g, [&](const Vec3d& p) {
-    double nearest2 = std::numeric_limits<double>::infinity();
-    double angle = 0;
-    for (const auto& t : mesh.triangles)
-    {
-      const Vec3d &a = mesh.points[t[0]], &b = mesh.points[t[1]], &c = mesh.points[t[2]];
-      nearest2 = std::min(nearest2, squaredDistanceToTriangle(p, a, b, c));
-      if (thickness == 0)
-      {
-        angle += solidAngle(p, a, b, c);
-      }
-    }
-    const double distance = std::sqrt(nearest2);
-    if (thickness > 0)
-    {
-      return distance - 0.5 * thickness;
-    }
-    const bool inside = std::abs(angle / (4 * kPi)) > 0.5;
-    return inside ? -distance : distance;
-  });
-  return g;
 }
 
 DistanceGrid sphereDistance(const Vec3d& centre, double radius, double cell, double margin)

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -54,15 +55,16 @@ struct TriangleMesh
 };
 
 // The signed distance of a triangle mesh on a grid over the mesh's bounds padded by `margin`,
-// nodes `cell` apart. The magnitude is the distance to the nearest triangle; the sign comes from
-// the generalized winding number (inside where its magnitude is above 1/2), so a closed mesh
-// needs no particular orientation and nearly coincident points do not flip it. A mesh is closed
-// when every edge is shared by exactly two triangles; an open one is InvalidInput naming `what`
-// and an edge, unless `thickness` > 0: then the solid is the shell within thickness / 2 of the
-// surface (a plate, a sheet of a model). Empty meshes, indices out of range and non-finite points
-// are InvalidInput naming `what`.
+// nodes `cell` apart (MeshDistance.cpp). Within `band` of the surface the magnitude is the distance
+// to the nearest triangle; beyond it, a chamfer estimate that keeps growing away from the surface
+// (infinite `band`: exact everywhere, at a cost of nodes x triangles). The sign comes from the
+// parity of the crossings of rays along x, so a closed mesh needs no particular orientation. A
+// mesh is closed when every edge is shared by exactly two triangles; an open one is InvalidInput
+// naming `what` and an edge, unless `thickness` > 0: then the solid is the shell within
+// thickness / 2 of the surface (a plate, a sheet of a model). Empty meshes, indices out of range
+// and non-finite points are InvalidInput naming `what`.
 DistanceGrid meshDistance(const TriangleMesh& mesh, double cell, double margin, double thickness,
-  const std::string& what);
+  const std::string& what, double band = std::numeric_limits<double>::infinity());
 
 // Exact fields of the simple solids, on the same kind of grid.
 DistanceGrid sphereDistance(const Vec3d& centre, double radius, double cell, double margin);

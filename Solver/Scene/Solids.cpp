@@ -2,11 +2,67 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <string>
 
 namespace pbf
 {
+
+namespace
+{
+
+// The solid's bounding box; a mesh with no triangles or a non-finite point is named here, before
+// any grid is sized from it.
+Box boundsOf(const SolidRegion& s, const std::string& name)
+{
+  if (s.kind == SolidRegion::Kind::Box)
+  {
+    return s.box;
+  }
+  if (s.kind == SolidRegion::Kind::Sphere)
+  {
+    const Vec3d r{ s.radius, s.radius, s.radius };
+    return Box{ s.center - r, s.center + r };
+  }
+  if (!(s.thickness >= 0) || !std::isfinite(s.thickness))
+  {
+    std::ostringstream text;
+    text << name << ": thickness = " << s.thickness << ": must be >= 0";
+    throw InvalidInput(text.str());
+  }
+  if (s.mesh.triangles.empty())
+  {
+    throw InvalidInput(name + ": the surface has no triangles (an empty solid)");
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  Box b{ { inf, inf, inf }, { -inf, -inf, -inf } };
+  for (const auto& t : s.mesh.triangles)
+  {
+    for (std::uint32_t v : t)
+    {
+      if (v >= s.mesh.points.size())
+      {
+        throw InvalidInput(name + ": a triangle names point " + std::to_string(v) + " of " +
+          std::to_string(s.mesh.points.size()));
+      }
+      const Vec3d& p = s.mesh.points[v];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      {
+        std::ostringstream text;
+        text << name << ": point " << v << " = (" << p.x << ", " << p.y << ", " << p.z
+             << "): must be finite";
+        throw InvalidInput(text.str());
+      }
+      b.min = Vec3d{ std::min(b.min.x, p.x), std::min(b.min.y, p.y), std::min(b.min.z, p.z) };
+      b.max = Vec3d{ std::max(b.max.x, p.x), std::max(b.max.y, p.y), std::max(b.max.z, p.z) };
+    }
+  }
+  const double t = 0.5 * s.thickness;
+  return Box{ b.min - Vec3d{ t, t, t }, b.max + Vec3d{ t, t, t } };
+}
+
+} // namespace
 
 std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, const Parameters& p)
 {
@@ -16,8 +72,8 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
   for (std::size_t k = 0; k < solids.size(); ++k)
   {
     const SolidRegion& s = solids[k];
-    const Vec3d r{ s.radius, s.radius, s.radius };
-    const Box bounds = s.kind == SolidRegion::Kind::Box ? s.box : Box{ s.center - r, s.center + r };
+    const std::string name = s.name.empty() ? "obstacles[" + std::to_string(k) + "]" : s.name;
+    const Box bounds = boundsOf(s, name);
     // Only what the fluid can reach: the solid within h of the domain.
     const Box reach{ { std::max(bounds.min.x, d.min.x - h), std::max(bounds.min.y, d.min.y - h),
                        std::max(bounds.min.z, d.min.z - h) },
@@ -26,17 +82,24 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
     if (!(reach.min.x < reach.max.x && reach.min.y < reach.max.y && reach.min.z < reach.max.z))
     {
       std::ostringstream text;
-      text << "obstacles[" << k << "]: lies outside the domain (" << d.min.x << ", " << d.min.y
+      text << name << ": lies outside the domain (" << d.min.x << ", " << d.min.y
            << ", " << d.min.z << ") - (" << d.max.x << ", " << d.max.y << ", " << d.max.z << ")";
       throw InvalidInput(text.str());
     }
     // Nodes s/2 apart, or coarser for solids so large that all of them together would pass 2^24
     // nodes (64 MiB of floats).
-    const Vec3d size = reach.max - reach.min + Vec3d{ 2 * h, 2 * h, 2 * h };
+    const Box gridded = s.kind == SolidRegion::Kind::Mesh ? bounds : reach;
+    const Vec3d size = gridded.max - gridded.min + Vec3d{ 2 * h, 2 * h, 2 * h };
     const double budget = 16777216.0 / static_cast<double>(solids.size());
     const double cell =
       std::max(0.5 * p.particleSpacing, std::cbrt(size.x * size.y * size.z / budget));
-    if (s.kind == SolidRegion::Kind::Sphere)
+    if (s.kind == SolidRegion::Kind::Mesh)
+    {
+      // Exact where the boundary's sums and the collision read it (h, plus two nodes for the
+      // interpolation), estimated beyond.
+      fields.push_back(meshDistance(s.mesh, cell, h, s.thickness, name, h + 2 * cell));
+    }
+    else if (s.kind == SolidRegion::Kind::Sphere)
     {
       // The sphere's own grid, as far as the fluid can reach it.
       DistanceGrid g = sphereDistance(s.center, s.radius, cell, h);

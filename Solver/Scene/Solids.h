@@ -7,6 +7,7 @@
 #include "SignedDistance.h"
 #include "Stepper.h"
 
+#include <string>
 #include <vector>
 
 namespace pbf
@@ -17,17 +18,22 @@ struct SolidRegion
   enum class Kind
   {
     Box,
-    Sphere
+    Sphere,
+    Mesh
   };
   Kind kind = Kind::Box;
   Box box;         // Kind::Box
   Vec3d center;    // Kind::Sphere
   double radius = 0;
+  TriangleMesh mesh;     // Kind::Mesh: a closed surface, or a shell of `thickness`
+  double thickness = 0;  // [m]
+  std::string name;      // what errors call the solid ("obstacles[k]" when empty)
 };
 
 // The field of each solid: nodes s/2 apart (coarser only beyond 2^24 nodes) over the part of the
-// solid within h of the domain, padded by h (the reach of the boundary's sums). Throws InvalidInput naming the solid when it
-// lies wholly outside the domain.
+// solid within h of the domain (a mesh: over the whole mesh), padded by h (the reach of the
+// boundary's sums); a mesh's distance is exact within h + 2 nodes of its surface. Throws
+// InvalidInput naming the solid when it lies wholly outside the domain or its mesh is bad.
 std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, const Parameters& p);
 
 // The particles whose centres are outside every solid (the field >= 0), in order, their ids
