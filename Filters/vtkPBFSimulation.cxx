@@ -1,7 +1,10 @@
 #include "vtkPBFSimulation.h"
+#include "vtkPBFObstacles.h"
 #include "vtkPBFOutput.h"
 #include "vtkPBFRankCommunicator.h"
 #include "vtkPBFTranslate.h"
+
+#include "vtkDataSet.h"
 
 #include "vtkFieldData.h"
 #include "vtkIdTypeArray.h"
@@ -120,11 +123,12 @@ public:
 
   FrameRequest ParseRequest(vtkPBFSimulation* self, vtkInformation* request,
     vtkInformationVector* outputVector) const;
-  pbf::PlaybackKey MakeKey(vtkPBFSimulation* self, vtkPointSet* input, const FrameRequest& r);
+  pbf::PlaybackKey MakeKey(vtkPBFSimulation* self, vtkPointSet* input,
+    const std::vector<vtkDataSet*>& obstacles, const FrameRequest& r);
   // Makes `key` the playback's and applies the checkpoint settings.
   void Adopt(vtkPBFSimulation* self, const pbf::PlaybackKey& key);
-  std::unique_ptr<pbf::Simulation> Build(
-    vtkPBFSimulation* self, const pbf::PlaybackKey& key, vtkPointSet* input);
+  std::unique_ptr<pbf::Simulation> Build(vtkPBFSimulation* self, const pbf::PlaybackKey& key,
+    vtkPointSet* input, const std::vector<vtkDataSet*>& obstacles);
   void OnDeviceFault(vtkPBFSimulation* self, const pbf::DeviceFault& fault, int frame);
   // The frame's particles and field data on port 0, the diagnostics on port 1.
   void Deliver(vtkPBFSimulation* self, const FrameRequest& r, const pbf::FrameReached& reached,
@@ -158,6 +162,7 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->VorticityEpsilon = defaults.vorticityEpsilon;
   this->Unilateral = defaults.unilateral;
   this->MirrorWalls = defaults.mirrorWalls;
+  this->ObstacleThickness = 0.0;
   this->Gravity[0] = defaults.gravity.x;
   this->Gravity[1] = defaults.gravity.y;
   this->Gravity[2] = defaults.gravity.z;
@@ -180,8 +185,8 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->DecomposeAcrossRanks = true;
   this->Precision = PRECISION_SINGLE;
 
-  // Port 0 is optional: without an input the algorithm is a source.
-  this->SetNumberOfInputPorts(1);
+  // Port 0 is optional: without an input the algorithm is a source. Port 1: the obstacles.
+  this->SetNumberOfInputPorts(2);
   // Port 0: the particles of the frame; port 1: the diagnostics table; port 2: the outline of
   // the domain (the tank), so that a view shows and frames the whole of it from frame 0 on.
   this->SetNumberOfOutputPorts(3);
@@ -232,6 +237,14 @@ vtkIdType vtkPBFSimulation::GetLastRequestSteps() const
 //------------------------------------------------------------------------------
 int vtkPBFSimulation::FillInputPortInformation(int port, vtkInformation* info)
 {
+  if (port == 1)
+  {
+    // Any dataset whose surface bounds a solid, as many as the user connects.
+    info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkDataSet");
+    info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
+    info->Set(vtkAlgorithm::INPUT_IS_REPEATABLE(), 1);
+    return 1;
+  }
   if (port != 0)
   {
     return 0;
@@ -239,6 +252,12 @@ int vtkPBFSimulation::FillInputPortInformation(int port, vtkInformation* info)
   info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPointSet");
   info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
   return 1;
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::RemoveAllObstacles()
+{
+  this->SetInputConnection(1, nullptr);
 }
 
 //------------------------------------------------------------------------------
@@ -293,27 +312,30 @@ int vtkPBFSimulation::RequestInformation(
 int vtkPBFSimulation::RequestUpdateExtent(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector*)
 {
-  if (this->GetNumberOfInputConnections(0) == 0)
+  // Every input (the fluid's points, the obstacles) whole, in one piece, on every rank alike so
+  // that a collective upstream filter sees the same request everywhere; only piece 0 simulates.
+  // Each is read at its first time, not at the frame being computed: the fluid's points are the
+  // initial state and the obstacles stand still, so playing the animation does not re-execute
+  // them.
+  for (int port = 0; port < 2; ++port)
   {
-    return 1;
-  }
-  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
-  // The whole input in one piece, on every rank alike so that a collective upstream filter sees
-  // the same request everywhere; only piece 0 simulates it.
-  inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER(), 0);
-  inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES(), 1);
-  inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_GHOST_LEVELS(), 0);
-  // The input is the initial state: ask for its first time, not for the frame being computed,
-  // so that playing the animation does not re-execute the input.
-  if (inInfo->Has(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) &&
-    inInfo->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) > 0)
-  {
-    inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP(),
-      inInfo->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS())[0]);
-  }
-  else
-  {
-    inInfo->Remove(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
+    for (int c = 0; c < this->GetNumberOfInputConnections(port); ++c)
+    {
+      vtkInformation* inInfo = inputVector[port]->GetInformationObject(c);
+      inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER(), 0);
+      inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES(), 1);
+      inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_GHOST_LEVELS(), 0);
+      if (inInfo->Has(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) &&
+        inInfo->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) > 0)
+      {
+        inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP(),
+          inInfo->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS())[0]);
+      }
+      else
+      {
+        inInfo->Remove(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
+      }
+    }
   }
   return 1;
 }
@@ -350,10 +372,15 @@ int vtkPBFSimulation::RequestFrame(
   vtkPointSet* input = this->GetNumberOfInputConnections(0) > 0
     ? vtkPointSet::GetData(inputVector[0]->GetInformationObject(0))
     : nullptr;
+  std::vector<vtkDataSet*> obstacles;
+  for (int c = 0; c < this->GetNumberOfInputConnections(1); ++c)
+  {
+    obstacles.push_back(vtkDataSet::GetData(inputVector[1]->GetInformationObject(c)));
+  }
   pbf::Playback& playback = internals.Playback;
   try
   {
-    internals.Adopt(this, internals.MakeKey(this, input, r));
+    internals.Adopt(this, internals.MakeKey(this, input, obstacles, r));
     if (internals.LastFrame == r.Frame)
     {
       internals.DeliverAgain(r, output, table);
@@ -366,7 +393,7 @@ int vtkPBFSimulation::RequestFrame(
       try
       {
         const pbf::FrameReached reached = playback.reach(
-          r.Frame, [&]() { return internals.Build(this, playback.key(), input); },
+          r.Frame, [&]() { return internals.Build(this, playback.key(), input, obstacles); },
           [this](double fraction) {
             this->UpdateProgress(fraction);
             // AbortExecute stays set, as VTK has it: whoever set it clears it.
@@ -440,8 +467,8 @@ FrameRequest vtkPBFSimulation::vtkInternals::ParseRequest(
 }
 
 //------------------------------------------------------------------------------
-pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(
-  vtkPBFSimulation* self, vtkPointSet* input, const FrameRequest& r)
+pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
+  vtkPointSet* input, const std::vector<vtkDataSet*>& obstacles, const FrameRequest& r)
 {
   const std::string invalidTime = self->InvalidTimeProperty();
   if (!invalidTime.empty())
@@ -480,6 +507,14 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(
     self->Precision == PRECISION_DOUBLE ? pbf::Precision::Double : pbf::Precision::Single;
   key.hasInput = input != nullptr;
   key.inputVersion = input ? input->GetMTime() : 0;
+  // A new obstacle, a changed one or another thickness is another run.
+  std::ostringstream solids;
+  solids << obstacles.size() << " thickness " << self->ObstacleThickness;
+  for (vtkDataSet* obstacle : obstacles)
+  {
+    solids << " " << (obstacle ? obstacle->GetMTime() : 0);
+  }
+  key.obstacles = solids.str();
 
   // The ranks of a decomposed run, and the backend every rank agrees on.
   if (r.Decomposed && !this->Ranks)
@@ -524,12 +559,20 @@ void vtkPBFSimulation::vtkInternals::Adopt(vtkPBFSimulation* self, const pbf::Pl
 }
 
 //------------------------------------------------------------------------------
-std::unique_ptr<pbf::Simulation> vtkPBFSimulation::vtkInternals::Build(
-  vtkPBFSimulation* self, const pbf::PlaybackKey& key, vtkPointSet* input)
+std::unique_ptr<pbf::Simulation> vtkPBFSimulation::vtkInternals::Build(vtkPBFSimulation* self,
+  const pbf::PlaybackKey& key, vtkPointSet* input, const std::vector<vtkDataSet*>& obstacles)
 {
   const std::string sceneFile = self->SceneFile ? self->SceneFile : "";
-  const pbf::Scene scene =
+  pbf::Scene scene =
     sceneFile.empty() ? pbf::presetScene(self->GetPresetName()) : pbf::loadSceneFile(sceneFile);
+  // The Obstacles port's solids join the scene's own, named as the user can find them.
+  for (std::size_t c = 0; c < obstacles.size(); ++c)
+  {
+    const std::string name = "Obstacles input " + std::to_string(c + 1) + " of " +
+      std::to_string(obstacles.size()) + " (" +
+      (obstacles[c] ? obstacles[c]->GetClassName() : "no data") + ")";
+    scene.solids.push_back(vtkPBFSolidFromInput(obstacles[c], self->ObstacleThickness, name));
+  }
   // Decomposed, every rank builds the whole fluid (from the whole input, which
   // RequestUpdateExtent asks for on every rank) and keeps its slab.
   pbf::distributed::Communicator* ranks = key.ranks > 1 ? this->Ranks.get() : nullptr;
@@ -544,8 +587,8 @@ std::unique_ptr<pbf::Simulation> vtkPBFSimulation::vtkInternals::Build(
   if (simulation->seededInsideSolids() > 0 && (!ranks || ranks->rank() == 0))
   {
     vtkWarningWithObjectMacro(self, << simulation->seededInsideSolids()
-                                    << " initial particles lay inside the scene's obstacles "
-                                       "and were removed before the first step.");
+                                    << " initial particles lay inside the obstacles and were "
+                                       "removed before the first step.");
   }
   return simulation;
 }
@@ -772,6 +815,7 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "VorticityEpsilon: " << this->VorticityEpsilon << "\n";
   os << indent << "Unilateral: " << (this->Unilateral ? "On" : "Off") << "\n";
   os << indent << "MirrorWalls: " << (this->MirrorWalls ? "On" : "Off") << "\n";
+  os << indent << "ObstacleThickness: " << this->ObstacleThickness << "\n";
   os << indent << "Gravity: (" << this->Gravity[0] << ", " << this->Gravity[1] << ", "
      << this->Gravity[2] << ")\n";
   os << indent << "FrameInterval: " << this->FrameInterval << "\n";

@@ -191,6 +191,19 @@ public:
 
   ///@{
   /**
+   * Obstacles: the datasets on input port 1 (optional, repeatable: AddInputConnection(1, ...))
+   * are solids the fluid flows around, each taken as the surface that bounds it (see
+   * vtkPBFObstacles.h); they are read at their first time step. A surface that is not closed is
+   * an error unless ObstacleThickness [m] (default 0) makes it a thin shell of that thickness.
+   * RemoveAllObstacles() empties the port (the server manager's clean command).
+   */
+  vtkSetMacro(ObstacleThickness, double);
+  vtkGetMacro(ObstacleThickness, double);
+  void RemoveAllObstacles();
+  ///@}
+
+  ///@{
+  /**
    * Time: the interval between animation frames [s] (default 1/60), how the solver's step is
    * chosen (TimeStepping: TIME_STEPPING_AUTOMATIC, the default, or TIME_STEPPING_FIXED), for
    * Automatic the CFL number (default 0.4: the fastest particle moves at most that many spacings
@@ -335,6 +348,7 @@ protected:
   double VorticityEpsilon;
   bool Unilateral;
   bool MirrorWalls;
+  double ObstacleThickness;
   double Gravity[3];
   bool AdaptiveIterations;
   double DensityErrorTolerance;

@@ -48,7 +48,7 @@ bool operator==(const PlaybackKey& a, const PlaybackKey& b)
   return a.scene == b.scene && sameParameters(a.parameters, b.parameters) &&
     a.frameInterval == b.frameInterval && a.substeps == b.substeps && a.backend == b.backend &&
     a.precision == b.precision && a.hasInput == b.hasInput && a.inputVersion == b.inputVersion &&
-    a.ranks == b.ranks;
+    a.ranks == b.ranks && a.obstacles == b.obstacles;
 }
 
 Playback::Playback(distributed::Communicator* ranks)

@@ -43,6 +43,7 @@ struct PlaybackKey
   bool hasInput = false;          // the fluid starts from given particles ...
   std::uint64_t inputVersion = 0; // ... of this version (the VTK input's modification time)
   int ranks = 1;                  // > 1: this rank's share of a decomposed run
+  std::string obstacles;          // the solids given besides the scene's (and their versions)
 };
 
 // Field by field, so that a field added to Parameters and not here is noticed by the tests; a

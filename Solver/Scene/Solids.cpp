@@ -79,7 +79,11 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
                        std::max(bounds.min.z, d.min.z - h) },
       { std::min(bounds.max.x, d.max.x + h), std::min(bounds.max.y, d.max.y + h),
         std::min(bounds.max.z, d.max.z + h) } };
-    if (!(reach.min.x < reach.max.x && reach.min.y < reach.max.y && reach.min.z < reach.max.z))
+    // A flat mesh (a sheet) has no extent across itself and may still meet the fluid.
+    const bool flat = s.kind == SolidRegion::Kind::Mesh;
+    auto overlaps = [flat](double lo, double hi) { return flat ? lo <= hi : lo < hi; };
+    if (!(overlaps(reach.min.x, reach.max.x) && overlaps(reach.min.y, reach.max.y) &&
+          overlaps(reach.min.z, reach.max.z)))
     {
       std::ostringstream text;
       text << name << ": lies outside the domain (" << d.min.x << ", " << d.min.y

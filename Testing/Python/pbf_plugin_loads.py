@@ -59,6 +59,8 @@ def check_proxy(proxy, label):
             continue
         settable.append(name)
         expect(name in grouped, "%s.%s is in no property group" % (label, name))
+        if prop.IsA("vtkSMInputProperty"):
+            continue  # bounded by its data type domain, checked below
         domains = []
         domain_iterator = prop.NewDomainIterator()
         domain_iterator.Begin()
@@ -117,12 +119,29 @@ input_property = fluid_filter.SMProxy.GetProperty("Input")
 expect(input_property is not None, "the filter has no Input property")
 definition = pxm.SMProxyManager.GetProxyDefinitionManager().GetCollapsedProxyDefinition(
     "filters", "PBFSimulationFilter", None, False)
-input_xml = definition.FindNestedElementByName("InputProperty")
+input_xml = [definition.GetNestedElement(i) for i in range(definition.GetNumberOfNestedElements())
+             if definition.GetNestedElement(i).GetName() == "InputProperty" and
+             definition.GetNestedElement(i).GetAttribute("name") == "Input"][0]
 data_type_xml = input_xml.FindNestedElementByName("DataTypeDomain")
 accepted = [data_type_xml.GetNestedElement(i).GetAttribute("value")
             for i in range(data_type_xml.GetNumberOfNestedElements())
             if data_type_xml.GetNestedElement(i).GetName() == "DataType"]
 expect(accepted == ["vtkPointSet"], "the filter's input accepts %s, not any vtkPointSet" % accepted)
+
+# Both proxies take obstacles on port 1: as many as the user gives, none required.
+for proxy, label in ((source, "source"), (fluid_filter, "filter")):
+    obstacles = proxy.SMProxy.GetProperty("Obstacles")
+    expect(obstacles is not None and obstacles.IsA("vtkSMInputProperty"),
+           "%s has no Obstacles input property" % label)
+    expect(obstacles.GetPortIndex() == 1, "%s.Obstacles is on port %d, not 1"
+           % (label, obstacles.GetPortIndex()))
+    expect(obstacles.GetMultipleInput() == 1, "%s.Obstacles takes one input only" % label)
+    expect(obstacles.GetHints() is not None and
+           obstacles.GetHints().FindNestedElementByName("Optional") is not None,
+           "%s.Obstacles is not marked optional" % label)
+    # Which datasets it takes is shown by pbf_obstacles.py (poly data from sources and readers).
+    expect(obstacles.GetDomain("input_type") is not None,
+           "%s.Obstacles has no data type domain" % label)
 
 # The preset enumeration names the scenes compiled in from Data/ (file names without .json).
 enumeration = source.SMProxy.GetProperty("Preset").GetDomain("enum")

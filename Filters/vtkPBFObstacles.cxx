@@ -1,0 +1,75 @@
+#include "vtkPBFObstacles.h"
+
+#include "vtkCellArray.h"
+#include "vtkCleanPolyData.h"
+#include "vtkDataSet.h"
+#include "vtkDataSetSurfaceFilter.h"
+#include "vtkIdList.h"
+#include "vtkNew.h"
+#include "vtkPoints.h"
+#include "vtkPolyData.h"
+#include "vtkSmartPointer.h"
+#include "vtkTriangleFilter.h"
+
+//------------------------------------------------------------------------------
+pbf::SolidRegion vtkPBFSolidFromInput(vtkDataSet* input, double thickness, const std::string& name)
+{
+  if (!input || input->GetNumberOfPoints() == 0 || input->GetNumberOfCells() == 0)
+  {
+    throw pbf::InvalidInput(name + ": the dataset is empty (no points or no cells)");
+  }
+  vtkSmartPointer<vtkPolyData> surface = vtkPolyData::SafeDownCast(input);
+  if (!surface)
+  {
+    vtkNew<vtkDataSetSurfaceFilter> outer;
+    outer->SetInputData(input);
+    outer->Update();
+    surface = outer->GetOutput();
+  }
+  // Points merged only where they coincide exactly (a Box source's faces repeat its corners):
+  // a tolerance would move the surface.
+  vtkNew<vtkCleanPolyData> merged;
+  merged->SetInputData(surface);
+  merged->SetTolerance(0.0);
+  merged->PointMergingOn();
+  merged->ConvertLinesToPointsOff();
+  merged->ConvertPolysToLinesOff();
+  merged->ConvertStripsToPolysOff();
+  vtkNew<vtkTriangleFilter> triangles;
+  triangles->SetInputConnection(merged->GetOutputPort());
+  triangles->PassLinesOff();
+  triangles->PassVertsOff();
+  triangles->Update();
+  vtkPolyData* mesh = triangles->GetOutput();
+
+  pbf::SolidRegion solid;
+  solid.kind = pbf::SolidRegion::Kind::Mesh;
+  solid.thickness = thickness;
+  solid.name = name;
+  vtkPoints* points = mesh->GetPoints();
+  const vtkIdType n = points ? points->GetNumberOfPoints() : 0;
+  solid.mesh.points.resize(static_cast<std::size_t>(n));
+  for (vtkIdType i = 0; i < n; ++i)
+  {
+    double p[3];
+    points->GetPoint(i, p);
+    solid.mesh.points[static_cast<std::size_t>(i)] = pbf::Vec3d{ p[0], p[1], p[2] };
+  }
+  vtkCellArray* polys = mesh->GetPolys();
+  vtkNew<vtkIdList> ids;
+  for (polys->InitTraversal(); polys->GetNextCell(ids);)
+  {
+    if (ids->GetNumberOfIds() == 3)
+    {
+      solid.mesh.triangles.push_back({ static_cast<std::uint32_t>(ids->GetId(0)),
+        static_cast<std::uint32_t>(ids->GetId(1)), static_cast<std::uint32_t>(ids->GetId(2)) });
+    }
+  }
+  if (solid.mesh.triangles.empty())
+  {
+    throw pbf::InvalidInput(name + ": its surface has no polygons (" +
+      std::to_string(input->GetNumberOfCells()) +
+      " cells, none of them a face of a solid): an obstacle needs a surface that bounds a solid");
+  }
+  return solid;
+}

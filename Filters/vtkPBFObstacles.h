@@ -1,0 +1,19 @@
+// The datasets on the filter's Obstacles port as solids of the solver: the third place where
+// vtkPBFSimulation translates between VTK and the solver (vtkPBFTranslate.h has the others).
+#ifndef vtkPBFObstacles_h
+#define vtkPBFObstacles_h
+
+#include "Solids.h"
+
+#include <string>
+
+class vtkDataSet;
+
+// The surface of any dataset as a triangle mesh solid named `name`: poly data as it is, other
+// datasets through their outer surface (vtkDataSetSurfaceFilter), polygons and strips cut into
+// triangles, coincident points merged so that the triangles of a closed surface share edges.
+// Lines and vertices bound nothing and are left out. `thickness` > 0 makes an open surface a thin
+// shell. Throws pbf::InvalidInput naming `name` when nothing is left (an empty obstacle).
+pbf::SolidRegion vtkPBFSolidFromInput(vtkDataSet* input, double thickness, const std::string& name);
+
+#endif
