@@ -6,10 +6,19 @@
 #include "vtkDataSetSurfaceFilter.h"
 #include "vtkIdList.h"
 #include "vtkNew.h"
+#include "vtkOBJReader.h"
+#include "vtkPLYReader.h"
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
+#include "vtkAlgorithm.h"
+#include "vtkSTLReader.h"
 #include "vtkSmartPointer.h"
 #include "vtkTriangleFilter.h"
+#include "vtkXMLPolyDataReader.h"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
 
 //------------------------------------------------------------------------------
 pbf::SolidRegion vtkPBFSolidFromInput(vtkDataSet* input, double thickness, const std::string& name)
@@ -72,4 +81,60 @@ pbf::SolidRegion vtkPBFSolidFromInput(vtkDataSet* input, double thickness, const
       " cells, none of them a face of a solid): an obstacle needs a surface that bounds a solid");
   }
   return solid;
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFReadMeshFiles(pbf::Scene& scene)
+{
+  for (std::size_t k = 0; k < scene.solids.size(); ++k)
+  {
+    pbf::SolidRegion& solid = scene.solids[k];
+    if (solid.kind != pbf::SolidRegion::Kind::Mesh || solid.file.empty())
+    {
+      continue;
+    }
+    const std::string field = "obstacles[" + std::to_string(k) + "].file = \"" + solid.file + "\"";
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(solid.file, error))
+    {
+      throw pbf::InvalidInput(field + ": no such file");
+    }
+    std::string extension = std::filesystem::path(solid.file).extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+      [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    vtkSmartPointer<vtkAlgorithm> reader;
+    if (extension == ".stl")
+    {
+      auto stl = vtkSmartPointer<vtkSTLReader>::New();
+      stl->SetFileName(solid.file.c_str());
+      reader = stl;
+    }
+    else if (extension == ".obj")
+    {
+      auto obj = vtkSmartPointer<vtkOBJReader>::New();
+      obj->SetFileName(solid.file.c_str());
+      reader = obj;
+    }
+    else if (extension == ".ply")
+    {
+      auto ply = vtkSmartPointer<vtkPLYReader>::New();
+      ply->SetFileName(solid.file.c_str());
+      reader = ply;
+    }
+    else if (extension == ".vtp")
+    {
+      auto vtp = vtkSmartPointer<vtkXMLPolyDataReader>::New();
+      vtp->SetFileName(solid.file.c_str());
+      reader = vtp;
+    }
+    else
+    {
+      throw pbf::InvalidInput(field + ": not an STL, OBJ, PLY or VTP file (by its extension)");
+    }
+    reader->Update();
+    const pbf::SolidRegion read = vtkPBFSolidFromInput(
+      vtkPolyData::SafeDownCast(reader->GetOutputDataObject(0)), solid.thickness, field);
+    solid.mesh = read.mesh;
+    solid.name = field;
+  }
 }

@@ -3,6 +3,7 @@
 #ifndef vtkPBFObstacles_h
 #define vtkPBFObstacles_h
 
+#include "Scene.h"
 #include "Solids.h"
 
 #include <string>
@@ -15,5 +16,11 @@ class vtkDataSet;
 // Lines and vertices bound nothing and are left out. `thickness` > 0 makes an open surface a thin
 // shell. Throws pbf::InvalidInput naming `name` when nothing is left (an empty obstacle).
 pbf::SolidRegion vtkPBFSolidFromInput(vtkDataSet* input, double thickness, const std::string& name);
+
+// Reads the file of every mesh obstacle of a scene file ("type": "mesh") with VTK's reader for
+// its extension (.stl, .obj, .ply, .vtp) into the solid's triangles. Throws pbf::InvalidInput
+// naming obstacles[k].file for a missing file, an unknown extension or a file that yields no
+// surface.
+void vtkPBFReadMeshFiles(pbf::Scene& scene);
 
 #endif

@@ -565,6 +565,7 @@ std::unique_ptr<pbf::Simulation> vtkPBFSimulation::vtkInternals::Build(vtkPBFSim
   const std::string sceneFile = self->SceneFile ? self->SceneFile : "";
   pbf::Scene scene =
     sceneFile.empty() ? pbf::presetScene(self->GetPresetName()) : pbf::loadSceneFile(sceneFile);
+  vtkPBFReadMeshFiles(scene);
   // The Obstacles port's solids join the scene's own, named as the user can find them.
   for (std::size_t c = 0; c < obstacles.size(); ++c)
   {

@@ -45,8 +45,10 @@ struct DistanceGridView
     Real t[3];
     for (int a = 0; a < 3; ++a)
     {
-      Real c = u[a] < Real(0) ? Real(0) : u[a];
-      c = c > Real(n[a] - 1) ? Real(n[a] - 1) : c;
+      // Written so that a NaN coordinate (a diverged particle, reported by the health check
+      // after the step) reads node 0 instead of converting NaN to int.
+      Real c = u[a] > Real(0) ? u[a] : Real(0);
+      c = c < Real(n[a] - 1) ? c : Real(n[a] - 1);
       i[a] = static_cast<int>(c);
       i[a] = i[a] > n[a] - 2 ? n[a] - 2 : i[a];
       t[a] = c - Real(i[a]);

@@ -130,7 +130,9 @@ bool inside(const Vec3d& p, const Box& box)
 }
 
 // "obstacles": [{"type": "box", "min": [...], "max": [...]}, {"type": "sphere", "center": [...],
-// "radius": r}]. Where they lie against the domain is checked when the run is built (solidFields).
+// "radius": r}, {"type": "mesh", "file": "part.stl", "thickness": t}]. Where they lie against the
+// domain is checked when the run is built (solidFields); a mesh file is read there by the
+// ParaView plugin's VTK readers (STL, OBJ, PLY, VTP), its path relative to the scene file.
 std::vector<SolidRegion> parseObstacles(const json& obstacles)
 {
   if (!obstacles.is_array())
@@ -153,7 +155,7 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
     if (!item.is_object() || !item.contains("type") || !item["type"].is_string())
     {
       reject(path + ".type", item.is_object() && item.contains("type") ? item["type"] : json(),
-        "each obstacle needs a type, \"box\" or \"sphere\"");
+        "each obstacle needs a type, \"box\", \"sphere\" or \"mesh\"");
     }
     const std::string type = item["type"].get<std::string>();
     SolidRegion solid;
@@ -171,9 +173,24 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
       solid.center = vector3(item, path, "center");
       solid.radius = positive(item, path, "radius");
     }
+    else if (type == "mesh")
+    {
+      requireKeys(item, path, { "type", "file", "thickness" }, { "file" });
+      if (!item["file"].is_string() || item["file"].get<std::string>().empty())
+      {
+        reject(path + ".file", item["file"], "must be the path of an STL, OBJ, PLY or VTP file");
+      }
+      solid.kind = SolidRegion::Kind::Mesh;
+      solid.file = item["file"].get<std::string>();
+      solid.thickness = item.contains("thickness") ? number(item, path, "thickness") : 0.0;
+      if (!(solid.thickness >= 0))
+      {
+        reject(path + ".thickness", item["thickness"], "must be >= 0 (0: a closed surface)");
+      }
+    }
     else
     {
-      reject(path + ".type", item["type"], "must be \"box\" or \"sphere\"");
+      reject(path + ".type", item["type"], "must be \"box\", \"sphere\" or \"mesh\"");
     }
     solids.push_back(solid);
   }
@@ -400,14 +417,26 @@ Scene loadSceneFile(const std::string& path)
   {
     throw InvalidInput("scene file = \"" + path + "\": is empty");
   }
+  Scene scene;
   try
   {
-    return parseScene(text.str());
+    scene = parseScene(text.str());
   }
   catch (const InvalidInput& error)
   {
     throw InvalidInput("scene file \"" + path + "\": " + error.what());
   }
+  // A mesh's file is named relative to the scene file, so that a scene and its parts move
+  // together.
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  for (SolidRegion& solid : scene.solids)
+  {
+    if (!solid.file.empty() && std::filesystem::path(solid.file).is_relative())
+    {
+      solid.file = (folder / solid.file).lexically_normal().string();
+    }
+  }
+  return scene;
 }
 
 std::vector<std::string> presetNames()

@@ -31,6 +31,12 @@ Box boundsOf(const SolidRegion& s, const std::string& name)
     text << name << ": thickness = " << s.thickness << ": must be >= 0";
     throw InvalidInput(text.str());
   }
+  if (s.mesh.triangles.empty() && !s.file.empty())
+  {
+    throw InvalidInput(name + ".file = \"" + s.file +
+      "\": mesh files are read by the ParaView plugin (VTK's readers); load the scene in "
+      "ParaView or pvpython, or give the solid as a box or a sphere");
+  }
   if (s.mesh.triangles.empty())
   {
     throw InvalidInput(name + ": the surface has no triangles (an empty solid)");

@@ -25,7 +25,8 @@ struct SolidRegion
   Box box;         // Kind::Box
   Vec3d center;    // Kind::Sphere
   double radius = 0;
-  TriangleMesh mesh;     // Kind::Mesh: a closed surface, or a shell of `thickness`
+  TriangleMesh mesh;     // Kind::Mesh: a closed surface, or a shell of `thickness` ...
+  std::string file;      // ... or, until a reader fills `mesh`, the file that holds it
   double thickness = 0;  // [m]
   std::string name;      // what errors call the solid ("obstacles[k]" when empty)
 };

@@ -138,4 +138,38 @@ for f in range(0, FRAMES + 1, 4):
 expect(nearest < HALF + SPACING, "the surge never reached the plate (%.3f m)" % nearest)
 print("plate of 0.06 m: closest particle %.4f m from its sheet" % nearest)
 
+# A scene file's mesh obstacle: Data/Examples/dam_break_pillar.json reads pillar.stl (next to it)
+# with VTK's STL reader. The pillar's facets lie at most 0.08 (1 - cos(pi / 24)) inside its radius.
+data = os.environ.get("PBF_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "Data"))
+pillar = PositionBasedFluids(SceneFile=os.path.join(data, "Examples", "dam_break_pillar.json"),  # noqa: F821
+                             ParticleSpacing=SPACING, NumberOfFrames=FRAMES, FrameInterval=INTERVAL)
+closest = numpy.inf
+for f in range(0, FRAMES + 1, 2):
+    p = T.frame(pillar, f * INTERVAL)["points"]
+    below = p[:, 1] < 0.5  # the pillar's top
+    r = numpy.hypot(p[below, 0] - 1.0, p[below, 2] - 0.3)
+    expect(r.size == 0 or r.min() >= 0.08 * math.cos(math.pi / 24),
+           "frame %d: a particle %.4f m from the pillar's axis" % (f, r.min()))
+    closest = numpy.minimum(closest, r.min() if r.size else numpy.inf)
+expect(closest < 0.08 + SPACING, "the surge never reached the pillar (%.3f m)" % closest)
+print("pillar.stl from a scene file: closest particle %.4f m from its axis (radius 0.08)" % closest)
+
+# A scene file whose mesh is missing or of an unknown kind: an error naming the obstacle's file.
+for name, needle in (("missing.stl", "no such file"), ("pillar.txt", "not an STL, OBJ, PLY or VTP")):
+    scene = os.path.join(workdir, "scene_%s.json" % name.replace(".", "_"))
+    with open(scene, "w") as out:
+        out.write('{"domain": {"min": [0, 0, 0], "max": [1.6, 0.8, 0.6]}, "fluid": [{"type": "box", '
+                  '"min": [0, 0, 0], "max": [0.4, 0.6, 0.6]}], "obstacles": [{"type": "mesh", '
+                  '"file": "%s"}]}' % name)
+    if name.endswith(".txt"):
+        with open(os.path.join(workdir, name), "w") as out:
+            out.write("not a mesh\n")
+    broken = PositionBasedFluids(SceneFile=scene, ParticleSpacing=SPACING)  # noqa: F821
+    _, text = T.capture_messages(lambda: T.output_at(broken, 0.0))
+    # A new proxy may first say once that it found no GPU; that line is not the error.
+    errors = [line for line in text.splitlines()
+              if line.startswith("vtkPBFSimulation") and "Backend Auto" not in line]
+    expect(len(errors) == 1 and "obstacles[0].file" in errors[0] and name in errors[0] and
+           needle in errors[0], "the error for %s: %r" % (name, text))
+
 T.passed("pbf_obstacles")

@@ -12,6 +12,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
 
 using namespace pbf;
 
@@ -299,5 +302,49 @@ TEST(Obstacle, SceneErrorsNameTheObstacle)
     EXPECT_NE(std::string(error.what()).find("obstacles[0]: lies outside the domain"),
       std::string::npos)
       << error.what();
+  }
+}
+
+TEST(Obstacle, AMeshObstacleNamesItsFileRelativeToTheSceneFile)
+{
+  EXPECT_NE(sceneError(R"([{"type": "mesh"}])").find(".obstacles[0]"), std::string::npos);
+  EXPECT_NE(sceneError(R"([{"type": "mesh", "file": 3}])").find(".obstacles[0].file = 3"),
+    std::string::npos);
+  EXPECT_NE(sceneError(R"([{"type": "mesh", "file": "a.stl", "thickness": -0.1}])")
+              .find(".obstacles[0].thickness = -0.1: must be >= 0"),
+    std::string::npos);
+
+  // The file is named relative to the scene file's folder.
+  const std::filesystem::path folder =
+    std::filesystem::temp_directory_path() / ("pbf_mesh_scene_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(folder);
+  const std::filesystem::path path = folder / "scene.json";
+  {
+    std::ofstream out(path);
+    out << R"({"domain": {"min": [0, 0, 0], "max": [1, 1, 1]},
+      "fluid": [{"type": "box", "min": [0, 0, 0], "max": [0.5, 0.5, 0.5]}],
+      "obstacles": [{"type": "mesh", "file": "parts/rock.stl", "thickness": 0.02}]})";
+  }
+  const Scene scene = loadSceneFile(path.string());
+  std::filesystem::remove_all(folder);
+  ASSERT_EQ(scene.solids.size(), 1u);
+  EXPECT_EQ(scene.solids[0].kind, SolidRegion::Kind::Mesh);
+  EXPECT_EQ(scene.solids[0].file, (folder / "parts" / "rock.stl").string());
+  EXPECT_EQ(scene.solids[0].thickness, 0.02);
+
+  // Without the plugin nothing reads the file: the solver says so instead of running without it.
+  Parameters p;
+  p.particleSpacing = 0.05;
+  try
+  {
+    Simulation simulation(scene, p, Backend::Serial, Precision::Single);
+    ADD_FAILURE() << "a mesh obstacle nobody read was accepted";
+  }
+  catch (const InvalidInput& error)
+  {
+    const std::string text = error.what();
+    EXPECT_NE(text.find("obstacles[0].file = \"" + scene.solids[0].file + "\""), std::string::npos)
+      << text;
+    EXPECT_NE(text.find("ParaView plugin"), std::string::npos) << text;
   }
 }
