@@ -47,7 +47,8 @@ namespace
 {
 
 // Indexed by vtkPBFSimulation::PresetScenes; the names are pbf::presetScene's.
-const char* const PresetNames[] = { "dam_break", "double_dam_break", "blob", "stream" };
+const char* const PresetNames[] = { "dam_break", "double_dam_break", "blob", "stream",
+  "marin_dam_break" };
 
 std::string ReadWholeFile(const std::string& path)
 {

@@ -97,7 +97,8 @@ public:
     PRESET_DAM_BREAK = 0,
     PRESET_DOUBLE_DAM_BREAK = 1,
     PRESET_BLOB = 2,
-    PRESET_STREAM = 3
+    PRESET_STREAM = 3,
+    PRESET_MARIN_DAM_BREAK = 4
   };
 
   enum Backends
@@ -124,7 +125,7 @@ public:
   /**
    * The preset scene used when SceneFile is empty. Default PRESET_DAM_BREAK.
    */
-  vtkSetClampMacro(Preset, int, PRESET_DAM_BREAK, PRESET_STREAM);
+  vtkSetClampMacro(Preset, int, PRESET_DAM_BREAK, PRESET_MARIN_DAM_BREAK);
   vtkGetMacro(Preset, int);
   ///@}
 

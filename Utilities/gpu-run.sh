@@ -73,6 +73,9 @@ if ((quick)); then
   bench cuda_single 60 --backend cuda --sweep 64000,1000000 --warmup 20 --steps 100
   bench cuda_double 40 --backend cuda --precision double --particles 1000000 --warmup 20 --steps 100
   bench cuda_10M 40 --backend cuda --particles 10000000 --warmup 10 --steps 50
+  # What an obstacle costs at 1M: a sphere, and the MARIN box (issue 19's bound: 15 %).
+  bench cuda_sphere 30 --backend cuda --particles 1000000 --warmup 20 --steps 100 --solid 1
+  bench cuda_box 30 --backend cuda --particles 1000000 --warmup 20 --steps 100 --solid 2
 else
 bench cuda_single 120 --backend cuda --sweep default --warmup 20 --steps 100
 bench cuda_10M 40 --backend cuda --particles 10000000 --warmup 10 --steps 50
@@ -175,7 +178,8 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
   # The resolution runs (Documentation/Validation.md, "Resolution"): CSVs of every frame
   # into $out/resolution, the summary tables into the log. PBF_GPU_RESOLUTION=1: the 1.15M and
   # 9.2M dam breaks and the Martin & Moyce fronts; 2: the smoothing ratios, the CFL halving and
-  # the CPU (OpenMP) dam breaks; 3: both; 5: the refined benchmark (pbf_bench --refined).
+  # the CPU (OpenMP) dam breaks; 3: both; 5: the refined benchmark (pbf_bench --refined); 6: MARIN
+  # at 2 and 1 cm (pbf_marin).
   res=$out/resolution
   mkdir -p "$res"
   bench=$build/Solver/Tools/pbf_bench
@@ -205,6 +209,15 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
     # 1.15M to 2 s, 9.2M to 0.5 s, fixed steps, automatic with 4 projections and the defaults.
     refine bench_refined 200 --backend cuda --refined 0.01,0.005 --until 2
     refine bench_refined_9M 200 --backend cuda --refined 0.0025 --until 0.5
+  fi
+  if [[ $PBF_GPU_RESOLUTION == 6 ]]; then
+    # MARIN (Kleefsman et al. 2005) to 6 s at 2 and 1 cm: gauge heights against the records.
+    phase "marin 0.02 and 0.01 to 6 s"
+    timeout "$(limit 400)" "$build/Testing/Validation/pbf_marin" --backend cuda \
+      --records "$root/Testing/Validation" --spacings 0.02,0.01 --until 6 \
+      --csv "$res/marin.csv" >"$res/marin.txt" 2>&1
+    cat "$res/marin.txt"
+    record "marin: $(tail -n +2 "$res/marin.txt" | tr '\n' ' ')"
   fi
   if [[ $PBF_GPU_RESOLUTION == 4 ]]; then
     refine dam_break_1M_defaults 60 --backend cuda --refined 0.005 --until 2 --modes defaults

@@ -66,7 +66,7 @@ double percentile(std::vector<double> v, double q)
 }
 
 Result benchmark(const ToolOptions& options, double particles, int warmup, int steps,
-  const std::string& neighbors, double skin, bool graphs, int block, bool solid)
+  const std::string& neighbors, double skin, bool graphs, int block, int solid)
 {
   const Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
   const Parameters parameters = withSceneDomain(options.parameters, scene);
@@ -107,7 +107,7 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
   }
   batch = ParticleBatch{}; // the host copy is not needed any more
   r.device = stepper->description();
-  if (solid)
+  if (solid == 1)
   {
     // A sphere standing on the floor in the surge's way, a fifth of the tank's height across:
     // what one solid costs a step (its distance lookups in every pass near it).
@@ -118,6 +118,18 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
     sphere.center = { d.min.x + 0.6 * (d.max.x - d.min.x), d.min.y + sphere.radius,
       0.5 * (d.min.z + d.max.z) };
     stepper->setObstacles(solidFields({ sphere }, parameters));
+  }
+  else if (solid == 2)
+  {
+    // The MARIN box (Data/marin_dam_break.json) in the same proportions of the tank, mirrored
+    // in x because this column stands at the -x end.
+    const Box& d = parameters.domain;
+    const Vec3d size = d.max - d.min;
+    SolidRegion box;
+    box.kind = SolidRegion::Kind::Box;
+    box.box = { d.min + Vec3d{ (1.0 - 0.8245 / 3.22) * size.x, 0.0, 0.2955 * size.z },
+      d.min + Vec3d{ (1.0 - 0.6635 / 3.22) * size.x, 0.161 * size.y, 0.6985 * size.z } };
+    stepper->setObstacles(solidFields({ box }, parameters));
   }
 
   for (int s = 0; s < warmup; ++s)
@@ -273,7 +285,8 @@ int main(int argc, char** argv)
     { "frame", "--refined: frame interval [s] (default 1/60)" },
     { "modes", "--refined: comma-separated of fixed, fixed4, defaults (default all three)" },
     { "csv", "--refined: a folder for one CSV of frames per run" },
-    { "solid", "1: a sphere solid in the surge's way (what a solid costs; default 0)" },
+    { "solid", "1: a sphere solid in the surge's way, 2: the MARIN box (what a solid costs; "
+               "default 0: none)" },
   };
   try
   {
@@ -311,6 +324,11 @@ int main(int argc, char** argv)
     const double skin = std::stod(extra("skin", "0.002"));
     const bool graphs = extra("graphs", "1") != "0";
     const int block = std::stoi(extra("block", "128"));
+    const std::string solid = extra("solid", "0");
+    if (solid != "0" && solid != "1" && solid != "2")
+    {
+      throw InvalidInput("--solid = " + solid + ": must be 0 (none), 1 (a sphere) or 2 (a box)");
+    }
     if (steps < 1 || warmup < 0)
     {
       throw InvalidInput("--steps must be >= 1 and --warmup >= 0");
@@ -328,7 +346,7 @@ int main(int argc, char** argv)
     for (double count : counts)
     {
       results.push_back(benchmark(
-        options, count, warmup, steps, neighbors, skin, graphs, block, extra("solid", "0") == "1"));
+        options, count, warmup, steps, neighbors, skin, graphs, block, std::stoi(solid)));
       printRow(results.back());
     }
     if (!results.empty())

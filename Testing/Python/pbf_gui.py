@@ -59,7 +59,7 @@ view = simple.GetActiveViewOrCreate("RenderView")
 view.ViewSize = [800, 450]
 scene = simple.GetAnimationScene()
 keeper = simple.GetTimeKeeper()
-for preset in ("dam_break", "double_dam_break", "blob", "stream"):
+for preset in ("dam_break", "double_dam_break", "blob", "stream", "marin_dam_break"):
     fluid = simple.PositionBasedFluids(Preset=preset, ParticleSpacing=0.04,
                                        NumberOfFrames=int(os.environ.get("PBF_GUI_FRAMES", 24)))
     apply(fluid, view)

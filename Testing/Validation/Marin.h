@@ -1,0 +1,60 @@
+// The MARIN 3-D dam break with a box (Kleefsman et al. 2005; Data/marin_dam_break.json): water
+// heights at the experiment's gauges, and their comparison with the measured records in
+// ../shared/validation/marin_2005_H*.csv (Documentation/Validation.md).
+#pragma once
+
+#include "Simulation.h"
+
+#include <string>
+#include <vector>
+
+namespace pbf::validation
+{
+
+// The gauges in the project's axes (y up): H2 between the box and the reservoir, H4 inside it.
+struct Gauge
+{
+  const char* name;
+  double x, z; // [m]
+};
+constexpr Gauge kGaugeH2{ "H2", 0.992, 0.5 };
+constexpr Gauge kGaugeH4{ "H4", 2.638, 0.5 };
+
+struct TimeSeries
+{
+  std::vector<double> t, value; // [s], [m]
+  // Linear interpolation; NaN outside [t.front(), t.back()].
+  double at(double time) const;
+};
+
+// A measured record: a first line of '#' (the set-up and the source), a header "t,value", rows.
+TimeSeries readGaugeRecord(const std::string& csvPath);
+
+// The water height at the gauge: along the vertical line through it, the length over which the
+// fluid fraction sum_j (m / rho_0) W_poly6(|y - x_j|, h) exceeds 1/2 (sampled every s / 4). Air
+// pockets and drops above the free surface count only for what they occupy, as a wave gauge's
+// wire measures the wetted length.
+double waterHeight(const Simulation& simulation, const Gauge& gauge);
+
+struct MarinRun
+{
+  double spacing = 0;
+  std::size_t particles = 0;
+  TimeSeries h2, h4;
+};
+// Runs Data/marin_dam_break.json at `parameters` (its spacing, its solver settings) to `until`
+// [s], sampling both gauges every `sampleInterval` [s].
+MarinRun runMarin(const Parameters& parameters, Backend backend, Precision precision,
+  double until, double sampleInterval);
+
+struct MarinComparison
+{
+  double arrivalH2 = 0;           // [s] first time H2 exceeds kArrivalHeight, simulated
+  double arrivalH2Experiment = 0; // [s] the same in the record
+  double rmsH2 = 0, rmsH4 = 0;    // [m] over the samples up to the run's end
+};
+constexpr double kArrivalHeight = 0.01; // [m]: the first wave, clear of the gauge's noise
+MarinComparison compareMarin(
+  const MarinRun& run, const TimeSeries& recordH2, const TimeSeries& recordH4);
+
+} // namespace pbf::validation

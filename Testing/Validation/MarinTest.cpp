@@ -1,0 +1,66 @@
+// The MARIN dam break with a box (Testing/Validation/Marin.h) at a size CI affords: 5 cm, to
+// 0.8 s, on the CPU. The criteria of the issue (arrival within 5 %, RMS of H4 within 0.02 m over
+// 6 s) are for 2 cm and 1 cm on the GPU (Documentation/Validation.md); here the bounds are what
+// the coarse run must still meet, so that a lost box, a lost wave or a broken gauge fails.
+#include "Marin.h"
+
+#include "Scene.h"
+#include "SignedDistance.h"
+#include "Solids.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace pbf;
+using namespace pbf::validation;
+
+TEST(Marin, TheFirstWaveReachesH2AndNoParticleEntersTheBox)
+{
+  const TimeSeries h2 = readGaugeRecord(PBF_VALIDATION_DIR "/marin_2005_H2.csv");
+  const TimeSeries h4 = readGaugeRecord(PBF_VALIDATION_DIR "/marin_2005_H4.csv");
+  Parameters p;
+  p.particleSpacing = 0.05;
+  const Scene scene = presetScene("marin_dam_break");
+  ASSERT_EQ(scene.solids.size(), 1u);
+  const Box box = scene.solids[0].box;
+  Simulation simulation(scene, p, Backend::OpenMP, Precision::Single);
+  MarinRun run;
+  std::size_t worstInside = 0;
+  for (int k = 0; k <= 40; ++k)
+  {
+    const double t = 0.02 * k;
+    simulation.advanceTo(t);
+    run.h2.t.push_back(t);
+    run.h2.value.push_back(waterHeight(simulation, kGaugeH2));
+    run.h4.t.push_back(t);
+    run.h4.value.push_back(waterHeight(simulation, kGaugeH4));
+    Snapshot<double> state;
+    simulation.stepper().read(state);
+    std::size_t inside = 0;
+    for (const Vec3d& x : state.position)
+    {
+      // Strictly inside by more than float rounding (1e-6 m): a centre on a face is outside.
+      const double e = 1e-6;
+      inside += x.x > box.min.x + e && x.x < box.max.x - e && x.y < box.max.y - e &&
+          x.z > box.min.z + e && x.z < box.max.z - e
+        ? 1
+        : 0;
+    }
+    worstInside = std::max(worstInside, inside);
+  }
+  EXPECT_EQ(worstInside, 0u);
+  // The gauges read the column at rest first: H4 starts at the 0.55 m depth within a spacing,
+  // H2 dry.
+  EXPECT_NEAR(run.h4.value.front(), 0.55, p.particleSpacing);
+  EXPECT_LT(run.h2.value.front(), 0.001);
+  const MarinComparison c = compareMarin(run, h2, h4);
+  std::printf("MARIN at 5 cm: arrival at H2 %.3f s (record %.3f s), RMS H2 %.4f m, H4 %.4f m "
+              "over 0-0.8 s\n",
+    c.arrivalH2, c.arrivalH2Experiment, c.rmsH2, c.rmsH4);
+  // Measured at 5 cm: +15.8 % (0.414 s against 0.358 s); 4, 3 and 2 cm: +14.6, +10.9, +9.1 %.
+  ASSERT_TRUE(std::isfinite(c.arrivalH2)) << "the first wave never reached H2";
+  EXPECT_LT(std::abs(c.arrivalH2 / c.arrivalH2Experiment - 1.0), 0.20);
+  EXPECT_LT(c.rmsH2, 0.03);
+  EXPECT_LT(c.rmsH4, 0.03);
+}

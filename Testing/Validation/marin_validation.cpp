@@ -1,0 +1,87 @@
+// pbf_marin: the MARIN dam break with a box (Data/marin_dam_break.json) at one or more spacings.
+// Prints, per spacing, the particle count, the first arrival at gauge H2 against the record's and
+// the RMS height error at H2 and H4; optionally writes the simulated heights as CSV (t, H2, H4 per
+// spacing) for Testing/Validation/plots.py. Documentation/Validation.md has the figures.
+#include "Marin.h"
+
+#include "ToolOptions.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+using namespace pbf;
+using namespace pbf::validation;
+
+int main(int argc, char** argv)
+{
+  const std::map<std::string, std::string> keys = {
+    { "records", "folder of marin_2005_H2.csv and marin_2005_H4.csv (required)" },
+    { "spacings", "comma-separated particle spacings [m] (default 0.02)" },
+    { "until", "simulated time [s] (default 6)" },
+    { "sample", "gauge sampling interval [s] (default 0.01)" },
+    { "csv", "write t, then H2 and H4 per spacing, to this file" },
+  };
+  try
+  {
+    ToolOptions options = parseToolOptions(argc, argv, keys);
+    if (!options.extra.count("records"))
+    {
+      throw InvalidInput("--records is required\n" + toolUsage(keys));
+    }
+    const std::string folder = options.extra["records"];
+    const TimeSeries h2 = readGaugeRecord(folder + "/marin_2005_H2.csv");
+    const TimeSeries h4 = readGaugeRecord(folder + "/marin_2005_H4.csv");
+    const std::vector<double> spacings = toolReals(options, "spacings", 0.02);
+    const double until = toolReal(options, "until", 6.0);
+    const double sample = toolReal(options, "sample", 0.01);
+    std::vector<MarinRun> runs;
+    std::printf("spacing,particles,backend,arrival_H2,arrival_H2_experiment,arrival_relative,"
+                "rms_H2,rms_H4,seconds\n");
+    for (double s : spacings)
+    {
+      Parameters p = options.parameters;
+      p.particleSpacing = s;
+      const auto start = std::chrono::steady_clock::now();
+      runs.push_back(runMarin(p, options.backend, options.precision, until, sample));
+      const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const MarinComparison c = compareMarin(runs.back(), h2, h4);
+      std::printf("%.4g,%zu,%s,%.4f,%.4f,%+.4f,%.4f,%.4f,%.1f\n", s, runs.back().particles,
+        toString(options.backend), c.arrivalH2, c.arrivalH2Experiment,
+        c.arrivalH2 / c.arrivalH2Experiment - 1.0, c.rmsH2, c.rmsH4, seconds);
+      std::fflush(stdout);
+    }
+    if (options.extra.count("csv"))
+    {
+      FILE* out = std::fopen(options.extra["csv"].c_str(), "w");
+      if (!out)
+      {
+        throw InvalidInput("--csv = \"" + options.extra["csv"] + "\": cannot be written");
+      }
+      std::fprintf(out, "t");
+      for (const MarinRun& r : runs)
+      {
+        std::fprintf(out, ",H2_%g,H4_%g", r.spacing, r.spacing);
+      }
+      std::fprintf(out, "\n");
+      for (std::size_t k = 0; k < runs.front().h2.t.size(); ++k)
+      {
+        std::fprintf(out, "%.4f", runs.front().h2.t[k]);
+        for (const MarinRun& r : runs)
+        {
+          std::fprintf(out, ",%.5f,%.5f", r.h2.value[k], r.h4.value[k]);
+        }
+        std::fprintf(out, "\n");
+      }
+      std::fclose(out);
+    }
+    return 0;
+  }
+  catch (const std::exception& error)
+  {
+    std::cerr << "pbf_marin: " << error.what() << "\n";
+    return 1;
+  }
+}
