@@ -2,7 +2,9 @@
 #include "vtkPBFPageLocked.h"
 
 #include "vtkAbstractArray.h"
+#include "vtkAppendPolyData.h"
 #include "vtkCellArray.h"
+#include "vtkCubeSource.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
 #include "vtkFloatArray.h"
@@ -12,11 +14,13 @@
 #include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
+#include "vtkSphereSource.h"
 #include "vtkStringArray.h"
 #include "vtkTable.h"
 
 #include "Parameters.h"
 #include "Playback.h"
+#include "Scene.h"
 #include "Simulation.h"
 #include "Stepper.h"
 
@@ -290,12 +294,51 @@ vtkSmartPointer<vtkTable> vtkPBFOutput::DiagnosticsTable(
 }
 
 //------------------------------------------------------------------------------
-vtkSmartPointer<vtkPolyData> vtkPBFOutput::DomainOutline(const pbf::Box& box, const std::string& scene)
+vtkSmartPointer<vtkPolyData> vtkPBFOutput::DomainOutline(const pbf::Box& box, const pbf::Scene& scene)
 {
+  vtkNew<vtkAppendPolyData> all;
   vtkNew<vtkOutlineSource> outline;
   outline->SetBounds(box.min.x, box.max.x, box.min.y, box.max.y, box.min.z, box.max.z);
-  outline->Update();
-  vtkSmartPointer<vtkPolyData> domain = outline->GetOutput();
-  AddText(domain->GetFieldData(), "Scene", scene);
+  all->AddInputConnection(outline->GetOutputPort());
+  for (const pbf::SolidRegion& solid : scene.solids)
+  {
+    if (solid.kind == pbf::SolidRegion::Kind::Box)
+    {
+      vtkNew<vtkCubeSource> cube;
+      cube->SetBounds(solid.box.min.x, solid.box.max.x, solid.box.min.y, solid.box.max.y,
+        solid.box.min.z, solid.box.max.z);
+      all->AddInputConnection(cube->GetOutputPort());
+    }
+    else if (solid.kind == pbf::SolidRegion::Kind::Sphere)
+    {
+      vtkNew<vtkSphereSource> sphere;
+      sphere->SetCenter(solid.center.x, solid.center.y, solid.center.z);
+      sphere->SetRadius(solid.radius);
+      sphere->SetThetaResolution(32);
+      sphere->SetPhiResolution(32);
+      all->AddInputConnection(sphere->GetOutputPort());
+    }
+    else if (!solid.file.empty())
+    {
+      vtkNew<vtkPoints> points;
+      for (const pbf::Vec3d& p : solid.mesh.points)
+      {
+        points->InsertNextPoint(p.x, p.y, p.z);
+      }
+      vtkNew<vtkCellArray> triangles;
+      for (const auto& t : solid.mesh.triangles)
+      {
+        const vtkIdType ids[3] = { t[0], t[1], t[2] };
+        triangles->InsertNextCell(3, ids);
+      }
+      vtkNew<vtkPolyData> mesh;
+      mesh->SetPoints(points);
+      mesh->SetPolys(triangles);
+      all->AddInputData(mesh);
+    }
+  }
+  all->Update();
+  vtkSmartPointer<vtkPolyData> domain = all->GetOutput();
+  AddText(domain->GetFieldData(), "Scene", scene.name);
   return domain;
 }

@@ -6,7 +6,8 @@
  * Static helpers (the algorithm holds no state here): FillParticles writes the stepper's
  * particles straight into the output arrays' memory (page-locked for the GPU when asked), the
  * vertex cells shared from frame to frame while the count stays; FrameFieldData records every
- * parameter that made the frame; DiagnosticsTable and DomainOutline build ports 1 and 2.
+ * parameter that made the frame; DiagnosticsTable and DomainOutline (the tank and the scene's
+ * obstacles) build ports 1 and 2.
  */
 #ifndef vtkPBFOutput_h
 #define vtkPBFOutput_h
@@ -27,6 +28,7 @@ namespace pbf
 class Simulation;
 class Stepper;
 struct Box;
+struct Scene;
 struct FrameRow;
 }
 
@@ -49,8 +51,10 @@ public:
   static vtkSmartPointer<vtkTable> DiagnosticsTable(
     const std::map<int, pbf::FrameRow>& rows, bool loadImbalance);
 
-  // The 12 edges of the domain, with field data Scene.
-  static vtkSmartPointer<vtkPolyData> DomainOutline(const pbf::Box& box, const std::string& scene);
+  // The 12 edges of the domain and the surfaces of the scene's own obstacles (the JSON's boxes,
+  // spheres and mesh files: those of the Obstacles port are the user's to show), with field data
+  // Scene.
+  static vtkSmartPointer<vtkPolyData> DomainOutline(const pbf::Box& box, const pbf::Scene& scene);
 
   static void AddValue(vtkFieldData* fieldData, const char* name, double value);
   static void AddInteger(vtkFieldData* fieldData, const char* name, vtkIdType value);

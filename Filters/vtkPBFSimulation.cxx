@@ -769,7 +769,7 @@ void vtkPBFSimulation::RequestDomain(vtkInformationVector* outputVector)
   vtkPolyData* particles = vtkPolyData::GetData(outputVector, 0);
   if (const pbf::Simulation* live = internals.Playback.live())
   {
-    internals.Domain = vtkPBFOutput::DomainOutline(live->parameters().domain, live->scene().name);
+    internals.Domain = vtkPBFOutput::DomainOutline(live->parameters().domain, live->scene());
   }
   // One outline for the whole run: rank 0's (the others would only draw it again).
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();

@@ -166,6 +166,10 @@ public:
     {
       device_->release(p);
     }
+    if (solids_)
+    {
+      device_->release(solids_);
+    }
     for (HostBuffer* b : { &hostPack_, &hostRecv_ })
     {
       if (b->data)
@@ -236,6 +240,11 @@ public:
   {
     return sizeof(Real) == sizeof(float) ? Precision::Single : Precision::Double;
   }
+  // Collective (every rank gives the same solids): their grids, views and the boundary table go
+  // up in one allocation, then density and lambda are evaluated again with them
+  // (DeviceSubdomainSolids.h).
+  void setObstacles(const std::vector<DistanceGrid>& obstacles) override;
+
   std::string description() const override
   {
     const auto r = static_cast<std::size_t>(communicator_.rank());
@@ -702,6 +711,7 @@ private:
 
   // Fixed-size device arrays.
   std::vector<void*> fixed_;
+  void* solids_ = nullptr; // constants_.obstacles and .boundary: views, table, nodes
   std::uint32_t* cellOffsets_ = nullptr;
   unsigned long long* maxMoved_ = nullptr;
   unsigned long long* maskBuilds_ = nullptr;
@@ -756,3 +766,4 @@ private:
 #include "DeviceSubdomainExchange.h"
 #include "DeviceSubdomainMemory.h"
 #include "DeviceSubdomainSolve.h"
+#include "DeviceSubdomainSolids.h"

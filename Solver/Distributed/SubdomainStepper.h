@@ -84,6 +84,13 @@ public:
   // step cuts the slabs from this state, as the run that took it did.
   void load(const Snapshot<float>& state) override { loadFromSnapshot(state, fluid_.particles()); }
   void load(const Snapshot<double>& state) override { loadFromSnapshot(state, fluid_.particles()); }
+  // Collective: every rank holds every solid (their fields are small beside the fluid), and
+  // density and lambda are evaluated again with them, as CpuStepper does.
+  void setObstacles(const std::vector<DistanceGrid>& obstacles) override
+  {
+    fluid_.setObstacles(obstacles);
+    evaluateAtRest();
+  }
 
   // Collective: the particles of each rank.
   std::vector<std::uint64_t> particlesPerRank() const override;

@@ -15,8 +15,8 @@ void Stepper::setObstacles(const std::vector<DistanceGrid>& obstacles)
   {
     throw InvalidInput("obstacles: " + std::to_string(obstacles.size()) +
       " solid(s) given to the " + description() +
-      " backend, which has no solid obstacles yet (they run on Serial, CPU (OpenMP) and CUDA in "
-      "one process): run this scene without decomposing it across ranks");
+      " backend, which has no solid obstacles (every backend of this build has them: a stepper "
+      "outside it must implement Stepper::setObstacles)");
   }
 }
 

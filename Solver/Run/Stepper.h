@@ -156,8 +156,8 @@ public:
 
   // Solid obstacles the fluid flows around, as signed distance grids (Scene/SignedDistance.h,
   // Physics/Boundary.h), replacing any set before; static, part of the configuration like the
-  // parameters. The default throws InvalidInput naming the backend: the serial, OpenMP and
-  // single-GPU CUDA steppers have obstacles so far, the decomposed ones not yet.
+  // parameters. Every stepper of the solver has them; the default, for a stepper without, throws
+  // InvalidInput naming the backend.
   virtual void setObstacles(const std::vector<DistanceGrid>& obstacles);
 };
 
