@@ -76,6 +76,14 @@ if ((quick)); then
   # What an obstacle costs at 1M: a sphere, and the MARIN box (issue 19's bound: 15 %).
   bench cuda_sphere 30 --backend cuda --particles 1000000 --warmup 20 --steps 100 --solid 1
   bench cuda_box 30 --backend cuda --particles 1000000 --warmup 20 --steps 100 --solid 2
+  # No particle inside an obstacle, on one GPU and decomposed over two (on this one GPU).
+  for ranks in 1 2; do
+    phase "obstacle check, $ranks rank(s)"
+    timeout "$(limit 120)" "$build/Testing/Validation/pbf_obstacle_check" --backend cuda \
+      --spacing 0.02 --ranks "$ranks" >"$work/obstacles_$ranks.txt" 2>&1
+    cat "$work/obstacles_$ranks.txt"
+    record "obstacles, $ranks rank(s): $(tail -n +2 "$work/obstacles_$ranks.txt" | cut -d, -f1,5-9 | tr '\n' ' ')"
+  done
 else
 bench cuda_single 120 --backend cuda --sweep default --warmup 20 --steps 100
 bench cuda_10M 40 --backend cuda --particles 10000000 --warmup 10 --steps 50
@@ -179,7 +187,7 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
   # into $out/resolution, the summary tables into the log. PBF_GPU_RESOLUTION=1: the 1.15M and
   # 9.2M dam breaks and the Martin & Moyce fronts; 2: the smoothing ratios, the CFL halving and
   # the CPU (OpenMP) dam breaks; 3: both; 5: the refined benchmark (pbf_bench --refined); 6: MARIN
-  # at 2 and 1 cm (pbf_marin).
+  # at 2, 1 and 0.75 cm (pbf_marin).
   res=$out/resolution
   mkdir -p "$res"
   bench=$build/Solver/Tools/pbf_bench
@@ -211,10 +219,10 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
     refine bench_refined_9M 200 --backend cuda --refined 0.0025 --until 0.5
   fi
   if [[ $PBF_GPU_RESOLUTION == 6 ]]; then
-    # MARIN (Kleefsman et al. 2005) to 6 s at 2 and 1 cm: gauge heights against the records.
-    phase "marin 0.02 and 0.01 to 6 s"
+    # MARIN (Kleefsman et al. 2005) to 6 s at 2, 1 and 0.75 cm: gauge heights against the records.
+    phase "marin 0.02, 0.01 and 0.0075 to 6 s"
     timeout "$(limit 400)" "$build/Testing/Validation/pbf_marin" --backend cuda \
-      --records "$root/Testing/Validation" --spacings 0.02,0.01 --until 6 \
+      --records "$root/Testing/Validation" --spacings 0.02,0.01,0.0075 --until 6 \
       --csv "$res/marin.csv" >"$res/marin.txt" 2>&1
     cat "$res/marin.txt"
     record "marin: $(tail -n +2 "$res/marin.txt" | tr '\n' ' ')"
