@@ -93,6 +93,36 @@ for preset in ("dam_break", "double_dam_break", "blob", "stream", "marin_dam_bre
     print("pbf_gui: %s: tank in view at frames 0 and last, %d particles, speeds up to %.2f m/s"
           % (preset, last.GetNumberOfPoints(), speeds.max()))
 
+# The STL example (Data/Examples/dam_break_pillar.json reads pillar.stl): the Domain output draws
+# the pillar with the tank, the surge flows around it, no particle centre is inside it.
+example = os.path.join(os.environ["PBF_SOURCE_DIR"], "Data", "Examples", "dam_break_pillar.json")
+fluid = simple.PositionBasedFluids(SceneFile=example, ParticleSpacing=0.04,
+                                   NumberOfFrames=int(os.environ.get("PBF_GUI_FRAMES", 24)))
+apply(fluid, view)
+domain = fluid.GetClientSideObject().GetOutputDataObject(2)
+expect(domain.GetNumberOfLines() == 12 and domain.GetNumberOfPolys() > 0,
+       "the example's Domain output has %d lines and %d polygons (the tank and the pillar)"
+       % (domain.GetNumberOfLines(), domain.GetNumberOfPolys()))
+expect_tank_in_view(view, domain, "the STL example, frame 0")
+scene.UpdateAnimationUsingDataTimeSteps()
+scene.AnimationTime = keeper.TimestepValues[-1]
+simple.Render(view)
+last = numpy_support.vtk_to_numpy(
+    fluid.GetClientSideObject().GetOutputDataObject(0).GetPoints().GetData())
+below = last[:, 1] < 0.5  # the pillar: radius 0.08 about x = 1.0, z = 0.3, 24 facets
+axis = numpy.hypot(last[below, 0] - 1.0, last[below, 2] - 0.3)
+expect(axis.min() >= 0.08 * numpy.cos(numpy.pi / 24),
+       "the STL example: a particle %.4f m from the pillar's axis" % axis.min())
+expect((axis < 0.08 + 2 * 0.04).sum() > 10,
+       "the STL example: the surge has not reached the pillar (%d particles by it)"
+       % (axis < 0.16).sum())
+simple.SaveScreenshot(os.path.join(output_dir, "pbf_gui_dam_break_pillar.png"), view,
+                      ImageResolution=[800, 450])
+print("pbf_gui: the STL example: %d particles by the pillar, the closest %.4f m from its axis"
+      % ((axis < 0.16).sum(), axis.min()))
+simple.Delete(fluid)
+del fluid
+
 source = simple.PositionBasedFluids()
 frames = os.environ.get("PBF_GUI_FRAMES")
 if frames:

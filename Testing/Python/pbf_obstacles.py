@@ -3,9 +3,9 @@
 A Sphere source and an STL file (a Box written by vtkSTLWriter, read by ParaView's STL reader)
 stand in the dam break's way; no particle centre enters either in any frame, while the surge
 reaches them. Fluid seeded inside an obstacle is removed with a warning giving the count. Moving
-an obstacle restarts the run. An open surface, an empty dataset and an obstacle outside the tank
-are errors naming the input, with the previous output kept; a thickness makes the open surface a
-thin shell."""
+an obstacle restarts the run. An open surface, an empty dataset, an obstacle outside the tank and
+a NaN point are errors naming the input, with the previous output kept; a thickness makes the
+open surface a thin shell. A scene file's mesh obstacle (the shipped STL pillar) is read too."""
 import math
 import os
 import sys
@@ -105,11 +105,25 @@ expect(not numpy.all((result["points"] > lo) & (result["points"] < hi), axis=1).
 plate = Plane(Origin=[0.8, 0.0, 0.1], Point1=[0.8, 0.3, 0.1], Point2=[0.8, 0.0, 0.5])
 empty = ProgrammableSource(OutputDataSetType="vtkPolyData", Script="pass")
 far = Sphere(Center=[5.0, 5.0, 5.0], Radius=0.2)
+# A closed tetrahedron with a NaN corner.
+nan = ProgrammableSource(OutputDataSetType="vtkPolyData", Script="""
+from vtkmodules.vtkCommonCore import vtkPoints
+from vtkmodules.vtkCommonDataModel import vtkCellArray
+points = vtkPoints()
+for p in ((0.8, 0.1, 0.2), (1.0, 0.1, 0.2), (0.9, 0.3, 0.2), (0.9, 0.1, float("nan"))):
+    points.InsertNextPoint(p)
+faces = vtkCellArray()
+for f in ((0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)):
+    faces.InsertNextCell(3, f)
+output.SetPoints(points)
+output.SetPolys(faces)
+""")
 checked = PositionBasedFluids(ParticleSpacing=SPACING, NumberOfFrames=2)  # noqa: F821
 good = T.frame(checked, 0.0)
 for obstacle, needles in ((plate, ["Obstacles input 1", "not closed", "thickness"]),
                           (empty, ["Obstacles input 1", "empty"]),
-                          (far, ["Obstacles input 1", "outside the domain"])):
+                          (far, ["Obstacles input 1", "outside the domain"]),
+                          (nan, ["Obstacles input 1", "nan", "must be finite"])):
     checked.Obstacles = [obstacle]
     _, text = T.capture_messages(lambda: T.output_at(checked, 0.0))
     errors = [line for line in text.splitlines() if line.startswith("vtkPBFSimulation")]
