@@ -12,6 +12,8 @@
 //    of a closed mesh counts one crossing, or none or two where it grazes a silhouette.
 #include "SignedDistance.h"
 
+#include "PointText.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -23,13 +25,6 @@ namespace pbf
 {
 namespace
 {
-
-std::string format(const Vec3d& v)
-{
-  std::ostringstream out;
-  out << "(" << v.x << ", " << v.y << ", " << v.z << ")";
-  return out.str();
-}
 
 // Squared distance from p to the triangle abc: the closest point by the triangle's Voronoi
 // regions (Ericson, Real-Time Collision Detection, 5.1.5).
@@ -82,10 +77,10 @@ void checkMesh(const TriangleMesh& mesh, double thickness, const std::string& wh
   for (std::size_t i = 0; i < mesh.points.size(); ++i)
   {
     const Vec3d& p = mesh.points[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+    if (!isFinite(p))
     {
       throw InvalidInput(
-        what + ": point " + std::to_string(i) + " = " + format(p) + ": must be finite");
+        what + ": point " + std::to_string(i) + " = " + pointText(p) + ": must be finite");
     }
   }
   if (!(thickness >= 0) || !std::isfinite(thickness))

@@ -1,5 +1,7 @@
 #include "ParticleChecks.h"
 
+#include "PointText.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -9,22 +11,6 @@
 
 namespace pbf
 {
-namespace
-{
-
-std::string format(const Vec3d& v)
-{
-  std::ostringstream out;
-  out << "(" << v.x << ", " << v.y << ", " << v.z << ")";
-  return out.str();
-}
-
-bool finite(const Vec3d& v)
-{
-  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
-
-} // namespace
 
 void checkBatch(const Parameters& parameters, const ParticleBatch& batch)
 {
@@ -46,21 +32,21 @@ void checkBatch(const Parameters& parameters, const ParticleBatch& batch)
   for (std::size_t i = 0; i < n; ++i)
   {
     const Vec3d& x = batch.position[i];
-    if (!finite(x))
+    if (!isFinite(x))
     {
-      throw InvalidInput("position of particle " + std::to_string(i) + " = " + format(x) +
+      throw InvalidInput("position of particle " + std::to_string(i) + " = " + pointText(x) +
         ": must be finite");
     }
-    if (!finite(batch.velocity[i]))
+    if (!isFinite(batch.velocity[i]))
     {
       throw InvalidInput("velocity of particle " + std::to_string(i) + " = " +
-        format(batch.velocity[i]) + ": must be finite");
+        pointText(batch.velocity[i]) + ": must be finite");
     }
     if (x.x < d.min.x - slack || x.y < d.min.y - slack || x.z < d.min.z - slack ||
       x.x > d.max.x + slack || x.y > d.max.y + slack || x.z > d.max.z + slack)
     {
-      throw InvalidInput("position of particle " + std::to_string(i) + " = " + format(x) +
-        ": outside the domain " + format(d.min) + " - " + format(d.max));
+      throw InvalidInput("position of particle " + std::to_string(i) + " = " + pointText(x) +
+        ": outside the domain " + pointText(d.min) + " - " + pointText(d.max));
     }
   }
 }
@@ -75,7 +61,7 @@ void checkPacking(const Parameters& parameters, const ParticleBatch& batch, cons
   for (std::size_t i = 0; i < batch.position.size(); ++i)
   {
     const Vec3d& x = batch.position[i];
-    if (!finite(x))
+    if (!isFinite(x))
     {
       continue; // checkBatch names it
     }
@@ -113,8 +99,8 @@ void checkPacking(const Parameters& parameters, const ParticleBatch& batch, cons
     text.precision(4);
     text << "initial particles: " << onWalls << (onWalls == 1 ? " point lies" : " points lie")
          << " within a quarter of particleSpacing = " << s << " m of a wall of the domain "
-         << format(d.min) << " - " << format(d.max) << " (" << where << "), point "
-         << batch.id[firstOnWall] << " = " << format(batch.position[firstOnWall])
+         << pointText(d.min) << " - " << pointText(d.max) << " (" << where << "), point "
+         << batch.id[firstOnWall] << " = " << pointText(batch.position[firstOnWall])
          << " first: a wall mirrors the fluid, so a point on it counts twice. Move the points half "
             "a spacing inside, enlarge the domain (a scene file), or turn mirrorWalls off";
     throw InvalidInput(text.str());

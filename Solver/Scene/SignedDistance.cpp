@@ -1,5 +1,7 @@
 #include "SignedDistance.h"
 
+#include "PointText.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -12,18 +14,6 @@ namespace
 
 // 2^27 nodes is 512 MiB of floats: beyond that the resolution, not the solid, is wrong.
 constexpr double kMostNodes = 134217728.0;
-
-std::string format(const Vec3d& v)
-{
-  std::ostringstream out;
-  out << "(" << v.x << ", " << v.y << ", " << v.z << ")";
-  return out.str();
-}
-
-bool finite(const Vec3d& v)
-{
-  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
 
 // The nodes over [lo, hi] padded by margin, `cell` apart; phi left to fill.
 DistanceGrid gridOver(Vec3d lo, Vec3d hi, double cell, double margin, const std::string& what)
@@ -139,10 +129,10 @@ Vec3d DistanceGrid::gradient(const Vec3d& x) const
 
 DistanceGrid sphereDistance(const Vec3d& centre, double radius, double cell, double margin)
 {
-  if (!(radius > 0) || !std::isfinite(radius) || !finite(centre))
+  if (!(radius > 0) || !std::isfinite(radius) || !isFinite(centre))
   {
     std::ostringstream text;
-    text << "sphere at " << format(centre) << ", radius = " << radius
+    text << "sphere at " << pointText(centre) << ", radius = " << radius
          << ": needs a finite centre and a radius > 0";
     throw InvalidInput(text.str());
   }
@@ -154,10 +144,10 @@ DistanceGrid sphereDistance(const Vec3d& centre, double radius, double cell, dou
 
 DistanceGrid boxDistance(const Box& box, double cell, double margin)
 {
-  if (!finite(box.min) || !finite(box.max) || !(box.min.x < box.max.x) ||
+  if (!isFinite(box.min) || !isFinite(box.max) || !(box.min.x < box.max.x) ||
     !(box.min.y < box.max.y) || !(box.min.z < box.max.z))
   {
-    throw InvalidInput("box " + format(box.min) + " - " + format(box.max) +
+    throw InvalidInput("box " + pointText(box.min) + " - " + pointText(box.max) +
       ": needs finite corners with min < max on every axis");
   }
   return boxDistanceOn(box, gridOver(box.min, box.max, cell, margin, "box"));

@@ -1,5 +1,7 @@
 #include "Solids.h"
 
+#include "PointText.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -53,12 +55,10 @@ Box boundsOf(const SolidRegion& s, const std::string& name)
           std::to_string(s.mesh.points.size()));
       }
       const Vec3d& p = s.mesh.points[v];
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      if (!isFinite(p))
       {
-        std::ostringstream text;
-        text << name << ": point " << v << " = (" << p.x << ", " << p.y << ", " << p.z
-             << "): must be finite";
-        throw InvalidInput(text.str());
+        throw InvalidInput(
+          name + ": point " + std::to_string(v) + " = " + pointText(p) + ": must be finite");
       }
       b.min = Vec3d{ std::min(b.min.x, p.x), std::min(b.min.y, p.y), std::min(b.min.z, p.z) };
       b.max = Vec3d{ std::max(b.max.x, p.x), std::max(b.max.y, p.y), std::max(b.max.z, p.z) };
