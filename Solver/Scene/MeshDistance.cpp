@@ -306,7 +306,7 @@ std::vector<char> insideByRays(const TriangleMesh& mesh, const DistanceGrid& g)
 } // namespace
 
 DistanceGrid meshDistance(const TriangleMesh& mesh, double cell, double margin, double thickness,
-  const std::string& what, double band)
+  const std::string& what, double band, const Box* within)
 {
   checkMesh(mesh, thickness, what);
   Vec3d lo = mesh.points[mesh.triangles[0][0]], hi = lo;
@@ -324,6 +324,17 @@ DistanceGrid meshDistance(const TriangleMesh& mesh, double cell, double margin, 
     std::ostringstream text;
     text << what << ": distance band = " << band << ": must be > 0";
     throw InvalidInput(text.str());
+  }
+  if (within)
+  {
+    lo = Vec3d{ std::max(lo.x, within->min.x), std::max(lo.y, within->min.y),
+      std::max(lo.z, within->min.z) };
+    hi = Vec3d{ std::min(hi.x, within->max.x), std::min(hi.y, within->max.y),
+      std::min(hi.z, within->max.z) };
+    if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z))
+    {
+      throw InvalidInput(what + ": lies outside the region its field is wanted in");
+    }
   }
   DistanceGrid g = gridOver(Box{ lo, hi }, cell, margin + 0.5 * thickness, what);
   // A shell's surface lies thickness / 2 off the triangles: the band reaches past it.

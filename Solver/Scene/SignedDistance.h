@@ -63,8 +63,11 @@ struct TriangleMesh
 // naming `what` and an edge, unless `thickness` > 0: then the solid is the shell within
 // thickness / 2 of the surface (a plate, a sheet of a model). Empty meshes, indices out of range
 // and non-finite points are InvalidInput naming `what`.
+// `within`: when given, the grid covers only the part of the mesh's bounds inside it (the part of a
+// large solid that the fluid can reach); the sign still counts every triangle.
 DistanceGrid meshDistance(const TriangleMesh& mesh, double cell, double margin, double thickness,
-  const std::string& what, double band = std::numeric_limits<double>::infinity());
+  const std::string& what, double band = std::numeric_limits<double>::infinity(),
+  const Box* within = nullptr);
 
 // Exact fields of the simple solids, on the same kind of grid.
 DistanceGrid sphereDistance(const Vec3d& centre, double radius, double cell, double margin);

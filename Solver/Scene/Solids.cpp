@@ -98,8 +98,7 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
     }
     // Nodes s/2 apart, or coarser for solids so large that all of them together would pass 2^24
     // nodes (64 MiB of floats).
-    const Box gridded = s.kind == SolidRegion::Kind::Mesh ? bounds : reach;
-    const Vec3d size = gridded.max - gridded.min + Vec3d{ 2 * h, 2 * h, 2 * h };
+    const Vec3d size = reach.max - reach.min + Vec3d{ 2 * h, 2 * h, 2 * h };
     const double budget = 16777216.0 / static_cast<double>(solids.size());
     const double cell =
       std::max(0.5 * p.particleSpacing, std::cbrt(size.x * size.y * size.z / budget));
@@ -107,7 +106,7 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
     {
       // Exact where the boundary's sums and the collision read it (h, plus two nodes for the
       // interpolation), estimated beyond.
-      fields.push_back(meshDistance(s.mesh, cell, h, s.thickness, name, h + 2 * cell));
+      fields.push_back(meshDistance(s.mesh, cell, h, s.thickness, name, h + 2 * cell, &reach));
     }
     else if (s.kind == SolidRegion::Kind::Sphere)
     {

@@ -32,8 +32,9 @@ struct SolidRegion
 };
 
 // The field of each solid: nodes s/2 apart (coarser only beyond 2^24 nodes) over the part of the
-// solid within h of the domain (a mesh: over the whole mesh), padded by h (the reach of the
-// boundary's sums); a mesh's distance is exact within h + 2 nodes of its surface. Throws
+// solid within h of the domain (a terrain larger than the tank costs only what is inside),
+// padded by h (the reach of the boundary's sums); a mesh's distance is exact within h + 2 nodes
+// of its surface. Throws
 // InvalidInput naming the solid when it lies wholly outside the domain or its mesh is bad.
 std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, const Parameters& p);
 

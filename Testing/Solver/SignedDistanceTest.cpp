@@ -286,3 +286,44 @@ TEST(SignedDistance, RaysThroughEdgesAndCornersCountOneCrossing)
   EXPECT_NEAR(g.at({ 0.5, 0.5, 0.5 }), a.at({ 0.5, 0.5, 0.5 }), 1e-6);
   EXPECT_NEAR(g.at({ -0.25, 0.5, 0.5 }), 0.25, 1e-6);
 }
+
+TEST(SignedDistance, AMeshFieldCanCoverOnlyTheRegionTheFluidReaches)
+{
+  // A sphere of 0.5 m whose centre is outside the region: the clipped grid is the part inside
+  // it (plus the margin), with the values of the whole grid at the same points, the sign counted
+  // over every triangle (the rays start outside the clipped grid).
+  const TriangleMesh mesh = icosphere({ 0.0, 0.0, 0.0 }, 0.5, 3);
+  const double cell = 0.02, band = 0.06;
+  const Box region{ { 0.2, -0.2, -0.2 }, { 1.0, 0.2, 0.2 } };
+  const DistanceGrid whole = meshDistance(mesh, cell, 0.04, 0.0, "big sphere", band);
+  const DistanceGrid part = meshDistance(mesh, cell, 0.04, 0.0, "big sphere", band, &region);
+  EXPECT_LT(part.phi.size() * 4, whole.phi.size()); // a quarter of the nodes or fewer
+  EXPECT_NEAR(part.origin.x, 0.2 - 0.04, 1e-12);
+  double worst = 0;
+  int inside = 0, checked = 0;
+  for (double x = 0.2; x <= 0.5; x += 0.013)
+  {
+    for (double y = -0.2; y <= 0.2; y += 0.017)
+    {
+      for (double z = -0.2; z <= 0.2; z += 0.019)
+      {
+        const Vec3d p{ x, y, z };
+        const double a = whole.at(p), b = part.at(p);
+        ASSERT_EQ(a < 0, b < 0) << x << ", " << y << ", " << z;
+        if (std::abs(a) < band - 2 * cell)
+        {
+          worst = std::max(worst, std::abs(a - b));
+          ++checked;
+        }
+        inside += b < 0 ? 1 : 0;
+      }
+    }
+  }
+  // Within the band both hold exact distances at their nodes, which lie elsewhere: the two
+  // trilinear interpolations of |p| - r differ by at most twice cell^2 / (4 r) = 4e-4 m.
+  EXPECT_LT(worst, 1e-3);
+  EXPECT_GT(checked, 100);
+  EXPECT_GT(inside, 100);
+  const Box away{ { 2.0, 2.0, 2.0 }, { 3.0, 3.0, 3.0 } };
+  EXPECT_THROW(meshDistance(mesh, cell, 0.04, 0.0, "big sphere", band, &away), InvalidInput);
+}
