@@ -108,15 +108,16 @@ void checkMesh(const TriangleMesh& mesh, double thickness, const std::string& wh
   {
     return; // a shell needs no inside
   }
+  // Closed: every edge has two triangles, or an even number where solids touch along it (the
+  // outer surface of a tetrahedral mesh can have such edges); the rays' parity holds for both.
   for (const auto& edge : edges)
   {
-    if (edge.second != 2)
+    if (edge.second % 2 != 0)
     {
       throw InvalidInput(what + ": the surface is not closed: the edge between points " +
         std::to_string(edge.first.first) + " and " + std::to_string(edge.first.second) +
         " belongs to " + std::to_string(edge.second) +
-        " triangles, not 2. Close the surface (Fill Holes), or give it a thickness to make it a "
-        "thin shell");
+        (edge.second == 1 ? " triangle" : " triangles") + ", not 2. Close the surface (Fill Holes), or give it a thickness to make it a thin shell");
     }
   }
 }
@@ -204,7 +205,8 @@ void chamfer(std::vector<double>& d, const DistanceGrid& g)
     }
   }
   auto sweep = [&](int sign) {
-    const int k0 = sign > 0 ? 0 : g.nz - 1, j0 = sign > 0 ? 0 : g.ny - 1, i0 = sign > 0 ? 0 : g.nx - 1;
+    const int k0 = sign > 0 ? 0 : g.nz - 1, j0 = sign > 0 ? 0 : g.ny - 1;
+    const int i0 = sign > 0 ? 0 : g.nx - 1;
     for (int k = k0; k >= 0 && k < g.nz; k += sign)
     {
       for (int j = j0; j >= 0 && j < g.ny; j += sign)
@@ -280,7 +282,8 @@ std::vector<char> insideByRays(const TriangleMesh& mesh, const DistanceGrid& g)
         }
         if (in)
         {
-          crossings[static_cast<std::size_t>(j)].push_back((e[0] * a.x + e[1] * b.x + e[2] * c.x) / area);
+          const double x = (e[0] * a.x + e[1] * b.x + e[2] * c.x) / area;
+          crossings[static_cast<std::size_t>(j)].push_back(x);
         }
       }
     }

@@ -59,7 +59,8 @@ struct TriangleMesh
 // to the nearest triangle; beyond it, a chamfer estimate that keeps growing away from the surface
 // (infinite `band`: exact everywhere, at a cost of nodes x triangles). The sign comes from the
 // parity of the crossings of rays along x, so a closed mesh needs no particular orientation. A
-// mesh is closed when every edge is shared by exactly two triangles; an open one is InvalidInput
+// mesh is closed when every edge is shared by two triangles (or an even number, where solids
+// touch along it); an open one is InvalidInput
 // naming `what` and an edge, unless `thickness` > 0: then the solid is the shell within
 // thickness / 2 of the surface (a plate, a sheet of a model). Empty meshes, indices out of range
 // and non-finite points are InvalidInput naming `what`.

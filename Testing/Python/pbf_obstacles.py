@@ -15,7 +15,8 @@ import numpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import pbf_testing as T  # noqa: E402
-from paraview.simple import Box, Plane, ProgrammableSource, Sphere, STLReader  # noqa: E402
+from paraview.simple import (Box, Delaunay3D, Plane, ProgrammableSource, Sphere,  # noqa: E402
+                             STLReader)
 from vtkmodules.vtkFiltersSources import vtkCubeSource  # noqa: E402
 from vtkmodules.vtkIOGeometry import vtkSTLWriter  # noqa: E402
 
@@ -77,6 +78,27 @@ expect(reached > 20, "only %d particles ever came within 2 spacings of the spher
 print("sphere and STL box: closest particle %.4f m / %.4f m from their surfaces, %d particles by "
       "the sphere at once, none inside in %d frames" % (closest_sphere, closest_block, reached,
                                                        FRAMES + 1))
+
+# An unstructured grid is an obstacle through its outer surface: the tetrahedra of Delaunay3D
+# over a Box's corners (x 1.0..1.2, y 0..0.3 on the floor, z 0.2..0.4), in the surge's way.
+corners = Box(Center=[1.1, 0.15, 0.3], XLength=0.2, YLength=0.3, ZLength=0.2)
+hull = Delaunay3D(Input=corners)
+hull.UpdatePipeline()
+expect(hull.GetDataInformation().GetDataSetTypeAsString() == "vtkUnstructuredGrid",
+       "Delaunay3D gave %s" % hull.GetDataInformation().GetDataSetTypeAsString())
+solid = PositionBasedFluids(Obstacles=[hull], ParticleSpacing=SPACING,  # noqa: F821
+                            NumberOfFrames=FRAMES, FrameInterval=INTERVAL)
+HULL_LO, HULL_HI = numpy.array([1.0, 0.0, 0.2]), numpy.array([1.2, 0.3, 0.4])
+nearest = numpy.inf
+for f in range(0, FRAMES + 1, 4):
+    p = T.frame(solid, f * INTERVAL)["points"]
+    inside = numpy.all((p > HULL_LO + 1e-5) & (p < HULL_HI - 1e-5), axis=1)
+    expect(not inside.any(), "frame %d: %d particles inside the hull" % (f, inside.sum()))
+    gap = numpy.maximum(HULL_LO - p, p - HULL_HI).max(axis=1)
+    nearest = numpy.minimum(nearest, gap.min())
+expect(nearest < SPACING, "the surge never reached the hull (%.3f m)" % nearest)
+print("an unstructured grid (Delaunay3D, %d tetrahedra) as an obstacle: closest %.4f m"
+      % (hull.GetDataInformation().GetNumberOfCells(), nearest))
 
 # Frames asked again out of order (from checkpoints, the solids rebuilt with the run) are the
 # same bits as on the way there.

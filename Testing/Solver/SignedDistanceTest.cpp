@@ -327,3 +327,36 @@ TEST(SignedDistance, AMeshFieldCanCoverOnlyTheRegionTheFluidReaches)
   const Box away{ { 2.0, 2.0, 2.0 }, { 3.0, 3.0, 3.0 } };
   EXPECT_THROW(meshDistance(mesh, cell, 0.04, 0.0, "big sphere", band, &away), InvalidInput);
 }
+
+TEST(SignedDistance, SolidsTouchingAlongAnEdgeAreClosed)
+{
+  // Two unit cubes that share the edge x = 1, y = 1 (its two points merged): four triangles meet
+  // there, as on the outer surface of a tetrahedral mesh (Delaunay3D). Closed all the same.
+  TriangleMesh m = boxMesh({ { 0, 0, 0 }, { 1, 1, 1 } });
+  const TriangleMesh other = boxMesh({ { 1, 1, 0 }, { 2, 2, 1 } });
+  std::vector<std::uint32_t> index(8);
+  for (std::uint32_t k = 0; k < 8; ++k)
+  {
+    // other's corners (1, 1, 0) and (1, 1, 1) are m's corners 3 and 7.
+    const Vec3d& p = other.points[k];
+    if (p.x == 1 && p.y == 1)
+    {
+      index[k] = p.z == 0 ? 3u : 7u;
+      continue;
+    }
+    index[k] = static_cast<std::uint32_t>(m.points.size());
+    m.points.push_back(p);
+  }
+  for (const auto& t : other.triangles)
+  {
+    m.triangles.push_back({ index[t[0]], index[t[1]], index[t[2]] });
+  }
+  const DistanceGrid g = meshDistance(m, 0.1, 0.2, 0.0, "two cubes on an edge", 0.3);
+  EXPECT_LT(g.at({ 0.5, 0.5, 0.5 }), -0.45);
+  EXPECT_LT(g.at({ 1.5, 1.5, 0.5 }), -0.45);
+  EXPECT_NEAR(g.at({ 1.5, 0.5, 0.5 }), 0.5, 1e-6); // the empty quarters: outside
+  EXPECT_NEAR(g.at({ 0.5, 1.5, 0.5 }), 0.5, 1e-6);
+  // An odd count is still refused: one triangle fewer leaves an edge with one.
+  m.triangles.pop_back();
+  EXPECT_THROW(meshDistance(m, 0.1, 0.2, 0.0, "two cubes on an edge", 0.3), InvalidInput);
+}
