@@ -127,7 +127,7 @@ public:
   pbf::PlaybackKey MakeKey(vtkPBFSimulation* self, vtkPointSet* input,
     const std::vector<vtkDataSet*>& obstacles, const FrameRequest& r);
   // Makes `key` the playback's and applies the checkpoint settings.
-  void Adopt(vtkPBFSimulation* self, const pbf::PlaybackKey& key);
+  void Adopt(vtkPBFSimulation* self, const pbf::PlaybackKey& key, int frame);
   std::unique_ptr<pbf::Simulation> Build(vtkPBFSimulation* self, const pbf::PlaybackKey& key,
     vtkPointSet* input, const std::vector<vtkDataSet*>& obstacles);
   void OnDeviceFault(vtkPBFSimulation* self, const pbf::DeviceFault& fault, int frame);
@@ -381,7 +381,7 @@ int vtkPBFSimulation::RequestFrame(
   pbf::Playback& playback = internals.Playback;
   try
   {
-    internals.Adopt(this, internals.MakeKey(this, input, obstacles, r));
+    internals.Adopt(this, internals.MakeKey(this, input, obstacles, r), r.Frame);
     if (internals.LastFrame == r.Frame)
     {
       internals.DeliverAgain(r, output, table);
@@ -548,8 +548,20 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
 }
 
 //------------------------------------------------------------------------------
-void vtkPBFSimulation::vtkInternals::Adopt(vtkPBFSimulation* self, const pbf::PlaybackKey& key)
+void vtkPBFSimulation::vtkInternals::Adopt(
+  vtkPBFSimulation* self, const pbf::PlaybackKey& key, int frame)
 {
+  // Obstacles are static: one that changes (moved by hand, or by an animated Transform upstream)
+  // starts the run again with the obstacle where it is now. Said whenever a later frame is asked
+  // (playing, scrubbing), so that an animated obstacle is not mistaken for a moving one.
+  const std::string& before = this->Playback.key().obstacles;
+  const auto none = [](const std::string& o) { return o.empty() || o.rfind("0 ", 0) == 0; };
+  if (frame > 0 && !none(before) && !none(key.obstacles) && before != key.obstacles)
+  {
+    vtkWarningWithObjectMacro(self, << "the Obstacles input changed: the simulation starts "
+                                       "again from frame 0 with the obstacles as they are now "
+                                       "(obstacles stand still; a moving one is not simulated).");
+  }
   if (this->Playback.adopt(key) && !this->Playback.deviceFaulted())
   {
     this->LastFrame = -1; // another run: nothing delivered belongs to it

@@ -3,7 +3,7 @@
 A Sphere source and an STL file (a Box written by vtkSTLWriter, read by ParaView's STL reader)
 stand in the dam break's way; no particle centre enters either in any frame, while the surge
 reaches them. Fluid seeded inside an obstacle is removed with a warning giving the count. Moving
-an obstacle restarts the run. An open surface, an empty dataset, an obstacle outside the tank and
+an obstacle restarts the run, with a warning (obstacles stand still). An open surface, an empty dataset, an obstacle outside the tank and
 a NaN point are errors naming the input, with the previous output kept; a thickness makes the
 open surface a thin shell. A scene file's mesh obstacle (the shipped STL pillar) is read too."""
 import math
@@ -108,7 +108,9 @@ for f in (16, 7):
 # Moving the sphere is another run: frame 0 is recomputed and the fluid now meets it elsewhere.
 before = T.frame(fluid, 12 * INTERVAL)
 sphere.Center = [0.9, 0.8, 0.3]  # on the lid instead of the floor: the surge passes beneath it
-after = T.frame(fluid, 12 * INTERVAL)
+after, text = T.capture_messages(lambda: T.frame(fluid, 12 * INTERVAL))
+expect("the Obstacles input changed: the simulation starts again from frame 0" in text,
+       "moving an obstacle restarted the run without saying so: %r" % text)
 expect(not numpy.array_equal(before["points"], after["points"]),
        "moving the obstacle did not change the run")
 sphere.Center = list(CENTRE)
