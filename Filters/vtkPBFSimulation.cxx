@@ -33,6 +33,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -49,6 +50,36 @@ namespace
 // Indexed by vtkPBFSimulation::PresetScenes; the names are pbf::presetScene's.
 const char* const PresetNames[] = { "dam_break", "double_dam_break", "blob", "stream",
   "marin_dam_break" };
+
+// The size and modification time of each mesh file a scene file names: a mesh edited in place
+// is another run, as an edited scene file is. A scene file that does not parse gives nothing here;
+// building the run reports it.
+std::string MeshFileVersions(const std::string& sceneFile)
+{
+  std::string versions;
+  if (sceneFile.empty())
+  {
+    return versions;
+  }
+  try
+  {
+    for (const pbf::SolidRegion& solid : pbf::loadSceneFile(sceneFile).solids)
+    {
+      if (!solid.file.empty())
+      {
+        std::error_code error;
+        const auto size = std::filesystem::file_size(solid.file, error);
+        const auto time = std::filesystem::last_write_time(solid.file, error);
+        versions += "\nmesh " + solid.file + " " + std::to_string(error ? 0 : size) + " " +
+          std::to_string(error ? 0 : time.time_since_epoch().count());
+      }
+    }
+  }
+  catch (const std::exception&)
+  {
+  }
+  return versions;
+}
 
 std::string ReadWholeFile(const std::string& path)
 {
@@ -480,6 +511,7 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
   const std::string sceneFile = self->SceneFile ? self->SceneFile : "";
   key.scene = sceneFile.empty() ? std::string("preset ") + self->GetPresetName()
                                 : "file " + sceneFile + "\n" + ReadWholeFile(sceneFile);
+  key.scene += MeshFileVersions(sceneFile);
   pbf::Parameters& p = key.parameters;
   p.restDensity = self->RestDensity;
   p.particleSpacing = self->ParticleSpacing;
