@@ -102,32 +102,18 @@ void vtkPBFReadMeshFiles(pbf::Scene& scene)
     std::string extension = std::filesystem::path(solid.file).extension().string();
     std::transform(extension.begin(), extension.end(), extension.begin(),
       [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    vtkSmartPointer<vtkAlgorithm> reader;
-    if (extension == ".stl")
-    {
-      auto stl = vtkSmartPointer<vtkSTLReader>::New();
-      stl->SetFileName(solid.file.c_str());
-      reader = stl;
-    }
-    else if (extension == ".obj")
-    {
-      auto obj = vtkSmartPointer<vtkOBJReader>::New();
-      obj->SetFileName(solid.file.c_str());
-      reader = obj;
-    }
-    else if (extension == ".ply")
-    {
-      auto ply = vtkSmartPointer<vtkPLYReader>::New();
-      ply->SetFileName(solid.file.c_str());
-      reader = ply;
-    }
-    else if (extension == ".vtp")
-    {
-      auto vtp = vtkSmartPointer<vtkXMLPolyDataReader>::New();
-      vtp->SetFileName(solid.file.c_str());
-      reader = vtp;
-    }
-    else
+    // VTK's reader for the extension; each takes SetFileName.
+    auto open = [&](auto made) {
+      made->SetFileName(solid.file.c_str());
+      return vtkSmartPointer<vtkAlgorithm>(made);
+    };
+    const vtkSmartPointer<vtkAlgorithm> reader = extension == ".stl"
+      ? open(vtkSmartPointer<vtkSTLReader>::New())
+      : extension == ".obj" ? open(vtkSmartPointer<vtkOBJReader>::New())
+      : extension == ".ply" ? open(vtkSmartPointer<vtkPLYReader>::New())
+      : extension == ".vtp" ? open(vtkSmartPointer<vtkXMLPolyDataReader>::New())
+                            : nullptr;
+    if (!reader)
     {
       throw pbf::InvalidInput(field + ": not an STL, OBJ, PLY or VTP file (by its extension)");
     }

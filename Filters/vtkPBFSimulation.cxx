@@ -118,6 +118,9 @@ public:
   int LastFrame = -1;
   // The outline of the domain last simulated (port 2), kept when a request fails.
   vtkSmartPointer<vtkPolyData> Domain = vtkSmartPointer<vtkPolyData>::New();
+  // The run Domain was built for: the tank and the scene's obstacles change only with it.
+  pbf::PlaybackKey DomainKey;
+  bool DomainBuilt = false;
   // Reused from frame to frame while the particle count stays.
   vtkSmartPointer<vtkCellArray> Vertices;
   // The diagnostics table of the rows of version TableVersion.
@@ -540,14 +543,17 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
     self->Precision == PRECISION_DOUBLE ? pbf::Precision::Double : pbf::Precision::Single;
   key.hasInput = input != nullptr;
   key.inputVersion = input ? input->GetMTime() : 0;
-  // A new obstacle, a changed one or another thickness is another run.
-  std::ostringstream solids;
-  solids << obstacles.size() << " thickness " << self->ObstacleThickness;
-  for (vtkDataSet* obstacle : obstacles)
+  // A new obstacle, a changed one or another thickness is another run; none: empty.
+  if (!obstacles.empty())
   {
-    solids << " " << (obstacle ? obstacle->GetMTime() : 0);
+    std::ostringstream solids;
+    solids << obstacles.size() << " thickness " << self->ObstacleThickness;
+    for (vtkDataSet* obstacle : obstacles)
+    {
+      solids << " " << (obstacle ? obstacle->GetMTime() : 0);
+    }
+    key.obstacles = solids.str();
   }
-  key.obstacles = solids.str();
 
   // The ranks of a decomposed run, and the backend every rank agrees on.
   if (r.Decomposed && !this->Ranks)
@@ -587,8 +593,7 @@ void vtkPBFSimulation::vtkInternals::Adopt(
   // starts the run again with the obstacle where it is now. Said whenever a later frame is asked
   // (playing, scrubbing), so that an animated obstacle is not mistaken for a moving one.
   const std::string& before = this->Playback.key().obstacles;
-  const auto none = [](const std::string& o) { return o.empty() || o.rfind("0 ", 0) == 0; };
-  if (frame > 0 && !none(before) && !none(key.obstacles) && before != key.obstacles)
+  if (frame > 0 && !before.empty() && !key.obstacles.empty() && before != key.obstacles)
   {
     vtkWarningWithObjectMacro(self, << "the Obstacles input changed: the simulation starts "
                                        "again from frame 0 with the obstacles as they are now "
@@ -811,9 +816,12 @@ void vtkPBFSimulation::RequestDomain(vtkInformationVector* outputVector)
   vtkInternals& internals = *this->Internals;
   vtkPolyData* domain = vtkPolyData::GetData(outputVector, 2);
   vtkPolyData* particles = vtkPolyData::GetData(outputVector, 0);
-  if (const pbf::Simulation* live = internals.Playback.live())
+  const pbf::Simulation* live = internals.Playback.live();
+  if (live && !(internals.DomainBuilt && internals.DomainKey == internals.Playback.key()))
   {
     internals.Domain = vtkPBFOutput::DomainOutline(live->parameters().domain, live->scene());
+    internals.DomainKey = internals.Playback.key();
+    internals.DomainBuilt = true;
   }
   // One outline for the whole run: rank 0's (the others would only draw it again).
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();

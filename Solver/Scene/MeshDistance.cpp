@@ -68,60 +68,6 @@ double squaredDistanceToTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b,
   return squared(a + ab * (vb * denominator) + ac * (vc * denominator));
 }
 
-void checkMesh(const TriangleMesh& mesh, double thickness, const std::string& what)
-{
-  if (mesh.triangles.empty())
-  {
-    throw InvalidInput(what + ": the surface has no triangles (an empty solid)");
-  }
-  for (std::size_t i = 0; i < mesh.points.size(); ++i)
-  {
-    const Vec3d& p = mesh.points[i];
-    if (!isFinite(p))
-    {
-      throw InvalidInput(
-        what + ": point " + std::to_string(i) + " = " + pointText(p) + ": must be finite");
-    }
-  }
-  if (!(thickness >= 0) || !std::isfinite(thickness))
-  {
-    std::ostringstream text;
-    text << what << ": thickness = " << thickness << ": must be >= 0";
-    throw InvalidInput(text.str());
-  }
-  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-  {
-    const auto& v = mesh.triangles[t];
-    for (int e = 0; e < 3; ++e)
-    {
-      if (v[e] >= mesh.points.size())
-      {
-        throw InvalidInput(what + ": triangle " + std::to_string(t) + " names point " +
-          std::to_string(v[e]) + " of " + std::to_string(mesh.points.size()));
-      }
-      const std::uint32_t a = v[e], b = v[(e + 1) % 3];
-      ++edges[{ std::min(a, b), std::max(a, b) }];
-    }
-  }
-  if (thickness > 0)
-  {
-    return; // a shell needs no inside
-  }
-  // Closed: every edge has two triangles, or an even number where solids touch along it (the
-  // outer surface of a tetrahedral mesh can have such edges); the rays' parity holds for both.
-  for (const auto& edge : edges)
-  {
-    if (edge.second % 2 != 0)
-    {
-      throw InvalidInput(what + ": the surface is not closed: the edge between points " +
-        std::to_string(edge.first.first) + " and " + std::to_string(edge.first.second) +
-        " belongs to " + std::to_string(edge.second) +
-        (edge.second == 1 ? " triangle" : " triangles") + ", not 2. Close the surface (Fill Holes), or give it a thickness to make it a thin shell");
-    }
-  }
-}
-
 // The nodes [first, last] along one axis whose coordinates lie in [lo, hi], clamped to the grid.
 std::pair<int, int> nodeRange(double lo, double hi, double origin, double cell, int n)
 {
@@ -308,20 +254,78 @@ std::vector<char> insideByRays(const TriangleMesh& mesh, const DistanceGrid& g)
 
 } // namespace
 
-DistanceGrid meshDistance(const TriangleMesh& mesh, double cell, double margin, double thickness,
-  const std::string& what, double band, const Box* within)
+Box meshBounds(const TriangleMesh& mesh, double thickness, const std::string& what)
 {
-  checkMesh(mesh, thickness, what);
-  Vec3d lo = mesh.points[mesh.triangles[0][0]], hi = lo;
+  if (mesh.triangles.empty())
+  {
+    throw InvalidInput(what + ": the surface has no triangles (an empty solid)");
+  }
+  for (std::size_t i = 0; i < mesh.points.size(); ++i)
+  {
+    const Vec3d& p = mesh.points[i];
+    if (!isFinite(p))
+    {
+      throw InvalidInput(
+        what + ": point " + std::to_string(i) + " = " + pointText(p) + ": must be finite");
+    }
+  }
+  if (!(thickness >= 0) || !std::isfinite(thickness))
+  {
+    std::ostringstream text;
+    text << what << ": thickness = " << thickness << ": must be >= 0";
+    throw InvalidInput(text.str());
+  }
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+  {
+    const auto& v = mesh.triangles[t];
+    for (int e = 0; e < 3; ++e)
+    {
+      if (v[e] >= mesh.points.size())
+      {
+        throw InvalidInput(what + ": triangle " + std::to_string(t) + " names point " +
+          std::to_string(v[e]) + " of " + std::to_string(mesh.points.size()));
+      }
+      const std::uint32_t a = v[e], b = v[(e + 1) % 3];
+      ++edges[{ std::min(a, b), std::max(a, b) }];
+    }
+  }
+  Box bounds{ mesh.points[mesh.triangles[0][0]], mesh.points[mesh.triangles[0][0]] };
   for (const auto& t : mesh.triangles)
   {
     for (std::uint32_t v : t)
     {
       const Vec3d& p = mesh.points[v];
-      lo = Vec3d{ std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z) };
-      hi = Vec3d{ std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z) };
+      bounds.min = Vec3d{ std::min(bounds.min.x, p.x), std::min(bounds.min.y, p.y),
+        std::min(bounds.min.z, p.z) };
+      bounds.max = Vec3d{ std::max(bounds.max.x, p.x), std::max(bounds.max.y, p.y),
+        std::max(bounds.max.z, p.z) };
     }
   }
+  if (thickness > 0)
+  {
+    return bounds; // a shell needs no inside
+  }
+  // Closed: every edge has two triangles, or an even number where solids touch along it (the
+  // outer surface of a tetrahedral mesh can have such edges); the rays' parity holds for both.
+  for (const auto& edge : edges)
+  {
+    if (edge.second % 2 != 0)
+    {
+      throw InvalidInput(what + ": the surface is not closed: the edge between points " +
+        std::to_string(edge.first.first) + " and " + std::to_string(edge.first.second) +
+        " belongs to " + std::to_string(edge.second) +
+        (edge.second == 1 ? " triangle" : " triangles") + ", not 2. Close the surface (Fill Holes), or give it a thickness to make it a thin shell");
+    }
+  }
+  return bounds;
+}
+
+DistanceGrid meshDistance(const TriangleMesh& mesh, double cell, double margin, double thickness,
+  const std::string& what, double band, const Box* within)
+{
+  const Box bounds = meshBounds(mesh, thickness, what);
+  Vec3d lo = bounds.min, hi = bounds.max;
   if (!(band > 0))
   {
     std::ostringstream text;

@@ -70,6 +70,11 @@ DistanceGrid meshDistance(const TriangleMesh& mesh, double cell, double margin, 
   const std::string& what, double band = std::numeric_limits<double>::infinity(),
   const Box* within = nullptr);
 
+// The bounds of a mesh's points, after the checks meshDistance makes (InvalidInput naming `what`
+// for no triangles, an index out of range, a non-finite point, a bad thickness, or an open surface
+// when thickness is 0).
+Box meshBounds(const TriangleMesh& mesh, double thickness, const std::string& what);
+
 // Exact fields of the simple solids, on the same kind of grid.
 DistanceGrid sphereDistance(const Vec3d& centre, double radius, double cell, double margin);
 DistanceGrid boxDistance(const Box& box, double cell, double margin);

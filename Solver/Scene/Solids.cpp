@@ -1,10 +1,7 @@
 #include "Solids.h"
 
-#include "PointText.h"
-
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <sstream>
 #include <string>
 
@@ -14,8 +11,7 @@ namespace pbf
 namespace
 {
 
-// The solid's bounding box; a mesh with no triangles or a non-finite point is named here, before
-// any grid is sized from it.
+// The solid's bounding box (a shell's padded by half its thickness).
 Box boundsOf(const SolidRegion& s, const std::string& name)
 {
   if (s.kind == SolidRegion::Kind::Box)
@@ -27,43 +23,14 @@ Box boundsOf(const SolidRegion& s, const std::string& name)
     const Vec3d r{ s.radius, s.radius, s.radius };
     return Box{ s.center - r, s.center + r };
   }
-  if (!(s.thickness >= 0) || !std::isfinite(s.thickness))
-  {
-    std::ostringstream text;
-    text << name << ": thickness = " << s.thickness << ": must be >= 0";
-    throw InvalidInput(text.str());
-  }
   if (s.mesh.triangles.empty() && !s.file.empty())
   {
     throw InvalidInput(name + ".file = \"" + s.file +
       "\": mesh files are read by the ParaView plugin (VTK's readers); load the scene in "
       "ParaView or pvpython, or give the solid as a box or a sphere");
   }
-  if (s.mesh.triangles.empty())
-  {
-    throw InvalidInput(name + ": the surface has no triangles (an empty solid)");
-  }
-  const double inf = std::numeric_limits<double>::infinity();
-  Box b{ { inf, inf, inf }, { -inf, -inf, -inf } };
-  for (const auto& t : s.mesh.triangles)
-  {
-    for (std::uint32_t v : t)
-    {
-      if (v >= s.mesh.points.size())
-      {
-        throw InvalidInput(name + ": a triangle names point " + std::to_string(v) + " of " +
-          std::to_string(s.mesh.points.size()));
-      }
-      const Vec3d& p = s.mesh.points[v];
-      if (!isFinite(p))
-      {
-        throw InvalidInput(
-          name + ": point " + std::to_string(v) + " = " + pointText(p) + ": must be finite");
-      }
-      b.min = Vec3d{ std::min(b.min.x, p.x), std::min(b.min.y, p.y), std::min(b.min.z, p.z) };
-      b.max = Vec3d{ std::max(b.max.x, p.x), std::max(b.max.y, p.y), std::max(b.max.z, p.z) };
-    }
-  }
+  // A mesh is checked whole (closed, or given a thickness) before anything is sized from it.
+  const Box b = meshBounds(s.mesh, s.thickness, name);
   const double t = 0.5 * s.thickness;
   return Box{ b.min - Vec3d{ t, t, t }, b.max + Vec3d{ t, t, t } };
 }
@@ -85,11 +52,7 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
                        std::max(bounds.min.z, d.min.z - h) },
       { std::min(bounds.max.x, d.max.x + h), std::min(bounds.max.y, d.max.y + h),
         std::min(bounds.max.z, d.max.z + h) } };
-    // A flat mesh (a sheet) has no extent across itself and may still meet the fluid.
-    const bool flat = s.kind == SolidRegion::Kind::Mesh;
-    auto overlaps = [flat](double lo, double hi) { return flat ? lo <= hi : lo < hi; };
-    if (!(overlaps(reach.min.x, reach.max.x) && overlaps(reach.min.y, reach.max.y) &&
-          overlaps(reach.min.z, reach.max.z)))
+    if (!(reach.min.x < reach.max.x && reach.min.y < reach.max.y && reach.min.z < reach.max.z))
     {
       std::ostringstream text;
       text << name << ": lies outside the domain (" << d.min.x << ", " << d.min.y
