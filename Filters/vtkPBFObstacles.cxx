@@ -124,3 +124,31 @@ void vtkPBFReadMeshFiles(pbf::Scene& scene)
     solid.name = field;
   }
 }
+
+//------------------------------------------------------------------------------
+std::string vtkPBFMeshFileVersions(const std::string& sceneFile)
+{
+  std::string versions;
+  if (sceneFile.empty())
+  {
+    return versions;
+  }
+  try
+  {
+    for (const pbf::SolidRegion& solid : pbf::loadSceneFile(sceneFile).solids)
+    {
+      if (!solid.file.empty())
+      {
+        std::error_code error;
+        const auto size = std::filesystem::file_size(solid.file, error);
+        const auto time = std::filesystem::last_write_time(solid.file, error);
+        versions += "\nmesh " + solid.file + " " + std::to_string(error ? 0 : size) + " " +
+          std::to_string(error ? 0 : time.time_since_epoch().count());
+      }
+    }
+  }
+  catch (const std::exception&)
+  {
+  }
+  return versions;
+}

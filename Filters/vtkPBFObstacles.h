@@ -23,4 +23,9 @@ pbf::SolidRegion vtkPBFSolidFromInput(vtkDataSet* input, double thickness, const
 // surface.
 void vtkPBFReadMeshFiles(pbf::Scene& scene);
 
+// The size and modification time of each mesh file a scene file names: a mesh edited in place
+// is another run, as an edited scene file is. A scene file that does not parse gives nothing here;
+// building the run reports it.
+std::string vtkPBFMeshFileVersions(const std::string& sceneFile);
+
 #endif

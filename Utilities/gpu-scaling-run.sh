@@ -7,7 +7,7 @@
 #      gpu-labelled ctest (capped, before the scaling; without --no-ctest)
 #   3. pbf_bench_mpi --backend cuda, one rank per GPU (its local rank's): strong scaling at P
 #      particles (default 32M) and weak scaling at Q per GPU (default 16M) on 1, 2, 4 GPUs (counts
-#      the machine lacks are skipped), and pbf_bench's single-GPU CudaStepper at Q and P, the
+#      the machine lacks are skipped), and pbf_bench's single-GPU DeviceStepper at Q and P, the
 #      reference a decomposed run has to beat; strong 4 GPUs once more (the run-to-run spread)
 # Every phase has a time limit inside PBF_GPU_BUDGET seconds (default 560), so the short table
 # comes last within the device tool's 10 minutes. Logs and JSON go under $OUT (else

@@ -54,22 +54,7 @@ void CpuStepper<Real>::forEachParticle(Stage&& stage)
 template <class Real>
 void CpuStepper<Real>::sortByCell()
 {
-  const std::size_t n = fluid_.x.size();
-  forEachParticle([&](std::uint32_t i) { fluid_.keys[i] = fluid_.geometry.keyOf(fluid_.p[i]); });
-
-  // O(N + cells) and serial in both CPU backends; the per-particle stages dominate.
-  countingSortByCell(fluid_.keys, fluid_.cellOffsets, fluid_.order, fluid_.cursor);
-
-  auto gather = [&](auto& array, auto& tmp) {
-    tmp.resize(n);
-    forEachParticle([&](std::uint32_t i) { tmp[i] = array[fluid_.order[i]]; });
-    array.swap(tmp);
-  };
-  gather(fluid_.x, fluid_.gatherVec);
-  gather(fluid_.p, fluid_.gatherVec);
-  gather(fluid_.v, fluid_.gatherVec);
-  gather(fluid_.id, fluid_.gatherId);
-  gather(fluid_.keys, gatherKey_);
+  fluid_.sortByCell([&](auto&& f) { forEachParticle(f); }, [](auto&&) {});
 }
 
 template <class Real>

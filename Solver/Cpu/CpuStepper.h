@@ -51,7 +51,6 @@ private:
   using HostStepper<Stepper, Real>::fluid_;
   using HostStepper<Stepper, Real>::report_;
   std::vector<double> blockSums_;
-  std::vector<CellKey> gatherKey_; // the cell sort's gather target for the keys
 };
 
 } // namespace pbf

@@ -76,6 +76,30 @@ struct HostFluid
     boundary = table.view(boundaryValues.data());
   }
 
+  // Sorts the particles by the cell of p (Green 2008): keys, a counting sort (O(N + cells),
+  // serial), then x, p, v, id and keys gathered in the new order. forEach(f) runs f(i) for every
+  // particle, in parallel or not; gatherMore(gather) gathers a stepper's own arrays the same way
+  // (gather(array, scratch)).
+  template <class ForEach, class GatherMore>
+  void sortByCell(ForEach&& forEach, GatherMore&& gatherMore)
+  {
+    const std::size_t n = x.size();
+    forEach([&](std::uint32_t i) { keys[i] = geometry.keyOf(p[i]); });
+    countingSortByCell(keys, cellOffsets, order, cursor);
+    // Into scratch kept from step to step: nothing is allocated once the arrays have their size.
+    auto gather = [&](auto& array, auto& scratch) {
+      scratch.resize(n);
+      forEach([&](std::uint32_t k) { scratch[k] = array[order[k]]; });
+      array.swap(scratch);
+    };
+    gather(x, gatherVec);
+    gather(p, gatherVec);
+    gather(v, gatherVec);
+    gather(id, gatherId);
+    gather(keys, gatherKey);
+    gatherMore(gather);
+  }
+
   HostParticles<Real> particles() { return { x, v, density, lambda, id }; }
   ConstHostParticles<Real> particles() const { return { x, v, density, lambda, id }; }
 
@@ -110,6 +134,7 @@ struct HostFluid
   // Gather targets of the cell sort, kept to avoid allocating every step.
   std::vector<Vec3<Real>> gatherVec;
   std::vector<std::int64_t> gatherId;
+  std::vector<CellKey> gatherKey;
 
   std::vector<DistanceGrid> obstacles;
   std::vector<DistanceGridView<Real>> obstacleViews;

@@ -52,6 +52,24 @@ struct Options
   std::uint64_t faultAtStep = 0;
 };
 
+// The largest Options::block: the neighbour passes' shared rows hold this many threads.
+constexpr int kMaxOptionsBlock = 128;
+
+// The checks of Options that every CUDA stepper makes before it touches the device.
+inline void validateOptions(const Options& options)
+{
+  if (!(options.skin > 0.0 && options.skin <= 1.0))
+  {
+    throw InvalidInput("CUDA skin = " + std::to_string(options.skin) +
+      ": must lie in (0, 1] (a fraction of h)");
+  }
+  if (options.block < 32 || options.block > kMaxOptionsBlock || options.block % 32 != 0)
+  {
+    throw InvalidInput("CUDA block = " + std::to_string(options.block) +
+      ": must be a multiple of 32 up to " + std::to_string(kMaxOptionsBlock));
+  }
+}
+
 struct Diagnostics
 {
   std::string device;             // "NVIDIA H200"

@@ -1,6 +1,8 @@
-// DeviceSubdomainStepper's Device policy on CUDA: a compute stream on the rank's device, the kernel
-// executor of StepSchedule.h, cudaMalloc'd arrays, and the transfers of the ghost and migration
-// messages (each followed by a stream synchronisation before the exchange reads the bytes). The
+// The Device policy of both GPU steppers (DeviceStepper, DeviceSubdomainStepper) on CUDA: a
+// compute stream on the device, the kernel executor of StepSchedule.h, cudaMalloc'd arrays, the
+// step captured as a CUDA graph, the statistics' reduction, and the transfers of the ghost and
+// migration messages (each followed by a stream synchronisation before the exchange reads the
+// bytes). The
 // ghost refreshes' copies (downloadAside, uploadAside) run on a second stream, ordered against
 // the compute stream by events, so that the interior pass does not queue behind the border
 // fields' copy to the host nor the next pass behind the neighbours' fields' copy to the device.
@@ -10,8 +12,10 @@
 // before them and their fields leave sooner.
 #pragma once
 
+#include "CudaReductions.cuh"
 #include "CudaRuntime.cuh"
 #include "CudaSubdomain.h"
+#include "DeviceStepper.h"
 #include "DeviceSubdomainStepper.h"
 
 #include <cuda_runtime.h>
@@ -113,14 +117,91 @@ public:
     if (error == cudaErrorMemoryAllocation)
     {
       cudaGetLastError();
-      throw InvalidInput("particle count: the decomposed CUDA stepper could not allocate " +
+      throw InvalidInput("particle count: the CUDA backend could not allocate " +
         std::to_string(bytes >> 20) + " MiB more on " + name_ +
-        "; use more ranks, fewer particles or a CPU backend");
+        "; use fewer particles, more ranks or a CPU backend");
+    }
+    check(error, "cudaMalloc");
+    return p;
+  }
+  // nullptr when the device is out of memory (the caller says what it needed).
+  void* allocateOrNull(std::size_t bytes)
+  {
+    void* p = nullptr;
+    const cudaError_t error = cudaMalloc(&p, bytes);
+    if (error == cudaErrorMemoryAllocation)
+    {
+      cudaGetLastError();
+      return nullptr;
     }
     check(error, "cudaMalloc");
     return p;
   }
   void release(void* p) { cudaFree(p); }
+  void memoryInfo(std::size_t& freeBytes, std::size_t& totalBytes)
+  {
+    check(cudaMemGetInfo(&freeBytes, &totalBytes), "cudaMemGetInfo");
+  }
+  void* stream() const { return stream_; }
+
+  // The step as a CUDA graph: enqueue(exec) is recorded once on the compute stream (nothing runs)
+  // and launch replays it with the arguments it was recorded with.
+  struct Graph
+  {
+    cudaGraphExec_t exec = nullptr;
+  };
+  template <class Enqueue>
+  void capture(Graph& g, Enqueue&& enqueue)
+  {
+    destroy(g);
+    KernelExecutor exec = executor();
+    cudaGraph_t graph = nullptr;
+    check(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal),
+      "cudaStreamBeginCapture");
+    try
+    {
+      enqueue(exec);
+    }
+    catch (...)
+    {
+      cudaStreamEndCapture(stream_, &graph);
+      if (graph)
+      {
+        cudaGraphDestroy(graph);
+      }
+      throw;
+    }
+    check(cudaStreamEndCapture(stream_, &graph), "cudaStreamEndCapture");
+    const cudaError_t error = cudaGraphInstantiate(&g.exec, graph, 0);
+    cudaGraphDestroy(graph);
+    check(error, "cudaGraphInstantiate");
+  }
+  void launch(const Graph& g) { check(cudaGraphLaunch(g.exec, stream_), "cudaGraphLaunch"); }
+  void destroy(Graph& g)
+  {
+    if (g.exec)
+    {
+      cudaGraphExecDestroy(g.exec);
+    }
+    g.exec = nullptr;
+  }
+
+  // Per block, then one block in a fixed order (CudaReductions.cuh).
+  static std::size_t statisticsPartialBytes()
+  {
+    return std::size_t(kStatisticsBlocks) * kStatisticsValues * sizeof(double);
+  }
+  void scanStatistics(const StatisticsScan<Real>& s, double* partials, double* result)
+  {
+    statisticsKernel<Real><<<kStatisticsBlocks, kStatisticsThreads, 0, stream_>>>(s.x, s.v,
+      s.density, s.sorted, s.grid, s.n, s.h2, s.mass, s.restDensity, partials);
+    check(cudaGetLastError(), "kernel launch (statistics)");
+    statisticsFinalKernel<Real><<<1, kStatisticsThreads, 0, stream_>>>(
+      partials, kStatisticsBlocks, result);
+    check(cudaGetLastError(), "kernel launch (statistics)");
+  }
+  // Options::faultAtStep: a trapped kernel, reported at the next synchronisation.
+  void injectFault() { injectedFault<Real><<<1, 1, 0, stream_>>>(); }
   void* allocateHost(std::size_t bytes)
   {
     void* p = nullptr;
@@ -177,9 +258,9 @@ public:
   std::string name() const { return name_; }
 
   // Scratch for the radix sorts, the offsets' scan and the selections at this capacity.
-  void reserveTemp(std::uint32_t particles, std::size_t cells, int keyBits)
+  static std::size_t tempBytesFor(std::uint32_t particles, std::size_t cells, int keyBits)
   {
-    std::size_t need = KernelExecutor::tempBytesFor(particles, cells, keyBits);
+    const std::size_t need = KernelExecutor::tempBytesFor(particles, cells, keyBits);
     std::size_t selectBytes = 0;
     std::uint32_t* none = nullptr;
     const thrust::counting_iterator<std::uint32_t> first(0);
@@ -187,7 +268,11 @@ public:
             static_cast<std::int64_t>(particles), AnyIndex<Real>{}),
       "cub::DeviceSelect::If (size query)");
     // Room for the predicates' own instantiations, whose sizes the selection re-checks.
-    need = std::max(need, selectBytes) + 4096;
+    return std::max(need, selectBytes) + 4096;
+  }
+  void reserveTemp(std::uint32_t particles, std::size_t cells, int keyBits)
+  {
+    const std::size_t need = tempBytesFor(particles, cells, keyBits);
     if (need <= tempBytes_)
     {
       return;
@@ -215,6 +300,27 @@ private:
   void* temp_ = nullptr;
   std::size_t tempBytes_ = 0;
 };
+
+// The two steppers on this policy, instantiated once per precision (CudaFloat.cu, CudaDouble.cu).
+template <class Real>
+std::unique_ptr<CudaStepperInterface> makeCudaStepperOf(
+  const Parameters& parameters, const ParticleBatch& initial, const Options& options)
+{
+  // The inputs first: bad ones are named even where no device is present.
+  Parameters checked = parameters;
+  checked.validate();
+  checkBatch(checked, initial);
+  validateOptions(options);
+  std::string why;
+  if (!cudaDevicePresent(&why))
+  {
+    throw std::runtime_error("CUDA backend unavailable: " + why);
+  }
+  int device = 0;
+  check(cudaGetDevice(&device), "cudaGetDevice");
+  return std::make_unique<DeviceStepper<Real, CudaDevicePolicy<Real>>>(
+    parameters, initial, options, std::make_unique<CudaDevicePolicy<Real>>(device, options.block));
+}
 
 template <class Real>
 std::unique_ptr<distributed::DecomposedStepper> makeCudaSubdomainStepperOf(

@@ -1,9 +1,10 @@
-// The reductions of CudaStepper over its particles: statistics() (sums and maxima for the
-// diagnostics) and health() (the divergence check's scan), each reduced per block and then by one
-// block in a fixed order, so that the result does not depend on scheduling: no float atomics.
+// CudaDevicePolicy's scanStatistics (StatisticsScan.h): the sums and maxima of a stepper's
+// statistics(), reduced per block and then by one block in a fixed order, so that the result does
+// not depend on scheduling: no float atomics. And the kernel of Options::faultAtStep.
 #pragma once
 
 #include "Equations.h"
+#include "StatisticsScan.h"
 
 #include <cuda_runtime.h>
 
@@ -14,23 +15,8 @@ namespace pbf
 namespace cuda
 {
 
-// statistics(): sums and maxima over particles, reduced per block and then by one block in a
-// fixed order, so the result does not depend on scheduling.
-constexpr int kStatisticsValues = 9;
 constexpr int kStatisticsBlocks = 512;
 constexpr int kStatisticsThreads = 256;
-enum StatisticsValue
-{
-  kErrorSum,
-  kErrorMax,
-  kNeighborSum,
-  kSpeedMax,
-  kKinetic,
-  kMomentumX,
-  kMomentumY,
-  kMomentumZ,
-  kNonFinite, // max of 0/1
-};
 
 __device__ inline bool statisticsIsMax(int value)
 {
@@ -129,69 +115,6 @@ __global__ void __launch_bounds__(kStatisticsThreads) statisticsFinalKernel(
     }
   }
   reduceBlock(shared, acc, result);
-}
-
-// health(): the divergence check's scan and the automatic time step's fastest particle, every
-// step, so it is three maxima over particles and nothing else: the largest speed^2, the largest
-// rho_i / rho_0 - 1 and whether anything is not finite. Maxima do not depend on the order.
-constexpr int kHealthValues = 3;
-constexpr int kHealthBlocks = 264; // two per SM of an H100 or H200
-
-template <class Real>
-__global__ void __launch_bounds__(kStatisticsThreads) healthKernel(const Vec3<Real>* x,
-  const Vec3<Real>* v, const Real* density, std::uint32_t n, double inverseRestDensity,
-  double* partials)
-{
-  __shared__ double shared[kHealthValues][kStatisticsThreads];
-  double acc[kHealthValues] = { 0.0, -1.0, 0.0 };
-  for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < n; i += gridDim.x * blockDim.x)
-  {
-    const Vec3d vi = Vec3d::from(v[i]);
-    const Vec3d xi = Vec3d::from(x[i]);
-    const double speed2 = dot(vi, vi);
-    const bool finite = isfinite(xi.x + xi.y + xi.z + vi.x + vi.y + vi.z);
-    acc[0] = finite ? fmax(acc[0], speed2) : acc[0];
-    acc[1] = fmax(acc[1], double(density[i]) * inverseRestDensity - 1.0);
-    acc[2] = finite ? acc[2] : 1.0;
-  }
-  const int t = threadIdx.x;
-  for (int k = 0; k < kHealthValues; ++k)
-  {
-    shared[k][t] = acc[k];
-  }
-  __syncthreads();
-  for (int width = kStatisticsThreads / 2; width > 0; width >>= 1)
-  {
-    if (t < width)
-    {
-      for (int k = 0; k < kHealthValues; ++k)
-      {
-        shared[k][t] = fmax(shared[k][t], shared[k][t + width]);
-      }
-    }
-    __syncthreads();
-  }
-  if (t < kHealthValues)
-  {
-    partials[blockIdx.x * kHealthValues + t] = shared[t][0];
-  }
-}
-
-// One thread: the blocks' maxima in order.
-__global__ inline void healthFinalKernel(const double* partials, int blocks, double* result)
-{
-  double acc[kHealthValues] = { 0.0, -1.0, 0.0 };
-  for (int b = 0; b < blocks; ++b)
-  {
-    for (int k = 0; k < kHealthValues; ++k)
-    {
-      acc[k] = fmax(acc[k], partials[b * kHealthValues + k]);
-    }
-  }
-  for (int k = 0; k < kHealthValues; ++k)
-  {
-    result[k] = acc[k];
-  }
 }
 
 } // namespace cuda

@@ -97,23 +97,8 @@ struct Launch<ConfinementStage>
   static constexpr bool neighborPass = true;
   static constexpr int minBlocks = 7;
 };
-constexpr int kMaxBlock = 128;
+constexpr int kMaxBlock = kMaxOptionsBlock;
 static_assert(kMaxBlock <= kMaskBlock, "forEachNeighbor's shared rows hold kMaskBlock threads");
-
-// The checks of Options that every CUDA stepper makes before it touches the device.
-inline void validateOptions(const Options& options)
-{
-  if (!(options.skin > 0.0 && options.skin <= 1.0))
-  {
-    throw InvalidInput("CUDA skin = " + std::to_string(options.skin) +
-      ": must lie in (0, 1] (a fraction of h)");
-  }
-  if (options.block < 32 || options.block > kMaxBlock || options.block % 32 != 0)
-  {
-    throw InvalidInput("CUDA block = " + std::to_string(options.block) +
-      ": must be a multiple of 32 up to " + std::to_string(kMaxBlock));
-  }
-}
 
 template <class Stage, class F>
 __global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageKernel(
@@ -151,7 +136,6 @@ __global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageMaxK
 
 // Adaptive mode's mean compression: fixed blocks of particles summed in a fixed tree, then the
 // block sums by one block, so the result is the same on every run.
-constexpr int kCompressionBlock = 4096;
 constexpr int kReduceThreads = 256;
 
 __device__ inline void treeSum(double* shared)

@@ -8,7 +8,7 @@ namespace pbf
 namespace cuda
 {
 
-// Compiled in CudaSubdomainFloat.cu and CudaSubdomainDouble.cu.
+// Compiled in CudaFloat.cu and CudaDouble.cu.
 extern template std::unique_ptr<distributed::DecomposedStepper> makeCudaSubdomainStepperOf<float>(
   distributed::Communicator&, const Parameters&, const ParticleBatch&, int, const Options&);
 extern template std::unique_ptr<distributed::DecomposedStepper> makeCudaSubdomainStepperOf<double>(

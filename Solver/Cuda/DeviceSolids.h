@@ -1,7 +1,7 @@
 // The solid obstacles (Physics/Boundary.h) of a GPU stepper in one block of device memory: the
 // grids' views, the boundary table (poly6, spiky, spiky2, tensile), then each grid's nodes. Laid
-// out here once for both GPU steppers (CudaStepperSolids.cuh, DeviceSubdomainSolids.h), which
-// differ only in how they allocate and copy.
+// out here once for both GPU steppers (DeviceStepperScans.h, DeviceSubdomainSolids.h), on their
+// device policy.
 #pragma once
 
 #include "Boundary.h"
@@ -13,13 +13,19 @@
 namespace pbf::cuda
 {
 
-// Points `constants` at the solids (none: null, 0 and an empty table) and returns the block, or
-// nullptr without solids. allocate(bytes) gives device memory, upload(device, host, bytes)
-// copies into it, wait() returns once the copies are done (the host arrays die here).
-template <class Real, class Allocate, class Upload, class Wait>
-void* uploadSolids(const std::vector<DistanceGrid>& obstacles, const Parameters& parameters,
-  StepConstants<Real>& constants, Allocate&& allocate, Upload&& upload, Wait&& wait)
+// Waits for the queued work, releases the previous block (`old`, may be null), points
+// `constants` at the new solids (none: null, 0 and an empty table) and returns their block, or
+// nullptr without solids. The copies are done when it returns (the host arrays die here).
+template <class Real, class Device>
+void* replaceSolids(Device& device, void* old, const std::vector<DistanceGrid>& obstacles,
+  const Parameters& parameters, StepConstants<Real>& constants)
 {
+  device.activate();
+  device.synchronize();
+  if (old)
+  {
+    device.release(old);
+  }
   constants.obstacles = nullptr;
   constants.obstacleCount = 0;
   constants.boundary = BoundaryTable<Real>{};
@@ -38,19 +44,19 @@ void* uploadSolids(const std::vector<DistanceGrid>& obstacles, const Parameters&
     nodesAt.push_back(total);
     total += aligned(g.phi.size() * sizeof(float));
   }
-  void* block = allocate(total);
+  void* block = device.allocate(total);
   char* base = static_cast<char*>(block);
   std::vector<DistanceGridView<Real>> views;
   for (std::size_t k = 0; k < obstacles.size(); ++k)
   {
     const DistanceGrid& g = obstacles[k];
-    upload(base + nodesAt[k], g.phi.data(), g.phi.size() * sizeof(float));
+    device.upload(base + nodesAt[k], g.phi.data(), g.phi.size() * sizeof(float));
     views.push_back(g.view<Real>(reinterpret_cast<const float*>(base + nodesAt[k])));
   }
-  upload(base, views.data(), views.size() * sizeof(DistanceGridView<Real>));
+  device.upload(base, views.data(), views.size() * sizeof(DistanceGridView<Real>));
   Real* onDevice = reinterpret_cast<Real*>(base + viewBytes);
-  upload(onDevice, table.data(), table.size() * sizeof(Real));
-  wait();
+  device.upload(onDevice, table.data(), table.size() * sizeof(Real));
+  device.synchronize();
   constants.obstacles = reinterpret_cast<const DistanceGridView<Real>*>(base);
   constants.obstacleCount = static_cast<int>(obstacles.size());
   constants.boundary = t.view(onDevice);

@@ -1,6 +1,6 @@
 // DeviceSubdomainStepper's solid obstacles (Physics/Boundary.h): every rank holds every solid's
 // distance grid (small beside the fluid), in one allocation of the device policy with their
-// views and the boundary table (DeviceSolids.h, as CudaStepper on one GPU); the
+// views and the boundary table (DeviceSolids.h, as DeviceStepper on one GPU); the
 // passes read them through StepConstants, the masks allow for a particle a solid moves on
 // (StepSchedule's correctionPass). Included at the end of DeviceSubdomainStepper.h; not a header
 // of its own.
@@ -15,17 +15,7 @@ namespace pbf::cuda
 template <class Real, class Device>
 void DeviceSubdomainStepper<Real, Device>::setObstacles(const std::vector<DistanceGrid>& obstacles)
 {
-  device_->activate();
-  device_->synchronize();
-  if (solids_)
-  {
-    device_->release(solids_);
-    solids_ = nullptr;
-  }
-  solids_ = uploadSolids(
-    obstacles, parameters_, constants_, [&](std::size_t bytes) { return device_->allocate(bytes); },
-    [&](void* device, const void* host, std::size_t bytes) { device_->upload(device, host, bytes); },
-    [&] { device_->synchronize(); });
+  solids_ = replaceSolids(*device_, solids_, obstacles, parameters_, constants_);
   // As after an append: the state at rest, p = x, evaluated with the solids on every rank.
   cut(xBuffer_, -1);
   evaluateAtRest();

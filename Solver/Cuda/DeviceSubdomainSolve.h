@@ -187,9 +187,8 @@ void DeviceSubdomainStepper<Real, Device>::keepOwned(const Vec3<Real>* x,
   subdomain::gather<Real>(exec, n, ownedList_, density_, densityAlt_);
   subdomain::gather<Real>(exec, n, ownedList_, lambda_, lambdaAlt_);
   subdomain::gather<Real>(exec, n, ownedList_, id_, idAlt_);
-  std::swap(density_, densityAlt_);
-  std::swap(lambda_, lambdaAlt_);
-  std::swap(id_, idAlt_);
+  store_->swapAlternates();
+  adoptStore();
   xBuffer_ = toX;
   vBuffer_ = toV;
 }

@@ -59,6 +59,8 @@
 #include "Distributed/RankReductions.h"
 #include "Distributed/Slabs.h"
 #include "Distributed/SubdomainStepper.h"
+#include "DeviceHealth.h"
+#include "DeviceParticleStore.h"
 #include "HostParticles.h"
 #include "ParticleChecks.h"
 #include "StepSchedule.h"
@@ -279,8 +281,9 @@ public:
     return builds;
   }
 
-  // What health() runs on each rank. Public only because nvcc allows no extended __host__
-  // __device__ lambda in a private member function.
+
+private:
+  // What the public calls above run on each rank, inside distributed::together.
   // The divergence check's scan and the automatic step's fastest particle, every step: three
   // maxima over the owned particles on the device (largest speed^2, largest compression, any
   // non-finite value), 24 bytes back, then reduced over the ranks so that every rank reaches the
@@ -290,33 +293,16 @@ public:
   {
     device_->activate();
     auto exec = device_->executor();
-    exec.fillZero(healthBits_, 3 * sizeof(unsigned long long));
-    const std::uint32_t n = count(n_);
-    const Vec3<Real>* x = vec_[xBuffer_];
-    const Vec3<Real>* v = vec_[vBuffer_];
-    const Real* density = density_;
-    const double inverseRho0 = 1.0 / parameters_.restDensity;
-    exec.forEachMax(GatherStage{}, n, healthBits_, [=] PBF_HD(std::uint32_t i) -> double {
-      const Vec3<Real> vi = v[i];
-      const double speed2 = double(vi.x) * vi.x + double(vi.y) * vi.y + double(vi.z) * vi.z;
-      return speed2 < 1e300 ? speed2 : 0.0; // NaN and infinity are the third maximum's
-    });
-    exec.forEachMax(GatherStage{}, n, healthBits_ + 1, [=] PBF_HD(std::uint32_t i) -> double {
-      const double e = double(density[i]) * inverseRho0 - 1.0;
-      return e > 0.0 && e < 1e300 ? e : 0.0;
-    });
-    exec.forEachMax(GatherStage{}, n, healthBits_ + 2, [=] PBF_HD(std::uint32_t i) -> double {
-      const Vec3<Real> xi = x[i], vi = v[i];
-      const double sum = double(xi.x) + xi.y + xi.z + vi.x + vi.y + vi.z;
-      return sum - sum == 0.0 ? 0.0 : 1.0; // finite exactly when sum - sum is 0
-    });
+    enqueueHealth(exec, vec_[xBuffer_], vec_[vBuffer_], density_, count(n_),
+      1.0 / parameters_.restDensity, healthBits_);
     unsigned long long bits[3] = { 0, 0, 0 };
     device_->download(bits, healthBits_, sizeof bits);
     device_->synchronize();
+    double mine[3];
+    decodeHealth(bits, mine);
     Health all;
-    for (const std::vector<double>& r : distributed::allGather(communicator_,
-           { MaskSchedule::bitsToDouble(bits[0]), MaskSchedule::bitsToDouble(bits[1]),
-             MaskSchedule::bitsToDouble(bits[2]) }))
+    for (const std::vector<double>& r :
+      distributed::allGather(communicator_, { mine[0], mine[1], mine[2] }))
     {
       all.maxSpeed = std::max(all.maxSpeed, std::sqrt(r[0]));
       all.maxDensityError = std::max(all.maxDensityError, r[1]);
@@ -325,8 +311,6 @@ public:
     return all;
   }
 
-private:
-  // What the public calls above run on each rank, inside distributed::together.
   void stepAlone()
   {
     device_->activate();
@@ -499,6 +483,8 @@ private:
   // O(log N) times), keeping the first `keep` entries of the four Vec3 buffers, density, lambda
   // and id. Never shrinks: once grown, steps allocate nothing.
   void reserve(std::size_t needed, std::size_t keep);
+  // The array pointers below from the store, after it grew or swapped its alternates.
+  void adoptStore();
 
   // Page-locked host memory for the messages, so that the copies to and from the device run at
   // the bus's speed and asynchronously; grow-only.
@@ -688,9 +674,9 @@ private:
   StepTime<Real>* deviceTime_ = nullptr; // constants_.time
   distributed::Slabs slabs_;
 
-  // Per-particle device arrays (capacity_ each); owned particles in [0, n_) between steps, with
-  // x in vec_[xBuffer_] and v in vec_[vBuffer_].
-  std::vector<void*> particleArrays_;
+  // Per-particle device arrays (capacity_ each, in the store; the pointers below are its); owned
+  // particles in [0, n_) between steps, with x in vec_[xBuffer_] and v in vec_[vBuffer_].
+  std::unique_ptr<DeviceParticleStore<Real, Device>> store_;
   std::size_t capacity_ = 0;
   std::size_t n_ = 0;
   std::size_t total_ = 0; // owned + ghosts during a step

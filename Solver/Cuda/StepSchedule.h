@@ -1,6 +1,7 @@
 // One solver step of the CUDA backend as a sequence of per-particle stages, written once over an
-// executor: CudaStepper.cuh runs it with kernels, CUB and CUDA graphs; the tests run it on the host,
-// where it must reproduce the serial backend bit for bit (Testing/Cuda/StepScheduleTest.cpp).
+// executor: DeviceStepper.h queues it on the device policy (kernels, CUB and CUDA graphs on CUDA; the
+// host policy in the tests, where it must reproduce the serial backend bit for bit:
+// Testing/Cuda/DeviceStepperHostTest.cpp).
 //
 // It is CpuStepper::step() with the memory of a GPU in mind:
 // - Algorithm 1's arrays rotate through four Vec3 buffers instead of six plus gather copies;
@@ -51,6 +52,10 @@ struct ConfinementStage {};
 // either counts one more projection or, when it is within the tolerance, sets done; the passes
 // that follow in the step then return at once (the skipped corrections copy the positions, so the
 // buffers stay where the captured graph expects them).
+// Adaptive mode's mean compression is summed in blocks of this many particles, in order (on the
+// device each block in a fixed tree, then the block sums by one block): the same on every run.
+constexpr int kCompressionBlock = 4096;
+
 struct AdaptiveState
 {
   int done;
@@ -107,7 +112,7 @@ struct StepConstants
 };
 
 // The constants of a step for given parameters: skin is how far beyond h the masks reach, as a
-// fraction of h; masks off means the 27-cell walk. CudaStepper and DeviceSubdomainStepper both
+// fraction of h; masks off means the 27-cell walk. DeviceStepper and DeviceSubdomainStepper both
 // build theirs here.
 template <class Real>
 StepConstants<Real> makeStepConstants(const Parameters& parameters, double skin, bool masks)

@@ -261,28 +261,18 @@ template <class Real>
 void SubdomainStepper<Real>::sortByCell()
 {
   const std::size_t n = fluid_.x.size();
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    fluid_.keys[i] = fluid_.geometry.keyOf(fluid_.p[i]);
-  }
-  countingSortByCell(fluid_.keys, fluid_.cellOffsets, fluid_.order, fluid_.cursor);
-  // Into scratch kept from step to step, as CpuStepper gathers: nothing allocated once the
-  // arrays have their size.
-  auto gather = [&](auto& array, auto& scratch) {
-    scratch.resize(n);
-    for (std::size_t k = 0; k < n; ++k)
-    {
-      scratch[k] = array[fluid_.order[k]];
-    }
-    array.swap(scratch);
-  };
-  gather(fluid_.x, fluid_.gatherVec);
-  gather(fluid_.p, fluid_.gatherVec);
-  gather(fluid_.v, fluid_.gatherVec);
-  gather(fluid_.id, fluid_.gatherId);
-  gather(fluid_.keys, gatherIndex_);
-  gather(tag_, gatherIndex_);
-  gather(ghostFrom_, gatherFrom_);
+  // Serially over owned particles and ghosts, as before this rank knows which are which.
+  fluid_.sortByCell(
+    [n](auto&& f) {
+      for (std::size_t i = 0; i < n; ++i)
+      {
+        f(static_cast<std::uint32_t>(i));
+      }
+    },
+    [&](auto&& gather) {
+      gather(tag_, gatherIndex_);
+      gather(ghostFrom_, gatherFrom_);
+    });
   // Sorted index of each pre-sort index; ghosts keep their arrival order per rank, which is the
   // order in which their owner packs their fields.
   std::vector<std::uint32_t>& sortedOf = gatherIndex_;

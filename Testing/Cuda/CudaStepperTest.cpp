@@ -67,17 +67,6 @@ Snapshot<Real> runCuda(const std::string& sceneName, Precision precision, int st
   return out;
 }
 
-template <class Real>
-void expectBitIdentical(const Snapshot<Real>& a, const Snapshot<Real>& b)
-{
-  ASSERT_EQ(a.id, b.id);
-  const std::size_t n = a.id.size();
-  EXPECT_EQ(std::memcmp(a.position.data(), b.position.data(), n * sizeof(a.position[0])), 0);
-  EXPECT_EQ(std::memcmp(a.velocity.data(), b.velocity.data(), n * sizeof(a.velocity[0])), 0);
-  EXPECT_EQ(std::memcmp(a.density.data(), b.density.data(), n * sizeof(a.density[0])), 0);
-  EXPECT_EQ(std::memcmp(a.lambda.data(), b.lambda.data(), n * sizeof(a.lambda[0])), 0);
-}
-
 cuda::Options withSearch(cuda::NeighborSearch search)
 {
   cuda::Options o;
@@ -210,9 +199,9 @@ TEST(CudaStepper, TwoRunsAreBitIdentical)
   PBF_REQUIRE_GPU();
   // No atomics feed the state, and the sort is stable: a run is reproducible to the bit.
   const cuda::Options defaults;
-  expectBitIdentical(runCuda<float>("dam_break", Precision::Single, 100, defaults),
+  test::expectBitIdentical(runCuda<float>("dam_break", Precision::Single, 100, defaults),
     runCuda<float>("dam_break", Precision::Single, 100, defaults));
-  expectBitIdentical(runCuda<double>("blob", Precision::Double, 100, defaults),
+  test::expectBitIdentical(runCuda<double>("blob", Precision::Double, 100, defaults),
     runCuda<double>("blob", Precision::Double, 100, defaults));
 }
 
@@ -232,7 +221,7 @@ TEST(CudaStepper, NeighborMasksAndGraphsChangeNoBit)
       o.skin = skin;
       o.graphs = graphs;
       SCOPED_TRACE("skin " + std::to_string(skin) + (graphs ? ", graphs" : ""));
-      expectBitIdentical(reference, runCuda<float>("blob", Precision::Single, 80, o));
+      test::expectBitIdentical(reference, runCuda<float>("blob", Precision::Single, 80, o));
     }
   }
   // Three iterations swap the x and v buffers every step.
@@ -249,7 +238,7 @@ TEST(CudaStepper, NeighborMasksAndGraphsChangeNoBit)
   Snapshot<float> sa, sb;
   a->read(sa);
   b->read(sb);
-  expectBitIdentical(sa, sb);
+  test::expectBitIdentical(sa, sb);
 }
 
 TEST(CudaStepper, EmittersGrowTheDeviceArraysLikeTheSerialBackend)
@@ -339,7 +328,7 @@ TEST(CudaStepper, CheckpointRestoresBitIdentically)
     straight.stepper().read(a);
     resumed.stepper().read(b);
     SCOPED_TRACE(scene);
-    expectBitIdentical(a, b);
+    test::expectBitIdentical(a, b);
   }
 }
 
@@ -397,7 +386,7 @@ TEST(CudaStepper, DefaultsAreBitIdenticalAcrossRunsAndResumes)
   Snapshot<float> x, y;
   a.stepper().read(x);
   b.stepper().read(y);
-  expectBitIdentical(x, y);
+  test::expectBitIdentical(x, y);
 }
 
 TEST(CudaStepper, RefinedDamBreakAtAMillionParticlesHolds)
@@ -452,29 +441,12 @@ TEST(CudaStepper, TheDivergenceCheckStopsABlowUpOnTheGpu)
   }
 }
 
-namespace
-{
-
-// The dam break with a box solid cutting into the column (its fluid removed, the rest touching
-// it from the first step) and a sphere in the surge's way.
-Scene sceneWithSolids()
-{
-  return parseScene(R"({
-    "domain": { "min": [0, 0, 0], "max": [1.6, 0.8, 0.6] },
-    "fluid": [ { "type": "box", "min": [0, 0, 0], "max": [0.4, 0.6, 0.6] } ],
-    "obstacles": [
-      { "type": "sphere", "center": [0.9, 0.12, 0.3], "radius": 0.12 },
-      { "type": "box", "min": [0.3, -0.5, -0.5], "max": [0.5, 0.2, 0.2] } ] })");
-}
-
-} // namespace
-
 TEST(CudaStepper, SolidsMatchTheSerialBackend)
 {
   PBF_REQUIRE_GPU();
   // Double precision, the fixed scheme: as OneStepMatchesSerialInDoublePrecision, rounding only
   // (1e-12 relative after a step), now with the solids' terms in every pass.
-  const Scene scene = sceneWithSolids();
+  const Scene scene = test::damBreakWithSolids();
   Simulation serial(scene, smallParameters(0.04), Backend::Serial, Precision::Double);
   Simulation gpu(scene, smallParameters(0.04), Backend::CUDA, Precision::Double);
   ASSERT_EQ(gpu.stepper().size(), serial.stepper().size());
@@ -492,7 +464,7 @@ TEST(CudaStepper, NoParticleEntersASolidOnTheGpu)
   PBF_REQUIRE_GPU();
   Parameters p;
   p.particleSpacing = 0.02;
-  Simulation gpu(sceneWithSolids(), p, Backend::CUDA, Precision::Single);
+  Simulation gpu(test::damBreakWithSolids(), p, Backend::CUDA, Precision::Single);
   double deepest = 0;
   for (int frame = 1; frame <= 48; ++frame) // 0.8 s: the surge passes the sphere
   {

@@ -55,7 +55,7 @@ void expectBitIdentical(const Snapshot<double>& a, const Snapshot<double>& b)
 TEST(DeviceSubdomainOnHost, OneRankIsBitIdenticalToTheSerialBackend)
 {
   // One rank has no ghosts and migrates nothing: StepSchedule's stages in StepSchedule's order,
-  // which reproduce the serial backend bit for bit (StepScheduleTest).
+  // which reproduce the serial backend bit for bit (DeviceStepperHostTest).
   const PresetFluid setup = presetFluid("dam_break", 0.04);
   const Snapshot<double> reference = serialState(setup, 10, Precision::Double);
   const DecomposedOutcome one = runDecomposed(1, setup, 10, onHost<double>());

@@ -4,13 +4,16 @@
 // that read what another particle of the same stage writes would then give different results.
 #pragma once
 
+#include "Cuda/StatisticsScan.h"
 #include "Cuda/StepSchedule.h"
 #include "DeviceFault.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <string>
 #include <cstring>
+#include <functional>
 #include <numeric>
 #include <vector>
 
@@ -128,8 +131,8 @@ private:
   bool backwards_;
 };
 
-// The Device policy of cuda::DeviceSubdomainStepper on host memory: the decomposed CUDA step
-// runs here stage by stage, with the transfers as plain copies.
+// The Device policy of both GPU steppers (cuda::DeviceStepper, cuda::DeviceSubdomainStepper) on
+// host memory: their steps run here stage by stage, with the transfers as plain copies.
 class HostDevicePolicy
 {
 public:
@@ -177,10 +180,77 @@ public:
     }
   }
   void reserveTemp(std::uint32_t, std::size_t, int) {}
+  static std::size_t tempBytesFor(std::uint32_t, std::size_t, int) { return 0; }
   void activate() {}
   std::string name() const { return "host executor"; }
 
+  void* allocateOrNull(std::size_t bytes) { return allocate(bytes); }
+  // As much memory as a test says (64 GiB free unless told).
+  void memoryInfo(std::size_t& freeBytes, std::size_t& totalBytes) const
+  {
+    freeBytes = freeBytes_;
+    totalBytes = freeBytes_;
+  }
+  void setFreeMemory(std::size_t bytes) { freeBytes_ = bytes; }
+  void* stream() const { return nullptr; }
+
+  // A captured step keeps its closure, with the arguments of the capture, and launch runs it:
+  // what a CUDA graph does with its kernels' arguments.
+  struct Graph
+  {
+    std::function<void(HostExecutor&)> replay;
+  };
+  template <class Enqueue>
+  void capture(Graph& g, Enqueue&& enqueue)
+  {
+    g.replay = std::forward<Enqueue>(enqueue);
+    ++captures_;
+  }
+  void launch(const Graph& g)
+  {
+    HostExecutor exec = executor();
+    g.replay(exec);
+  }
+  void destroy(Graph& g) { g.replay = nullptr; }
+  long captures() const { return captures_; }
+
+  static std::size_t statisticsPartialBytes() { return 0; }
+  // The sums and maxima of CudaReductions.cuh's kernels, in particle order.
+  template <class Real>
+  void scanStatistics(const cuda::StatisticsScan<Real>& s, double*, double* result)
+  {
+    double acc[cuda::kStatisticsValues] = {};
+    for (std::uint32_t i = 0; i < s.n; ++i)
+    {
+      const double error = std::max(double(s.density[i]) / s.restDensity - 1.0, 0.0);
+      acc[cuda::kErrorSum] += error;
+      acc[cuda::kErrorMax] = std::max(acc[cuda::kErrorMax], error);
+      const Vec3d si = Vec3d::from(s.sorted[i]);
+      forEachNeighbor(s.grid, i, [&](std::uint32_t j) {
+        const Vec3d r = si - Vec3d::from(s.sorted[j]);
+        acc[cuda::kNeighborSum] += (j != i && dot(r, r) < s.h2) ? 1.0 : 0.0;
+      });
+      const Vec3d xi = Vec3d::from(s.x[i]);
+      const Vec3d vi = Vec3d::from(s.v[i]);
+      const double speed2 = dot(vi, vi);
+      acc[cuda::kSpeedMax] = std::max(acc[cuda::kSpeedMax], std::sqrt(speed2));
+      acc[cuda::kKinetic] += 0.5 * s.mass * speed2;
+      acc[cuda::kMomentumX] += vi.x * s.mass;
+      acc[cuda::kMomentumY] += vi.y * s.mass;
+      acc[cuda::kMomentumZ] += vi.z * s.mass;
+      if (!std::isfinite(xi.x + xi.y + xi.z + vi.x + vi.y + vi.z))
+      {
+        acc[cuda::kNonFinite] = 1.0;
+      }
+    }
+    std::memcpy(result, acc, sizeof acc);
+  }
+  // Options::faultAtStep: the next synchronisation reports a device fault.
+  void injectFault() { faultIn_ = 0; }
+
 private:
+  std::size_t freeBytes_ = std::size_t(64) << 30;
+  long captures_ = 0;
   bool backwards_;
   long faultIn_ = -1;
   long synchronizations_ = 0;

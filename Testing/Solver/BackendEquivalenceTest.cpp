@@ -12,17 +12,6 @@ namespace
 {
 
 template <class Real>
-void expectBitIdentical(const Snapshot<Real>& a, const Snapshot<Real>& b)
-{
-  ASSERT_EQ(a.id, b.id); // same order, since both sort the same way
-  const std::size_t n = a.id.size();
-  EXPECT_EQ(std::memcmp(a.position.data(), b.position.data(), n * sizeof(a.position[0])), 0);
-  EXPECT_EQ(std::memcmp(a.velocity.data(), b.velocity.data(), n * sizeof(a.velocity[0])), 0);
-  EXPECT_EQ(std::memcmp(a.density.data(), b.density.data(), n * sizeof(a.density[0])), 0);
-  EXPECT_EQ(std::memcmp(a.lambda.data(), b.lambda.data(), n * sizeof(a.lambda[0])), 0);
-}
-
-template <class Real>
 Snapshot<Real> run(Backend backend, Precision precision, const std::string& scene, int steps)
 {
   Parameters p;
@@ -40,14 +29,14 @@ TEST(BackendEquivalence, OpenMPIsBitIdenticalToSerialInSinglePrecision)
 {
   for (const char* scene : { "dam_break", "stream" })
   {
-    expectBitIdentical(run<float>(Backend::Serial, Precision::Single, scene, 60),
+    test::expectBitIdentical(run<float>(Backend::Serial, Precision::Single, scene, 60),
       run<float>(Backend::OpenMP, Precision::Single, scene, 60));
   }
 }
 
 TEST(BackendEquivalence, OpenMPIsBitIdenticalToSerialInDoublePrecision)
 {
-  expectBitIdentical(run<double>(Backend::Serial, Precision::Double, "blob", 60),
+  test::expectBitIdentical(run<double>(Backend::Serial, Precision::Double, "blob", 60),
     run<double>(Backend::OpenMP, Precision::Double, "blob", 60));
 }
 
@@ -64,7 +53,7 @@ TEST(BackendEquivalence, SteppingInPiecesEqualsSteppingAtOnce)
   Snapshot<float> a, b;
   once.stepper().read(a);
   pieces.stepper().read(b);
-  expectBitIdentical(a, b);
+  test::expectBitIdentical(a, b);
 }
 
 TEST(BackendEquivalence, SinglePrecisionTracksDoublePrecision)

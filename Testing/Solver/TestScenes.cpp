@@ -99,4 +99,14 @@ double maxRelativePositionError(const Snapshot<double>& a, const Snapshot<double
   return worst;
 }
 
+Scene damBreakWithSolids()
+{
+  return parseScene(R"({
+    "domain": { "min": [0, 0, 0], "max": [1.6, 0.8, 0.6] },
+    "fluid": [ { "type": "box", "min": [0, 0, 0], "max": [0.4, 0.6, 0.6] } ],
+    "obstacles": [
+      { "type": "sphere", "center": [0.9, 0.12, 0.3], "radius": 0.12 },
+      { "type": "box", "min": [0.3, -0.5, -0.5], "max": [0.5, 0.2, 0.2] } ] })");
+}
+
 } // namespace pbf::test

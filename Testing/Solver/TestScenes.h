@@ -4,6 +4,9 @@
 #include "Scene.h"
 #include "Simulation.h"
 
+#include <gtest/gtest.h>
+
+#include <cstring>
 #include <map>
 #include <string>
 
@@ -39,5 +42,21 @@ std::map<std::int64_t, std::size_t> indexById(const Snapshot<double>& snapshot);
 // Largest |x_a - x_b| / |x_b| over particles matched by id (infinity for a NaN). Adds a gtest
 // failure for a count that differs, an id twice in a, or an id of a missing from b.
 double maxRelativePositionError(const Snapshot<double>& a, const Snapshot<double>& b);
+
+// Two states equal bit for bit, in the same order (two backends that sort alike).
+template <class Real>
+void expectBitIdentical(const Snapshot<Real>& a, const Snapshot<Real>& b)
+{
+  ASSERT_EQ(a.id, b.id);
+  const std::size_t n = a.id.size();
+  EXPECT_EQ(std::memcmp(a.position.data(), b.position.data(), n * sizeof(a.position[0])), 0);
+  EXPECT_EQ(std::memcmp(a.velocity.data(), b.velocity.data(), n * sizeof(a.velocity[0])), 0);
+  EXPECT_EQ(std::memcmp(a.density.data(), b.density.data(), n * sizeof(a.density[0])), 0);
+  EXPECT_EQ(std::memcmp(a.lambda.data(), b.lambda.data(), n * sizeof(a.lambda[0])), 0);
+}
+
+// The dam break with a box solid cutting into the column (its fluid removed, the rest touching
+// it from the first step) and a sphere in the surge's way.
+Scene damBreakWithSolids();
 
 } // namespace pbf::test

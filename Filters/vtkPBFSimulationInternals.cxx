@@ -1,0 +1,392 @@
+#include "vtkPBFSimulationInternals.h"
+#include "vtkPBFObstacles.h"
+#include "vtkPBFOutput.h"
+#include "vtkPBFRankCommunicator.h"
+#include "vtkPBFTranslate.h"
+
+#include "vtkDataSet.h"
+#include "vtkFieldData.h"
+#include "vtkIdTypeArray.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkMultiProcessController.h"
+#include "vtkNew.h"
+#include "vtkOutputWindow.h"
+#include "vtkPointSet.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
+
+#include "Parameters.h"
+#include "Scene.h"
+#include "Stepper.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace
+{
+
+std::string ReadWholeFile(const std::string& path)
+{
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+double Milliseconds(std::chrono::steady_clock::time_point since)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since)
+    .count();
+}
+
+} // namespace
+
+//------------------------------------------------------------------------------
+FrameRequest vtkPBFSimulation::vtkInternals::ParseRequest(
+  vtkPBFSimulation* self, vtkInformation* request, vtkInformationVector* outputVector) const
+{
+  // The request may come through any port; all carry the same time.
+  int port = request->Has(vtkDemandDrivenPipeline::FROM_OUTPUT_PORT())
+    ? request->Get(vtkDemandDrivenPipeline::FROM_OUTPUT_PORT())
+    : 0;
+  if (port < 0 || port >= self->GetNumberOfOutputPorts())
+  {
+    port = 0;
+  }
+  vtkInformation* info = outputVector->GetInformationObject(port);
+  FrameRequest r;
+  r.Frame = self->FrameForTime(info->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
+      ? info->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
+      : 0.0);
+  r.Time = static_cast<double>(r.Frame) * self->FrameInterval;
+  if (info->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()))
+  {
+    r.Piece = info->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER());
+  }
+  if (info->Has(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES()))
+  {
+    r.Pieces = info->Get(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES());
+  }
+  // One piece per rank of ParaView's parallel engine: a domain-decomposed run, in which every
+  // rank takes part in every request. Any other split (streaming pieces in one process) gets the
+  // whole fluid on piece 0.
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  r.Decomposed = self->DecomposeAcrossRanks && r.Pieces > 1 && controller &&
+    controller->GetNumberOfProcesses() == r.Pieces && controller->GetLocalProcessId() == r.Piece;
+  return r;
+}
+
+//------------------------------------------------------------------------------
+pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
+  vtkPointSet* input, const std::vector<vtkDataSet*>& obstacles, const FrameRequest& r)
+{
+  const std::string invalidTime = self->InvalidTimeProperty();
+  if (!invalidTime.empty())
+  {
+    throw pbf::InvalidInput(invalidTime);
+  }
+  pbf::PlaybackKey key;
+  const std::string sceneFile = self->SceneFile ? self->SceneFile : "";
+  key.scene = sceneFile.empty() ? std::string("preset ") + self->GetPresetName()
+                                : "file " + sceneFile + "\n" + ReadWholeFile(sceneFile);
+  key.scene += vtkPBFMeshFileVersions(sceneFile);
+  pbf::Parameters& p = key.parameters;
+  p.restDensity = self->RestDensity;
+  p.particleSpacing = self->ParticleSpacing;
+  p.smoothingRatio = self->SmoothingRatio;
+  p.solverIterations = self->SolverIterations;
+  p.densityErrorTolerance = self->AdaptiveIterations ? self->DensityErrorTolerance : 0.0;
+  p.maxDensityErrorTolerance = self->MaxDensityErrorTolerance;
+  p.relaxation = self->RelaxationEpsilon;
+  p.sCorrK = self->SCorrK;
+  p.sCorrN = self->SCorrN;
+  p.sCorrDeltaQ = self->SCorrDeltaQ;
+  p.xsphViscosity = self->XSPHViscosity;
+  p.vorticityEpsilon = self->VorticityEpsilon;
+  p.unilateral = self->Unilateral;
+  p.mirrorWalls = self->MirrorWalls;
+  p.gravity = pbf::Vec3d{ self->Gravity[0], self->Gravity[1], self->Gravity[2] };
+  // Fixed: SubstepsPerFrame equal steps per frame. Automatic: steps chosen from the state, at
+  // most MaxTimeStep, landing on every frame; SubstepsPerFrame then changes nothing.
+  const bool automatic = self->TimeStepping == TIME_STEPPING_AUTOMATIC;
+  p.timeStepping = automatic ? pbf::TimeStepping::Automatic : pbf::TimeStepping::Fixed;
+  p.timeStep = automatic ? self->MaxTimeStep : self->FrameInterval / self->SubstepsPerFrame;
+  p.cflNumber = automatic ? self->CFLNumber : pbf::Parameters().cflNumber;
+  key.frameInterval = self->FrameInterval;
+  key.substeps = automatic ? 0 : self->SubstepsPerFrame;
+  key.precision =
+    self->Precision == PRECISION_DOUBLE ? pbf::Precision::Double : pbf::Precision::Single;
+  key.hasInput = input != nullptr;
+  key.inputVersion = input ? input->GetMTime() : 0;
+  // A new obstacle, a changed one or another thickness is another run; none: empty.
+  if (!obstacles.empty())
+  {
+    std::ostringstream solids;
+    solids << obstacles.size() << " thickness " << self->ObstacleThickness;
+    for (vtkDataSet* obstacle : obstacles)
+    {
+      solids << " " << (obstacle ? obstacle->GetMTime() : 0);
+    }
+    key.obstacles = solids.str();
+  }
+
+  // The ranks of a decomposed run, and the backend every rank agrees on.
+  if (r.Decomposed && !this->Ranks)
+  {
+    this->Ranks = MakeRankCommunicator(vtkMultiProcessController::GetGlobalController());
+  }
+  pbf::distributed::Communicator* ranks = r.Decomposed ? this->Ranks.get() : nullptr;
+  if (ranks && ranks->failed())
+  {
+    // Every rank failed together (the same error on each), so every rank comes here and opens a
+    // fresh channel before the next collective call, leaving the failed one's messages behind.
+    ranks->recover();
+  }
+  this->Playback.setRanks(ranks);
+  key.ranks = r.Decomposed ? r.Pieces : 1;
+  const pbf::BackendRequest requested[] = { pbf::BackendRequest::Auto, pbf::BackendRequest::CUDA,
+    pbf::BackendRequest::OpenMP, pbf::BackendRequest::Serial };
+  const pbf::BackendChoice choice =
+    pbf::chooseBackend(requested[self->Backend], this->HasCuda(), this->CudaAbsence, ranks);
+  key.backend = choice.backend;
+  if (!choice.noCuda.empty() && !this->FallbackReported)
+  {
+    this->FallbackReported = true;
+    std::ostringstream text;
+    text << self->GetClassName() << " (" << self << "): Backend Auto: no CUDA (" << choice.noCuda
+         << "); falling back to CPU (OpenMP).\n";
+    vtkOutputWindowDisplayText(text.str().c_str());
+  }
+  return key;
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::vtkInternals::Adopt(
+  vtkPBFSimulation* self, const pbf::PlaybackKey& key, int frame)
+{
+  // Obstacles are static: one that changes (moved by hand, or by an animated Transform upstream)
+  // starts the run again with the obstacle where it is now. Said whenever a later frame is asked
+  // (playing, scrubbing), so that an animated obstacle is not mistaken for a moving one.
+  const std::string& before = this->Playback.key().obstacles;
+  if (frame > 0 && !before.empty() && !key.obstacles.empty() && before != key.obstacles)
+  {
+    vtkWarningWithObjectMacro(self, << "the Obstacles input changed: the simulation starts "
+                                       "again from frame 0 with the obstacles as they are now "
+                                       "(obstacles stand still; a moving one is not simulated).");
+  }
+  if (this->Playback.adopt(key) && !this->Playback.deviceFaulted())
+  {
+    this->LastFrame = -1; // another run: nothing delivered belongs to it
+    this->DeviceFaultText.clear();
+  }
+  this->Playback.configureCheckpoints(self->CheckpointInterval,
+    static_cast<std::size_t>(std::min(self->CheckpointMemoryMB * 1048576.0, 1e18)));
+}
+
+//------------------------------------------------------------------------------
+std::unique_ptr<pbf::Simulation> vtkPBFSimulation::vtkInternals::Build(vtkPBFSimulation* self,
+  const pbf::PlaybackKey& key, vtkPointSet* input, const std::vector<vtkDataSet*>& obstacles)
+{
+  const std::string sceneFile = self->SceneFile ? self->SceneFile : "";
+  pbf::Scene scene =
+    sceneFile.empty() ? pbf::presetScene(self->GetPresetName()) : pbf::loadSceneFile(sceneFile);
+  vtkPBFReadMeshFiles(scene);
+  // The Obstacles port's solids join the scene's own, named as the user can find them.
+  for (std::size_t c = 0; c < obstacles.size(); ++c)
+  {
+    const std::string name = "Obstacles input " + std::to_string(c + 1) + " of " +
+      std::to_string(obstacles.size()) + " (" +
+      (obstacles[c] ? obstacles[c]->GetClassName() : "no data") + ")";
+    scene.solids.push_back(vtkPBFSolidFromInput(obstacles[c], self->ObstacleThickness, name));
+  }
+  // Decomposed, every rank builds the whole fluid (from the whole input, which
+  // RequestUpdateExtent asks for on every rank) and keeps its slab.
+  pbf::distributed::Communicator* ranks = key.ranks > 1 ? this->Ranks.get() : nullptr;
+  if (ranks && ranks->failed())
+  {
+    ranks->recover();
+  }
+  auto simulation = input
+    ? std::make_unique<pbf::Simulation>(scene, key.parameters, key.backend, key.precision,
+        vtkPBFBatchFromInput(input), ranks)
+    : std::make_unique<pbf::Simulation>(scene, key.parameters, key.backend, key.precision, ranks);
+  if (simulation->seededInsideSolids() > 0 && (!ranks || ranks->rank() == 0))
+  {
+    vtkWarningWithObjectMacro(self, << simulation->seededInsideSolids()
+                                    << " initial particles lay inside the obstacles and were "
+                                       "removed before the first step.");
+  }
+  return simulation;
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::vtkInternals::OnDeviceFault(
+  vtkPBFSimulation* self, const pbf::DeviceFault& fault, int frame)
+{
+  // The GPU failed (a lost device, a kernel that faulted): its copy of the state is gone, while
+  // the checkpoints and the diagnostics rows are host copies of whole frames and stay. CUDA is
+  // not tried again (a lost context stays lost until the process ends). Backend Auto goes on on
+  // the CPU; Backend CUDA stops with an error that says how to go on.
+  const std::uint64_t failedAt = this->Playback.live() ? this->Playback.live()->stepCount() : 0;
+  const bool fallBack =
+    self->Backend == BACKEND_AUTO && this->Playback.key().backend == pbf::Backend::CUDA;
+  const std::string resumable = this->Playback.afterDeviceFault(frame, fallBack);
+  this->CudaProbed = true;
+  this->CudaPresent = false;
+  this->CudaAbsence = std::string("the GPU failed earlier: ") + fault.what();
+  this->FallbackReported = true; // this message says it; the Auto notice need not
+  std::ostringstream text;
+  text << "CUDA device fault near step " << failedAt << ", on the way to frame " << frame << ": "
+       << fault.what() << ". ";
+  if (!fallBack)
+  {
+    text << "The previous output stays and so do the checkpoints: choose Backend Auto or CPU "
+            "(OpenMP) to go on from "
+         << resumable << " on the CPU.";
+    throw std::runtime_error(text.str());
+  }
+  text << "Backend Auto: falling back to CPU (OpenMP) from " << resumable
+       << "; the frames from there on are computed on the CPU (they agree with the GPU's to "
+          "rounding, not bit for bit).";
+  this->DeviceFaultText = text.str();
+  vtkWarningWithObjectMacro(self, << this->DeviceFaultText);
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::vtkInternals::Deliver(vtkPBFSimulation* self, const FrameRequest& r,
+  const pbf::FrameReached& reached, vtkPolyData* output, vtkTable* table)
+{
+  const auto start = std::chrono::steady_clock::now();
+  const pbf::Simulation& simulation = *this->Playback.live();
+  vtkNew<vtkPolyData> result;
+  vtkPBFOutput::FillParticles(simulation.stepper(),
+    self->PageLockedOutput && simulation.stepper().backend() == pbf::Backend::CUDA,
+    this->Vertices, result);
+  vtkSmartPointer<vtkFieldData> fieldData = vtkPBFOutput::FrameFieldData(
+    simulation, r.Frame, self->FrameInterval, self->SubstepsPerFrame);
+  vtkPBFOutput::AddInteger(fieldData, "RequestSteps", static_cast<vtkIdType>(reached.steps));
+  vtkPBFOutput::AddText(fieldData, "ResumedFrom", reached.resumedFrom);
+  if (this->Playback.key().ranks > 1)
+  {
+    // Collective, like every step: all ranks deliver the same frame.
+    vtkPBFOutput::AddInteger(fieldData, "Rank", r.Piece);
+    vtkPBFOutput::AddInteger(fieldData, "Ranks", this->Playback.key().ranks);
+    vtkNew<vtkIdTypeArray> perRank;
+    perRank->SetName("ParticlesPerRank");
+    for (const std::vector<double>& theirs :
+      pbf::distributed::allGather(*this->Ranks, { double(simulation.stepper().size()) }))
+    {
+      perRank->InsertNextValue(static_cast<vtkIdType>(theirs[0]));
+    }
+    fieldData->AddArray(perRank);
+  }
+  if (!this->DeviceFaultText.empty())
+  {
+    vtkPBFOutput::AddText(fieldData, "DeviceFault", this->DeviceFaultText);
+  }
+  vtkPBFOutput::AddInteger(
+    fieldData, "ResumedFromStep", static_cast<vtkIdType>(reached.resumedFromStep));
+  vtkNew<vtkIdTypeArray> held;
+  held->SetName("CheckpointFrames");
+  for (int frame : this->Playback.checkpointFrames())
+  {
+    held->InsertNextValue(frame);
+  }
+  fieldData->AddArray(held);
+  vtkPBFOutput::AddValue(
+    fieldData, "CheckpointMemoryMB", this->Playback.checkpointBytes() / 1048576.0);
+  result->SetFieldData(fieldData);
+  result->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), r.Time);
+  this->LastOutput = result;
+  this->LastFrame = r.Frame;
+  output->ShallowCopy(result);
+  output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), r.Time);
+  table->ShallowCopy(this->DiagnosticsTable());
+  table->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), r.Time);
+  this->DeliveryMilliseconds = Milliseconds(start);
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::vtkInternals::ReportAbort(vtkPBFSimulation* self, const FrameRequest& r)
+{
+  const pbf::Simulation& simulation = *this->Playback.live();
+  std::ostringstream text;
+  text << self->GetClassName() << " (" << self << "): aborted at step " << simulation.stepCount()
+       << " (t = " << simulation.time() << " s) on the way to frame " << r.Frame
+       << " (t = " << r.Time << " s); the previous output stays.\n";
+  vtkOutputWindowDisplayText(text.str().c_str());
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::vtkInternals::DeliverAgain(
+  const FrameRequest& r, vtkPolyData* output, vtkTable* table)
+{
+  // The frame just delivered: handed out again, arrays shared, nothing stepped or copied.
+  output->ShallowCopy(this->LastOutput);
+  vtkNew<vtkFieldData> fieldData;
+  fieldData->ShallowCopy(this->LastOutput->GetFieldData());
+  vtkPBFOutput::AddInteger(fieldData, "RequestSteps", 0);
+  vtkPBFOutput::AddText(fieldData, "ResumedFrom", "output");
+  vtkDataArray* steps = this->LastOutput->GetFieldData()->GetArray("StepCount");
+  vtkPBFOutput::AddInteger(fieldData, "ResumedFromStep",
+    steps ? static_cast<vtkIdType>(steps->GetTuple1(0)) : vtkIdType(0));
+  output->SetFieldData(fieldData);
+  output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), r.Time);
+  table->ShallowCopy(this->DiagnosticsTable());
+  table->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), r.Time);
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::vtkInternals::DeliverPrevious(vtkPolyData* output, vtkTable* table)
+{
+  // The last good output (with its own time) and the diagnostics known so far.
+  output->ShallowCopy(this->LastOutput);
+  table->ShallowCopy(this->DiagnosticsTable());
+  vtkInformation* last = this->LastOutput->GetInformation();
+  if (last->Has(vtkDataObject::DATA_TIME_STEP()))
+  {
+    const double shown = last->Get(vtkDataObject::DATA_TIME_STEP());
+    output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), shown);
+    table->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), shown);
+  }
+}
+
+//------------------------------------------------------------------------------
+vtkTable* vtkPBFSimulation::vtkInternals::DiagnosticsTable()
+{
+  const pbf::Playback& playback = this->Playback;
+  // A decomposed run's rows are reduced over the ranks and the same on each: rank 0 shows them.
+  const bool decomposed = playback.hasKey() && playback.key().ranks > 1;
+  if (decomposed && this->Ranks && this->Ranks->rank() != 0)
+  {
+    return this->EmptyTable;
+  }
+  if (!this->Table || this->TableVersion != playback.rowsVersion())
+  {
+    this->Table = vtkPBFOutput::DiagnosticsTable(playback.rows(), decomposed);
+    this->TableVersion = playback.rowsVersion();
+  }
+  return this->Table;
+}
+
+//------------------------------------------------------------------------------
+std::string vtkPBFSimulation::vtkInternals::InUserTerms(
+  vtkPBFSimulation* self, const std::exception& error) const
+{
+  std::string text = vtkPBFInUserTerms(error.what());
+  if (dynamic_cast<const pbf::InvalidInput*>(&error) && text.find("domain") != std::string::npos)
+  {
+    // The user set no domain: say where it comes from and what changes it.
+    const bool file = self->SceneFile && *self->SceneFile;
+    text += file ? std::string(". The domain is the one of Scene File \"") + self->SceneFile + "\""
+                 : std::string(". The domain is the tank of Preset \"") + self->GetPresetName() +
+        "\"; a Scene File with its own \"domain\" changes it";
+  }
+  return text;
+}
+

@@ -1,0 +1,109 @@
+// vtkPBFSimulation's state between requests and the steps of a request, apart from the
+// pipeline methods (vtkPBFSimulation.cxx): the playback core (live simulation, checkpoints,
+// diagnostics rows) and what the VTK side keeps of its results. Private to the filter.
+#ifndef vtkPBFSimulationInternals_h
+#define vtkPBFSimulationInternals_h
+
+#include "vtkPBFSimulation.h"
+
+#include "vtkCellArray.h"
+#include "vtkPolyData.h"
+#include "vtkSmartPointer.h"
+#include "vtkTable.h"
+
+#include "BackendChoice.h"
+#include "DeviceFault.h"
+#include "Distributed/Communicator.h"
+#include "Playback.h"
+#include "Simulation.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+class vtkDataSet;
+class vtkInformation;
+class vtkInformationVector;
+class vtkPointSet;
+
+// Which piece of which frame a request asks for.
+struct FrameRequest
+{
+  int Frame = 0;
+  double Time = 0; // the frame's time, Frame * FrameInterval
+  int Piece = 0;
+  int Pieces = 1;
+  bool Decomposed = false; // one piece per rank of the global controller: a decomposed run
+};
+
+// The algorithm's state between requests: the playback core (live simulation, checkpoints,
+// diagnostics rows) and what the VTK side keeps of its results.
+class vtkPBFSimulation::vtkInternals
+{
+public:
+  pbf::Playback Playback;
+
+  // What the last successful request produced (a failed or aborted request hands it out again)
+  // and, when it is a frame of the playback's key, which one (-1 otherwise).
+  vtkSmartPointer<vtkPolyData> LastOutput = vtkSmartPointer<vtkPolyData>::New();
+  int LastFrame = -1;
+  // The outline of the domain last simulated (port 2), kept when a request fails.
+  vtkSmartPointer<vtkPolyData> Domain = vtkSmartPointer<vtkPolyData>::New();
+  // The run Domain was built for: the tank and the scene's obstacles change only with it.
+  pbf::PlaybackKey DomainKey;
+  bool DomainBuilt = false;
+  // Reused from frame to frame while the particle count stays.
+  vtkSmartPointer<vtkCellArray> Vertices;
+  // The diagnostics table of the rows of version TableVersion.
+  vtkSmartPointer<vtkTable> Table;
+  std::uint64_t TableVersion = 0;
+  vtkSmartPointer<vtkTable> EmptyTable = vtkSmartPointer<vtkTable>::New();
+
+  // The cost of the last request.
+  pbf::FrameReached Costs;
+  double DeliveryMilliseconds = 0;
+
+  // The ranks of a decomposed run, over ParaView's global controller: its MPI communicator where
+  // it has one (pvbatch under mpiexec, a pvserver), so that a rank whose GPU faults stops every
+  // rank with its error (Distributed/RankFailure.h).
+  std::unique_ptr<pbf::distributed::Communicator> Ranks;
+
+  // CUDA is probed once: a device does not come and go while ParaView runs.
+  bool CudaProbed = false;
+  bool CudaPresent = false;
+  std::string CudaAbsence;
+  bool FallbackReported = false;
+  // The run met a device fault and went on on the CPU: the warning, which the frames computed
+  // since carry in their field data ("DeviceFault").
+  std::string DeviceFaultText;
+
+  bool HasCuda()
+  {
+    if (!this->CudaProbed)
+    {
+      this->CudaPresent = pbf::cudaAvailable(&this->CudaAbsence);
+      this->CudaProbed = true;
+    }
+    return this->CudaPresent;
+  }
+
+  FrameRequest ParseRequest(vtkPBFSimulation* self, vtkInformation* request,
+    vtkInformationVector* outputVector) const;
+  pbf::PlaybackKey MakeKey(vtkPBFSimulation* self, vtkPointSet* input,
+    const std::vector<vtkDataSet*>& obstacles, const FrameRequest& r);
+  // Makes `key` the playback's and applies the checkpoint settings.
+  void Adopt(vtkPBFSimulation* self, const pbf::PlaybackKey& key, int frame);
+  std::unique_ptr<pbf::Simulation> Build(vtkPBFSimulation* self, const pbf::PlaybackKey& key,
+    vtkPointSet* input, const std::vector<vtkDataSet*>& obstacles);
+  void OnDeviceFault(vtkPBFSimulation* self, const pbf::DeviceFault& fault, int frame);
+  // The frame's particles and field data on port 0, the diagnostics on port 1.
+  void Deliver(vtkPBFSimulation* self, const FrameRequest& r, const pbf::FrameReached& reached,
+    vtkPolyData* output, vtkTable* table);
+  void ReportAbort(vtkPBFSimulation* self, const FrameRequest& r);
+  void DeliverAgain(const FrameRequest& r, vtkPolyData* output, vtkTable* table);
+  void DeliverPrevious(vtkPolyData* output, vtkTable* table);
+  vtkTable* DiagnosticsTable();
+  std::string InUserTerms(vtkPBFSimulation* self, const std::exception& error) const;
+};
+
+#endif

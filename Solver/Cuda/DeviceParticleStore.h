@@ -1,0 +1,286 @@
+// The particle arrays of a GPU stepper, for both (DeviceStepper, DeviceSubdomainStepper): the
+// per-particle part of StepBuffers (four Vec3 buffers, density, lambda, id, two key buffers, the
+// neighbour masks), the arrays only one of them needs (stored volumes and |omega| for the single
+// GPU; alternates and index lists for a sub-domain's migration and ghosts), and adaptive mode's
+// block sums, in one allocation of `capacity` particles on the Device policy. The allocation is
+// checked against the device's free memory first, so that too many particles is an InvalidInput
+// that says what was needed, not a failed allocation.
+#pragma once
+
+#include "ParticleChecks.h"
+#include "StepSchedule.h"
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <utility>
+
+namespace pbf
+{
+namespace cuda
+{
+
+// Which arrays beyond the common ones a store holds.
+struct ParticleArrays
+{
+  bool masks = true;      // kNeighborRows words per particle (NeighborMasks.h)
+  bool volumes = false;   // volume and |omega| stored by the passes that compute them
+  bool alternates = false; // density, lambda and id again: the sub-domain's gathers
+  int lists = 0;          // index lists (uint32 per particle): the sub-domain's selections
+};
+
+constexpr int kMaxParticleLists = 5;
+
+template <class Real, class Device>
+class DeviceParticleStore
+{
+public:
+  DeviceParticleStore(Device& device, ParticleArrays arrays, std::size_t cells, int keyBits)
+    : device_(device)
+    , arrays_(arrays)
+    , cells_(cells)
+    , keyBits_(keyBits)
+  {
+  }
+  ~DeviceParticleStore() { release(); }
+  DeviceParticleStore(const DeviceParticleStore&) = delete;
+  DeviceParticleStore& operator=(const DeviceParticleStore&) = delete;
+
+  static std::size_t bytesPerParticle(const ParticleArrays& a)
+  {
+    const std::size_t scalars = 2 + (a.volumes ? 2 : 0) + (a.alternates ? 2 : 0);
+    return 4 * sizeof(Vec3<Real>) + scalars * sizeof(Real) +
+      (a.alternates ? 2 : 1) * sizeof(std::int64_t) + 2 * sizeof(CellKey) +
+      (a.masks ? kNeighborRows * sizeof(std::uint32_t) : 0) +
+      static_cast<std::size_t>(a.lists) * sizeof(std::uint32_t);
+  }
+
+  std::size_t capacity() const { return capacity_; }
+  // The allocation and the sort's scratch at this capacity.
+  std::size_t bytes() const { return bytes_ + tempBytes_; }
+
+  // Room for `needed` particles: when it must grow, to at least half again the capacity (so that
+  // growing by steps reallocates O(log N) times) and 1024. The first `keep` particles of every
+  // Vec3 buffer and of density, lambda and id are copied into the new arrays on the device.
+  void reserve(std::size_t needed, std::size_t keep)
+  {
+    if (needed <= capacity_ && capacity_ > 0)
+    {
+      return;
+    }
+    const std::size_t capacity = std::max({ needed, capacity_ + capacity_ / 2, std::size_t(1024) });
+    Pointers old = p;
+    void* oldArena = arena_;
+    arena_ = nullptr;
+    try
+    {
+      layOut(capacity, needed);
+    }
+    catch (...)
+    {
+      arena_ = oldArena;
+      p = old;
+      throw;
+    }
+    if (keep > 0)
+    {
+      auto exec = device_.executor();
+      for (int i = 0; i < 4; ++i)
+      {
+        exec.copy(p.vec[i], old.vec[i], keep * sizeof(Vec3<Real>));
+      }
+      exec.copy(p.density, old.density, keep * sizeof(Real));
+      exec.copy(p.lambda, old.lambda, keep * sizeof(Real));
+      exec.copy(p.id, old.id, keep * sizeof(std::int64_t));
+    }
+    device_.synchronize();
+    if (oldArena)
+    {
+      device_.release(oldArena);
+    }
+  }
+
+  // Exactly `capacity` particles, nothing kept (the caller frees the old arrays first with
+  // release(), so that both never take memory together). `particles` names the count in the
+  // message when it does not fit.
+  void allocate(std::size_t capacity, std::size_t particles)
+  {
+    release();
+    layOut(capacity, particles);
+  }
+
+  void release()
+  {
+    if (arena_)
+    {
+      device_.release(arena_);
+    }
+    arena_ = nullptr;
+    p = Pointers{};
+    capacity_ = 0;
+    bytes_ = 0;
+  }
+
+  // The alternates become density, lambda and id, and these the alternates: a gather's result
+  // taken over without a copy. What reserve() keeps follows.
+  void swapAlternates()
+  {
+    std::swap(p.density, p.densityAlt);
+    std::swap(p.lambda, p.lambdaAlt);
+    std::swap(p.id, p.idAlt);
+  }
+
+  // The arrays' per-particle part as the stages see it (the caller adds the fixed arrays).
+  StepBuffers<Real> buffers() const
+  {
+    StepBuffers<Real> b{};
+    for (int i = 0; i < 4; ++i)
+    {
+      b.vec[i] = p.vec[i];
+    }
+    b.density = p.density;
+    b.lambda = p.lambda;
+    b.volume = p.volume;
+    b.omegaLength = p.omegaLength;
+    b.id = p.id;
+    b.keys[0] = p.keys[0];
+    b.keys[1] = p.keys[1];
+    b.masks = p.masks;
+    b.stride = static_cast<std::uint32_t>(capacity_);
+    b.blockSums = p.blockSums;
+    return b;
+  }
+
+  struct Pointers
+  {
+    Vec3<Real>* vec[4] = {};
+    Real *density = nullptr, *lambda = nullptr, *volume = nullptr, *omegaLength = nullptr;
+    Real *densityAlt = nullptr, *lambdaAlt = nullptr;
+    std::int64_t *id = nullptr, *idAlt = nullptr;
+    CellKey* keys[2] = {};
+    std::uint32_t* masks = nullptr;
+    std::uint32_t* list[kMaxParticleLists] = {};
+    double* blockSums = nullptr; // two per block of kCompressionBlock: sums, then maxima
+  };
+  Pointers p;
+
+private:
+  void layOut(std::size_t capacity, std::size_t particles)
+  {
+    if (capacity >= std::numeric_limits<std::uint32_t>::max())
+    {
+      throw InvalidInput("particle count = " + std::to_string(capacity) +
+        ": more than 32-bit indices hold");
+    }
+    std::size_t offset = 0;
+    auto place = [&offset](std::size_t bytes) {
+      const std::size_t at = offset;
+      offset += (bytes + 255) / 256 * 256;
+      return at;
+    };
+    const ParticleArrays& a = arrays_;
+    std::size_t vecAt[4];
+    for (std::size_t& at : vecAt)
+    {
+      at = place(capacity * sizeof(Vec3<Real>));
+    }
+    const std::size_t scalar = capacity * sizeof(Real);
+    const std::size_t densityAt = place(scalar), lambdaAt = place(scalar);
+    const std::size_t volumeAt = a.volumes ? place(scalar) : 0;
+    const std::size_t omegaLengthAt = a.volumes ? place(scalar) : 0;
+    const std::size_t densityAltAt = a.alternates ? place(scalar) : 0;
+    const std::size_t lambdaAltAt = a.alternates ? place(scalar) : 0;
+    const std::size_t idAt = place(capacity * sizeof(std::int64_t));
+    const std::size_t idAltAt = a.alternates ? place(capacity * sizeof(std::int64_t)) : 0;
+    const std::size_t keysAt[2] = { place(capacity * sizeof(CellKey)),
+      place(capacity * sizeof(CellKey)) };
+    const std::size_t masksAt = a.masks ? place(kNeighborRows * capacity * sizeof(std::uint32_t)) : 0;
+    std::size_t listAt[kMaxParticleLists] = {};
+    for (int k = 0; k < a.lists; ++k)
+    {
+      listAt[k] = place(capacity * sizeof(std::uint32_t));
+    }
+    const std::size_t blockSumsAt =
+      place(2 * ((capacity + kCompressionBlock - 1) / kCompressionBlock) * sizeof(double));
+    const std::size_t total = offset;
+    const std::size_t temp =
+      device_.tempBytesFor(static_cast<std::uint32_t>(capacity), cells_, keyBits_);
+
+    std::size_t freeBytes = 0, totalBytes = 0;
+    device_.memoryInfo(freeBytes, totalBytes);
+    // Head room for what the driver allocates beside us: the kernels' stacks, graphs, CUB's
+    // per-launch state.
+    const std::size_t reserve = std::size_t(128) << 20;
+    auto mib = [](std::size_t bytes) { return std::to_string((bytes + (1u << 19)) >> 20); };
+    const std::string need = "particle count = " + std::to_string(particles) + " (capacity " +
+      std::to_string(capacity) + "): the CUDA backend needs " + mib(total + temp) +
+      " MiB of GPU memory for its particles (" + std::to_string(bytesPerParticle(a)) +
+      " bytes per particle, " + mib(temp) + " MiB of scratch for " + std::to_string(cells_ - 1) +
+      " grid cells) plus " + mib(reserve) + " MiB head room, but " + device_.name() + " has " +
+      mib(freeBytes) + " MiB free of " + mib(totalBytes) +
+      " MiB; use fewer particles, a larger particleSpacing, more ranks or a CPU backend";
+    if (total + temp + reserve > freeBytes)
+    {
+      throw InvalidInput(need);
+    }
+    void* arena = device_.allocateOrNull(total);
+    if (!arena)
+    {
+      throw InvalidInput(need + " (the allocation failed)");
+    }
+    try
+    {
+      device_.reserveTemp(static_cast<std::uint32_t>(capacity), cells_, keyBits_);
+    }
+    catch (...)
+    {
+      device_.release(arena);
+      throw;
+    }
+    char* base = static_cast<char*>(arena);
+    auto at = [base](std::size_t offsetOf) { return static_cast<void*>(base + offsetOf); };
+    Pointers q;
+    for (int i = 0; i < 4; ++i)
+    {
+      q.vec[i] = static_cast<Vec3<Real>*>(at(vecAt[i]));
+    }
+    q.density = static_cast<Real*>(at(densityAt));
+    q.lambda = static_cast<Real*>(at(lambdaAt));
+    q.volume = a.volumes ? static_cast<Real*>(at(volumeAt)) : nullptr;
+    q.omegaLength = a.volumes ? static_cast<Real*>(at(omegaLengthAt)) : nullptr;
+    q.densityAlt = a.alternates ? static_cast<Real*>(at(densityAltAt)) : nullptr;
+    q.lambdaAlt = a.alternates ? static_cast<Real*>(at(lambdaAltAt)) : nullptr;
+    q.id = static_cast<std::int64_t*>(at(idAt));
+    q.idAlt = a.alternates ? static_cast<std::int64_t*>(at(idAltAt)) : nullptr;
+    q.keys[0] = static_cast<CellKey*>(at(keysAt[0]));
+    q.keys[1] = static_cast<CellKey*>(at(keysAt[1]));
+    q.masks = a.masks ? static_cast<std::uint32_t*>(at(masksAt)) : nullptr;
+    for (int k = 0; k < a.lists; ++k)
+    {
+      q.list[k] = static_cast<std::uint32_t*>(at(listAt[k]));
+    }
+    q.blockSums = static_cast<double*>(at(blockSumsAt));
+    // Nothing reads these before writing them; zeroed all the same, so that a stale value can
+    // never look like a result.
+    device_.executor().fillZero(arena, total);
+    arena_ = arena;
+    p = q;
+    capacity_ = capacity;
+    bytes_ = total;
+    tempBytes_ = temp;
+  }
+
+  Device& device_;
+  ParticleArrays arrays_;
+  std::size_t cells_; // grid cells + 1: the offsets' scan
+  int keyBits_;
+  void* arena_ = nullptr;
+  std::size_t capacity_ = 0;
+  std::size_t bytes_ = 0;
+  std::size_t tempBytes_ = 0;
+};
+
+} // namespace cuda
+} // namespace pbf

@@ -1,0 +1,264 @@
+// DeviceStepper's memory: the particles' arrays in the store (DeviceParticleStore.h), grown by half
+// again when particles are added, the fixed arrays beside them, and the copies of the state in
+// and out.
+// Included at the end of DeviceStepper.h; not a header of its own.
+#pragma once
+
+#include "DeviceStepper.h"
+
+namespace pbf
+{
+namespace cuda
+{
+
+template <class Real, class Device>
+void DeviceStepper<Real, Device>::release()
+{
+  releaseGraphs();
+  if (store_)
+  {
+    store_->release();
+  }
+  buffers_ = fixedBuffers_;
+}
+
+template <class Real, class Device>
+void DeviceStepper<Real, Device>::allocateFixed()
+{
+  const StepConstants<Real>& k = constants_;
+  std::size_t offset = 0;
+  auto place = [&offset](std::size_t bytes) {
+    const std::size_t at = offset;
+    offset += (bytes + 255) / 256 * 256;
+    return at;
+  };
+  const std::size_t timeAt = place(sizeof(StepTime<Real>));
+  const std::size_t healthAt = place(3 * sizeof(unsigned long long));
+  const std::size_t offsetsAt = place((static_cast<std::size_t>(k.cellCount) + 1) * sizeof(std::uint32_t));
+  const std::size_t movedAt = place(static_cast<std::size_t>(std::max(k.iterations, 1)) * 8);
+  const std::size_t buildsAt = place(8);
+  const std::size_t adaptiveAt = place(sizeof(AdaptiveState));
+  const std::size_t partialsAt = place(device_->statisticsPartialBytes());
+  const std::size_t resultAt = place(kStatisticsValues * sizeof(double));
+  fixed_ = device_->allocate(offset);
+  fixedBytes_ = offset;
+  char* base = static_cast<char*>(fixed_);
+  deviceTime_ = reinterpret_cast<StepTime<Real>*>(base + timeAt);
+  constants_.time = deviceTime_;
+  healthBits_ = reinterpret_cast<unsigned long long*>(base + healthAt);
+  statisticsPartials_ = reinterpret_cast<double*>(base + partialsAt);
+  statisticsResult_ = reinterpret_cast<double*>(base + resultAt);
+  StepBuffers<Real>& b = fixedBuffers_;
+  b.cellOffsets = reinterpret_cast<std::uint32_t*>(base + offsetsAt);
+  b.maxMoved = reinterpret_cast<unsigned long long*>(base + movedAt);
+  b.maskBuilds = reinterpret_cast<unsigned long long*>(base + buildsAt);
+  b.adaptive = reinterpret_cast<AdaptiveState*>(base + adaptiveAt);
+  buffers_ = fixedBuffers_;
+  // The mask-build counter is read before it is written; the rest is zeroed so that a stale value
+  // can never look like a result.
+  device_->executor().fillZero(fixed_, offset);
+}
+
+// The store's arrays for `capacity` particles (checked against the free memory there), with the
+// fixed arrays beside them.
+template <class Real, class Device>
+void DeviceStepper<Real, Device>::allocate(std::size_t capacity, std::size_t particles)
+{
+  store_->allocate(capacity, particles);
+  StepBuffers<Real> b = store_->buffers();
+  b.cellOffsets = fixedBuffers_.cellOffsets;
+  b.maxMoved = fixedBuffers_.maxMoved;
+  b.maskBuilds = fixedBuffers_.maskBuilds;
+  b.adaptive = fixedBuffers_.adaptive;
+  buffers_ = b;
+}
+
+template <class Real, class Device>
+void DeviceStepper<Real, Device>::restore(const std::vector<Vec3<Real>>& x,
+  const std::vector<Vec3<Real>>& v, const std::vector<std::int64_t>& id)
+{
+  if (n_ == 0)
+  {
+    return;
+  }
+  device_->upload(buffers_.vec[roles_.x], x.data(), n_ * sizeof(Vec3<Real>));
+  device_->upload(buffers_.vec[roles_.v], v.data(), n_ * sizeof(Vec3<Real>));
+  device_->upload(buffers_.id, id.data(), n_ * sizeof(std::int64_t));
+  device_->synchronize();
+}
+
+template <class Real, class Device>
+void DeviceStepper<Real, Device>::append(const ParticleBatch& batch)
+{
+  checkBatch(parameters_, batch);
+  device_->activate();
+  const std::size_t added = batch.position.size();
+  const std::size_t n = n_ + added;
+  if (n >= std::numeric_limits<std::uint32_t>::max())
+  {
+    throw InvalidInput("particle count = " + std::to_string(n) + ": more than 32-bit indices hold");
+  }
+  if (n > store_->capacity())
+  {
+    // Grow by half again, so that emitters reallocate O(log N) times. x, v and id survive
+    // through the host, so that the old and the new arrays never take memory together;
+    // everything else is recomputed from them.
+    std::vector<Vec3<Real>> x(n_), v(n_);
+    std::vector<std::int64_t> id(n_);
+    if (n_ > 0)
+    {
+      device_->download(x.data(), buffers_.vec[roles_.x], n_ * sizeof(Vec3<Real>));
+      device_->download(v.data(), buffers_.vec[roles_.v], n_ * sizeof(Vec3<Real>));
+      device_->download(id.data(), buffers_.id, n_ * sizeof(std::int64_t));
+    }
+    device_->synchronize();
+    const std::size_t oldCapacity = store_->capacity();
+    const std::size_t capacity = std::max(n, oldCapacity + oldCapacity / 2);
+    release();
+    try
+    {
+      try
+      {
+        allocate(capacity, n);
+      }
+      catch (const InvalidInput&)
+      {
+        if (capacity == n)
+        {
+          throw;
+        }
+        allocate(n, n); // without the growth margin
+      }
+    }
+    catch (const InvalidInput&)
+    {
+      // Keep the particles we had: the memory they used was just freed.
+      allocate(oldCapacity, n_);
+      roles_ = Roles{};
+      restore(x, v, id);
+      settle();
+      throw;
+    }
+    roles_ = Roles{};
+    restore(x, v, id);
+  }
+  if (added > 0)
+  {
+    std::vector<Vec3<Real>> x(added), v(added);
+    for (std::size_t i = 0; i < added; ++i)
+    {
+      x[i] = Vec3<Real>::from(batch.position[i]);
+      v[i] = Vec3<Real>::from(batch.velocity[i]);
+    }
+    device_->upload(buffers_.vec[roles_.x] + n_, x.data(), added * sizeof(Vec3<Real>));
+    device_->upload(buffers_.vec[roles_.v] + n_, v.data(), added * sizeof(Vec3<Real>));
+    device_->upload(buffers_.id + n_, batch.id.data(), added * sizeof(std::int64_t));
+    // The host vectors die at the end of this scope: wait for the copies.
+    device_->synchronize();
+  }
+  n_ = n;
+  settle();
+}
+
+// Straight from the device into the caller's arrays: no host temporaries, no pass over the
+// particles on the CPU (page-locked destinations are copied at the full bus speed).
+template <class Real, class Device>
+template <class Out>
+void DeviceStepper<Real, Device>::copyInto(const SnapshotView<Out>& out) const
+{
+  if constexpr (!std::is_same<Out, Real>::value)
+  {
+    Stepper::readInto(out); // converts through read()
+  }
+  else
+  {
+    device_->activate();
+    const std::size_t n = n_;
+    const auto copy = [this, n](void* to, const void* from, std::size_t size) {
+      if (to && n > 0)
+      {
+        device_->download(to, from, n * size);
+      }
+    };
+    copy(out.position, buffers_.vec[roles_.x], sizeof(Vec3<Real>));
+    copy(out.velocity, buffers_.vec[roles_.v], sizeof(Vec3<Real>));
+    copy(out.density, buffers_.density, sizeof(Real));
+    copy(out.lambda, buffers_.lambda, sizeof(Real));
+    copy(out.id, buffers_.id, sizeof(std::int64_t));
+    device_->synchronize();
+  }
+}
+
+template <class Real, class Device>
+template <class Out>
+void DeviceStepper<Real, Device>::copyOut(Snapshot<Out>& out) const
+{
+  out.position.resize(n_);
+  out.velocity.resize(n_);
+  out.density.resize(n_);
+  out.lambda.resize(n_);
+  out.id.resize(n_);
+  if constexpr (std::is_same<Out, Real>::value)
+  {
+    // Same precision (checkpoints): straight into the snapshot's vectors.
+    copyInto(SnapshotView<Real>{ out.position.data(), out.velocity.data(), out.density.data(),
+      out.lambda.data(), out.id.data() });
+  }
+  else
+  {
+    Snapshot<Real> same;
+    copyOut(same);
+    for (std::size_t i = 0; i < n_; ++i)
+    {
+      out.position[i] = Vec3<Out>::from(same.position[i]);
+      out.velocity[i] = Vec3<Out>::from(same.velocity[i]);
+      out.density[i] = static_cast<Out>(same.density[i]);
+      out.lambda[i] = static_cast<Out>(same.lambda[i]);
+    }
+    out.id = std::move(same.id);
+  }
+}
+
+// As CpuStepper::loadState: the snapshot's order is kept, and the next step predicts, re-sorts
+// (stably, from this order) and recomputes everything else.
+template <class Real, class Device>
+template <class In>
+void DeviceStepper<Real, Device>::loadState(const Snapshot<In>& state)
+{
+  if (sizeof(In) != sizeof(Real))
+  {
+    throw InvalidInput(std::string("checkpoint precision = ") +
+      (sizeof(In) == sizeof(float) ? "single" : "double") + ": the stepper runs in " +
+      toString(precision()) + " precision");
+  }
+  const std::size_t n = state.id.size();
+  if (state.position.size() != n || state.velocity.size() != n || state.density.size() != n ||
+    state.lambda.size() != n)
+  {
+    throw InvalidInput("checkpoint arrays differ in length (" + std::to_string(n) + " ids)");
+  }
+  device_->activate();
+  device_->synchronize();
+  if (n > store_->capacity())
+  {
+    n_ = 0; // the old state is gone either way; empty if the allocation throws
+    release();
+    allocate(n, n);
+  }
+  roles_ = Roles{};
+  n_ = n;
+  if (n > 0)
+  {
+    // In is Real here (checked above), so the arrays go up as they are.
+    device_->upload(buffers_.vec[roles_.x], state.position.data(), n * sizeof(Vec3<Real>));
+    device_->upload(buffers_.vec[roles_.v], state.velocity.data(), n * sizeof(Vec3<Real>));
+    device_->upload(buffers_.density, state.density.data(), n * sizeof(Real));
+    device_->upload(buffers_.lambda, state.lambda.data(), n * sizeof(Real));
+    device_->upload(buffers_.id, state.id.data(), n * sizeof(std::int64_t));
+  }
+  captureGraphs();
+  device_->synchronize();
+}
+
+} // namespace cuda
+} // namespace pbf

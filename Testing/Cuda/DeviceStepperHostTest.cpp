@@ -1,0 +1,363 @@
+// The single-GPU stepper (Cuda/DeviceStepper.h) run on the host device policy: its schedule must
+// reproduce the serial backend bit for bit, with neighbour masks (any skin, so any number of
+// rebuilds) and with the cell walk, with the step captured as a graph or queued stage by stage;
+// and its memory, checkpoints, scans, solids and faults behave as on the GPU. This runs
+// everywhere (label "solver"); the GPU itself is tested in CudaStepperTest.cpp.
+#include "HostExecutor.h"
+
+#include "Cuda/DeviceStepper.h"
+#include "Cuda/NeighborMasks.h"
+#include "DeviceFault.h"
+#include "Scene.h"
+#include "Solids.h"
+#include "Stepper.h"
+#include "TestScenes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+using namespace pbf;
+
+namespace
+{
+
+template <class Real>
+using HostStepper = cuda::DeviceStepper<Real, test::HostDevicePolicy>;
+
+struct Case
+{
+  const char* scene;
+  int iterations;
+  bool masks;
+  double skin;
+  bool backwards;
+  double tolerance = 0; // densityErrorTolerance [%]: adaptive mode when > 0
+  bool graphs = true;
+};
+
+cuda::Options optionsOf(const Case& c)
+{
+  cuda::Options o;
+  o.search = c.masks ? cuda::NeighborSearch::RowMasks : cuda::NeighborSearch::CellWalk;
+  o.skin = c.skin;
+  o.graphs = c.graphs;
+  return o;
+}
+
+template <class Real>
+std::unique_ptr<HostStepper<Real>> hostStepper(const Parameters& p, const ParticleBatch& initial,
+  const cuda::Options& options, bool backwards = false, test::HostDevicePolicy** policy = nullptr)
+{
+  auto device = std::make_unique<test::HostDevicePolicy>(backwards);
+  if (policy)
+  {
+    *policy = device.get();
+  }
+  return std::make_unique<HostStepper<Real>>(p, initial, options, std::move(device));
+}
+
+Parameters fixedParameters(const Case& c, const Scene& scene)
+{
+  Parameters p;
+  p.particleSpacing = 0.04;
+  p.solverIterations = c.iterations;
+  p.densityErrorTolerance = c.tolerance;
+  return withSceneDomain(p, scene);
+}
+
+template <class Real>
+Snapshot<Real> stateOf(const Stepper& stepper)
+{
+  Snapshot<Real> s;
+  stepper.read(s);
+  return s;
+}
+
+template <class Real>
+void compareWithSerial(const Case& c, int steps, unsigned long long* builds = nullptr)
+{
+  const Scene scene = presetScene(c.scene);
+  const Parameters p = fixedParameters(c, scene);
+  const ParticleBatch initial = fillScene(scene, p);
+  const Precision precision = sizeof(Real) == 4 ? Precision::Single : Precision::Double;
+  auto serial = makeStepper(Backend::Serial, precision, p, initial);
+  auto device = hostStepper<Real>(p, initial, optionsOf(c), c.backwards);
+  int serialIterations = 0, deviceIterations = 0;
+  for (int s = 0; s < steps; ++s)
+  {
+    serial->step();
+    device->step();
+    serialIterations += serial->lastStep().iterations;
+    deviceIterations += device->lastStep().iterations;
+  }
+  if (c.tolerance > 0)
+  {
+    EXPECT_EQ(deviceIterations, serialIterations);
+    // The tolerance must both stop some steps early and not others, or nothing was tested.
+    EXPECT_LT(serialIterations, steps * c.iterations);
+    EXPECT_GT(serialIterations, steps);
+  }
+  SCOPED_TRACE(std::string(c.scene) + ", " + std::to_string(c.iterations) + " iterations, " +
+    (c.masks ? "masks, skin " + std::to_string(c.skin) : std::string("cell walk")) +
+    (c.backwards ? ", backwards" : "") + (c.graphs ? ", graphs" : ", stage by stage"));
+  test::expectBitIdentical(stateOf<Real>(*serial), stateOf<Real>(*device));
+  if (builds)
+  {
+    *builds = device->diagnostics().maskBuilds;
+  }
+}
+
+} // namespace
+
+TEST(StepSchedule, CellWalkReproducesTheSerialBackendBitForBit)
+{
+  compareWithSerial<float>({ "dam_break", 4, false, 0.1, false }, 40);
+  compareWithSerial<double>({ "blob", 3, false, 0.1, true }, 40);
+}
+
+TEST(StepSchedule, NeighborMasksReproduceTheSerialBackendBitForBit)
+{
+  for (bool backwards : { false, true })
+  {
+    compareWithSerial<float>({ "dam_break", 4, true, 0.1, backwards }, 60);
+    compareWithSerial<double>({ "double_dam_break", 3, true, 0.1, backwards }, 60);
+  }
+}
+
+TEST(StepSchedule, MasksStayExactWhenEveryPassMustRebuildThem)
+{
+  // A skin this thin is exceeded by the first corrections, so most passes rebuild: the
+  // rebuild path must give the same bits as the walk. The blob falls fast onto the pool.
+  unsigned long long thin = 0, thick = 0;
+  compareWithSerial<float>({ "blob", 4, true, 1e-4, false }, 60, &thin);
+  compareWithSerial<float>({ "blob", 4, true, 0.5, false }, 60, &thick);
+  // One build at rest plus at least one per step; the thin skin must rebuild far more often.
+  EXPECT_GE(thick, 61u);
+  EXPECT_GT(thin, 2 * thick);
+}
+
+TEST(StepSchedule, AdaptiveIterationsReproduceTheSerialBackendBitForBit)
+{
+  // Steps that meet the tolerance early skip their remaining projections on the device too.
+  compareWithSerial<float>({ "dam_break", 6, true, 0.1, false, 0.05 }, 60);
+  compareWithSerial<double>({ "blob", 5, false, 0.1, true, 0.05 }, 60);
+}
+
+TEST(DeviceStepperOnHost, StageByStageAndCapturedStepsAreTheSame)
+{
+  // Options::graphs off queues every stage at every step; on, the step recorded at construction
+  // is replayed with the arguments it was recorded with. Three projections swap x and v every
+  // step, so both recorded assignments are replayed.
+  compareWithSerial<float>({ "dam_break", 3, true, 0.02, false, 0, false }, 30);
+  compareWithSerial<float>({ "dam_break", 3, true, 0.02, false, 0, true }, 30);
+}
+
+TEST(DeviceStepperOnHost, TheStepIsCapturedAgainOnlyWhenItsArgumentsChange)
+{
+  const Scene scene = presetScene("dam_break");
+  const Parameters p = fixedParameters({ "dam_break", 4, true, 0.02, false }, scene);
+  test::HostDevicePolicy* policy = nullptr;
+  auto device = hostStepper<float>(p, fillScene(scene, p), cuda::Options{}, false, &policy);
+  const long atStart = policy->captures();
+  EXPECT_EQ(atStart, 2); // both assignments of x and v
+  for (int s = 0; s < 10; ++s)
+  {
+    device->step();
+  }
+  device->setTimeStep(p.timeStep / 2); // the step size is read on the device: no new capture
+  device->step();
+  EXPECT_EQ(policy->captures(), atStart);
+  ParticleBatch more;
+  more.position = { Vec3d{ 0.8, 0.5, 0.1 } };
+  more.velocity = { Vec3d{ 0, 0, 0 } };
+  more.id = { 1000000 };
+  device->append(more); // another particle count: captured again
+  EXPECT_EQ(policy->captures(), atStart + 2);
+}
+
+TEST(DeviceStepperOnHost, EmittersGrowTheArraysLikeTheSerialBackend)
+{
+  // The arrays start with room for 1024 particles; each batch below passes the capacity, so the
+  // state goes through the host into larger arrays. Bit-identical: the host policy rounds as the
+  // serial backend does, and the appended particles join in the same order.
+  const Scene scene = presetScene("dam_break");
+  const Parameters p = fixedParameters({ "dam_break", 4, true, 0.02, false }, scene);
+  const ParticleBatch initial = fillScene(scene, p);
+  auto serial = makeStepper(Backend::Serial, Precision::Double, p, initial);
+  auto device = hostStepper<double>(p, initial, cuda::Options{});
+  std::int64_t next = static_cast<std::int64_t>(initial.position.size());
+  const std::size_t startCapacity = device->diagnostics().capacity;
+  for (int round = 0; round < 3; ++round)
+  {
+    ParticleBatch batch;
+    for (int k = 0; k < 700; ++k)
+    {
+      batch.position.push_back(
+        Vec3d{ 0.62 + 0.04 * (k % 20), 0.42 + 0.04 * ((k / 20) % 5), 0.02 + 0.04 * (k / 100) });
+      batch.velocity.push_back(Vec3d{ 0, -0.5, 0 });
+      batch.id.push_back(next++);
+    }
+    serial->append(batch);
+    device->append(batch);
+    for (int s = 0; s < 5; ++s)
+    {
+      serial->step();
+      device->step();
+    }
+  }
+  EXPECT_GT(device->diagnostics().capacity, startCapacity);
+  EXPECT_EQ(device->size(), initial.position.size() + 2100);
+  test::expectBitIdentical(stateOf<double>(*serial), stateOf<double>(*device));
+}
+
+TEST(DeviceStepperOnHost, ACheckpointResumesBitIdentically)
+{
+  const Scene scene = presetScene("double_dam_break");
+  const Parameters p = fixedParameters({ "double_dam_break", 4, true, 0.02, false }, scene);
+  const ParticleBatch initial = fillScene(scene, p);
+  auto straight = hostStepper<float>(p, initial, cuda::Options{});
+  auto resumed = hostStepper<float>(p, initial, cuda::Options{});
+  for (int s = 0; s < 20; ++s)
+  {
+    straight->step();
+    resumed->step();
+  }
+  const Snapshot<float> at20 = stateOf<float>(*resumed);
+  for (int s = 0; s < 7; ++s)
+  {
+    resumed->step();
+  }
+  resumed->load(at20);
+  for (int s = 0; s < 20; ++s)
+  {
+    straight->step();
+    resumed->step();
+  }
+  test::expectBitIdentical(stateOf<float>(*straight), stateOf<float>(*resumed));
+  // A checkpoint of the other precision is refused, naming it.
+  Snapshot<double> wrong;
+  resumed->read(wrong);
+  try
+  {
+    resumed->load(wrong);
+    ADD_FAILURE() << "a double checkpoint was loaded into a single-precision stepper";
+  }
+  catch (const InvalidInput& error)
+  {
+    EXPECT_NE(std::string(error.what()).find("checkpoint precision = double"), std::string::npos)
+      << error.what();
+  }
+}
+
+TEST(DeviceStepperOnHost, ScansAgreeWithTheSerialBackend)
+{
+  const Scene scene = presetScene("dam_break");
+  const Parameters p = fixedParameters({ "dam_break", 4, true, 0.02, false }, scene);
+  const ParticleBatch initial = fillScene(scene, p);
+  auto serial = makeStepper(Backend::Serial, Precision::Double, p, initial);
+  auto device = hostStepper<double>(p, initial, cuda::Options{});
+  for (int s = 0; s < 30; ++s)
+  {
+    serial->step();
+    device->step();
+  }
+  const Statistics a = serial->statistics();
+  const Statistics b = device->statistics();
+  // The same particles (bit for bit, above) counted and summed in the same order: equal, except
+  // the sums, which the device policy adds in particle order as the CPU does; 1e-12 relative
+  // leaves room for a different association only.
+  EXPECT_EQ(b.particles, a.particles);
+  EXPECT_EQ(b.averageNeighbors, a.averageNeighbors);
+  EXPECT_EQ(b.maxDensityError, a.maxDensityError);
+  EXPECT_EQ(b.maxSpeed, a.maxSpeed);
+  EXPECT_NEAR(b.averageDensityError, a.averageDensityError, 1e-12 * a.averageDensityError);
+  EXPECT_NEAR(b.kineticEnergy, a.kineticEnergy, 1e-12 * a.kineticEnergy);
+  EXPECT_TRUE(b.finite);
+  EXPECT_GT(a.maxSpeed, 0.1); // the column is falling: the scans saw a moving fluid
+  const Health h = device->health();
+  const Health reference = serial->health();
+  EXPECT_EQ(h.maxSpeed, reference.maxSpeed);
+  EXPECT_EQ(h.nonFinite, 0u);
+  EXPECT_NEAR(h.maxDensityError, std::max(reference.maxDensityError, 0.0), 1e-15);
+}
+
+TEST(DeviceStepperOnHost, SolidsMatchTheSerialBackend)
+{
+  const Scene scene = test::damBreakWithSolids();
+  const Parameters p = fixedParameters({ "dam_break", 4, true, 0.02, false }, scene);
+  const std::vector<DistanceGrid> solids = solidFields(scene.solids, p);
+  std::size_t removed = 0;
+  const ParticleBatch initial = outsideSolids(fillScene(scene, p), solids, removed);
+  ASSERT_GT(removed, 0u);
+  auto serial = makeStepper(Backend::Serial, Precision::Double, p, initial);
+  auto device = hostStepper<double>(p, initial, cuda::Options{});
+  serial->setObstacles(solids);
+  device->setObstacles(solids);
+  for (int s = 0; s < 40; ++s)
+  {
+    serial->step();
+    device->step();
+  }
+  test::expectBitIdentical(stateOf<double>(*serial), stateOf<double>(*device));
+}
+
+TEST(DeviceStepperOnHost, MoreParticlesThanFreeMemoryIsInvalidInputNamingTheCount)
+{
+  const Scene scene = presetScene("dam_break");
+  const Parameters p = fixedParameters({ "dam_break", 4, true, 0.02, false }, scene);
+  const ParticleBatch initial = fillScene(scene, p);
+  auto device = std::make_unique<test::HostDevicePolicy>();
+  device->setFreeMemory(std::size_t(1) << 20); // 1 MiB: less than the head room alone
+  try
+  {
+    HostStepper<float> stepper(p, initial, cuda::Options{}, std::move(device));
+    ADD_FAILURE() << "constructed in 1 MiB";
+  }
+  catch (const InvalidInput& error)
+  {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("particle count = " + std::to_string(initial.position.size())),
+      std::string::npos)
+      << message;
+    EXPECT_NE(message.find("MiB free"), std::string::npos) << message;
+  }
+}
+
+TEST(DeviceStepperOnHost, AnInjectedFaultSurfacesAtTheNextWait)
+{
+  const Scene scene = presetScene("dam_break");
+  const Parameters p = fixedParameters({ "dam_break", 4, true, 0.02, false }, scene);
+  cuda::Options options;
+  options.faultAtStep = 3;
+  auto device = hostStepper<float>(p, fillScene(scene, p), options);
+  device->step();
+  device->step();
+  EXPECT_NO_THROW(device->synchronize());
+  device->step(); // queues the fault; nothing waits yet
+  EXPECT_THROW(device->synchronize(), DeviceFault);
+}
+TEST(MaskSchedule, RebuildsExactlyWhenTheBoundCouldBeExceeded)
+{
+  const double h = 0.04;
+  const MaskSchedule schedule{ 0.1 * h, h, 1e-9, 1 };
+  auto bits = [](double d) { return MaskSchedule::doubleToBits(d); };
+  // 2 * moved must stay under skin - 1e-3 h = 0.0039 m, with the 1e-3 relative margin.
+  const unsigned long long small[3] = { bits(0.0005), bits(0.0005), bits(0.0005) };
+  EXPECT_TRUE(schedule.rebuildAt(0, small)); // the first pass of a step always builds
+  EXPECT_FALSE(schedule.rebuildAt(1, small));
+  EXPECT_FALSE(schedule.rebuildAt(3, small)); // 2 * 0.0015 = 0.003 < 0.0039
+  const unsigned long long large[3] = { bits(0.001), bits(0.001), bits(0.001) };
+  EXPECT_FALSE(schedule.rebuildAt(1, large));
+  EXPECT_TRUE(schedule.rebuildAt(2, large));  // 2 * 0.002 = 0.004 > 0.0039: rebuild here
+  EXPECT_FALSE(schedule.rebuildAt(3, large)); // 0.001 since that rebuild
+  const unsigned long long nan[2] = { bits(std::numeric_limits<double>::quiet_NaN()), bits(0) };
+  EXPECT_TRUE(schedule.rebuildAt(1, nan)); // a NaN displacement never passes for small
+  EXPECT_GT(bits(std::numeric_limits<double>::quiet_NaN()),
+    bits(std::numeric_limits<double>::infinity())); // and wins an integer max over the bits
+}
