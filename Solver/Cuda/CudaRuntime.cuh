@@ -63,7 +63,7 @@ inline void check(cudaError_t error, const char* what)
 // registers a thread (65536 / (minBlocks * 128), rounded down to 8). The caps below bind only in
 // double precision, where ptxas otherwise took 78 (density), 98 (correction), 74 (vorticity) and
 // 72 (confinement) registers, and the correction pass ran at 4 blocks. Measured at 1M particles
-// on the H200 (Utilities/probe.sh variants, one session): 5.09 -> 4.54 ms a step in double, single
+// on the H200 (Utilities/gpu/probe.sh variants, one session): 5.09 -> 4.54 ms a step in double, single
 // unchanged (2.858 / 2.851 ms: its kernels take 45-55 registers, under every cap). A cap of 7
 // blocks for the correction pass (72 registers, 164 bytes of spills) gave 4.77 ms, 8 for the
 // others 4.79; in single precision 12 blocks (40 registers) gained nothing (Documentation/Performance.md).

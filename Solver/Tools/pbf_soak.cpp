@@ -1,7 +1,7 @@
 // pbf_soak: a long run that checks, every --check steps, what must never change: the particle
 // count (initial plus exactly what the emitters released), unique ids, every particle inside the
 // domain, no NaN, and flat memory (host RSS; device bytes for CUDA). Exits 1 at the first
-// violation, naming the step. Run on the CPU and on the GPU (Utilities/gpu-run.sh).
+// violation, naming the step. Run on the CPU and on the GPU (Utilities/gpu/run.sh).
 #include "ScaledScenes.h"
 #include "Scene.h"
 #include "Simulation.h"

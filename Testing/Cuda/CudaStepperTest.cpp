@@ -392,9 +392,9 @@ TEST(CudaStepper, DefaultsAreBitIdenticalAcrossRunsAndResumes)
 TEST(CudaStepper, RefinedDamBreakAtAMillionParticlesHolds)
 {
   PBF_REQUIRE_GPU();
-  // The resolution issue's case: the dam_break preset at s = 5 mm (1,152,000 particles) with the
+  // The refined dam break's case: the dam_break preset at s = 5 mm (1,152,000 particles) with the
   // defaults blew up by step 60 before (max density error 3,779 %, 408 m/s). The first 0.25 s
-  // (the column's collapse, where it blew up) must hold the bounds in every frame: mean
+  // (the column's collapse, where it blew up) must hold the required bounds in every frame: mean
   // compression <= 0.5 %, max <= 10 %, no particle faster than 3 sqrt(g H) = 7.3 m/s.
   Parameters p;
   p.particleSpacing = 0.005;

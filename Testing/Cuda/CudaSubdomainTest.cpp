@@ -63,7 +63,7 @@ TEST(CudaSubdomain, OneTwoAndThreeRanksMatchTheSerialBackendAfterTenStepsInDoubl
   // Ranks sum a particle's neighbours in another order than the serial backend, and the GPU
   // rounds differently (FMA, the reciprocal square root of the spiky gradient): ~1e-16 relative
   // per operation, grown over ten steps to ~1e-13 (CudaStepperTest sees 1e-14 after one step),
-  // far under the 1e-9, while a neighbour missed or counted twice moves a particle by
+  // far under the required 1e-9, while a neighbour missed or counted twice moves a particle by
   // ~1e-3 of its coordinate.
   const PresetFluid setup = presetFluid("dam_break", 0.04);
   const Snapshot<double> reference = serialState(setup, 10, Precision::Double);
@@ -138,7 +138,7 @@ TEST(CudaSubdomain, ParticlesMigrateAndTheCutMovesAndTheCellWalkAgrees)
 TEST(CudaSubdomain, FiveHundredStepsOfADamBreakOnTwoRanksAgreeWithOne)
 {
   PBF_REQUIRE_GPU();
-  // The figures: mean density error and kinetic energy within 1% of one rank. The
+  // The required figures: mean density error and kinetic energy within 1% of one rank. The
   // collapse is chaotic at the particle level, so both are compared as means over the run, as in
   // DistributedTest. 500 steps of 3,000 particles take seconds on a GPU.
   const PresetFluid setup = presetFluid("dam_break", 0.04);

@@ -68,7 +68,7 @@ TEST(DeviceSubdomainOnHost, TwoAndThreeRanksMatchTheSerialBackendAfterTenStepsIn
   // Ranks sum a particle's neighbours in another order (a cell's particles arrive in another
   // order after migration, and ghosts come after the owned particles), so results differ from
   // the serial backend by rounding: ~1e-16 per sum, grown over ten steps to well under the
-  // issue's 1e-9, while a neighbour missed or counted twice moves a particle by ~1e-3 of its
+  // required 1e-9, while a neighbour missed or counted twice moves a particle by ~1e-3 of its
   // coordinate.
   const PresetFluid setup = presetFluid("dam_break", 0.04);
   const Snapshot<double> reference = serialState(setup, 10, Precision::Double);

@@ -1,6 +1,6 @@
 // The GPU tests' guard: without a usable CUDA device a test reports SKIPPED (CTest counts it as
 // skipped, not passed), with the reason. Where a GPU must be (PBF_GPU_REQUIRED=1, which
-// Utilities/gpu-run.sh sets on the GPU machine) it fails instead: a regression in device
+// Utilities/gpu/run.sh sets on the GPU machine) it fails instead: a regression in device
 // detection would otherwise turn every GPU test into a skip and the GPU run would stay green.
 #pragma once
 

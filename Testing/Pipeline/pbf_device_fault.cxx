@@ -12,7 +12,7 @@
 //
 // One mode per process, since the context stays lost. Exit 0 when every check holds, 1 otherwise;
 // without a usable CUDA device it prints SKIPPED (CTest's skip pattern) and exits 0. Run by CTest
-// (where there is no GPU it skips) and by Utilities/pipeline-gpu-run.sh on the GPU machine.
+// (where there is no GPU it skips) and by Utilities/gpu/pipeline-run.sh on the GPU machine.
 #include "vtkPBFSimulation.h"
 
 #include "vtkCommand.h"

@@ -10,7 +10,7 @@
 //                [--substeps K] [--backend auto|cuda|openmp|serial] [--precision single|double]
 //                [--checkpoint-interval C] [--pageable] [--compare-pageable F2] [--work DIR]
 //
-// Not a test (no pass/fail exit on speed): Utilities/pipeline-gpu-run.sh runs it on the GPU
+// Not a test (no pass/fail exit on speed): Utilities/gpu/pipeline-run.sh runs it on the GPU
 // machine and Documentation/Performance.md records the figures. It does check that the frames
 // it delivers are sane (ids a permutation, finite values) and exits non-zero if not.
 #include "vtkPBFSimulation.h"

@@ -122,7 +122,7 @@ TEST(Distributed, TwoAndThreeRanksMatchOneRankAfterTenStepsInDouble)
 {
   // Ranks sum a particle's neighbours in another order (its ghosts come after the owned particles
   // of a cell), so results differ from one rank by rounding: ~1e-16 per sum, grown over ten calm
-  // steps to well under the 1e-9, while a neighbour missed or counted twice moves a
+  // steps to well under the required 1e-9, while a neighbour missed or counted twice moves a
   // particle by ~1e-3 of its coordinate.
   const PresetFluid setup = presetFluid("dam_break", 0.04);
   const Outcome one = runRanks<double>(1, setup, 10);
@@ -143,7 +143,7 @@ TEST(Distributed, TwoAndThreeRanksMatchOneRankAfterTenStepsInDouble)
 
 TEST(Distributed, FiveHundredStepsOfADamBreakAgreeWithOneRank)
 {
-  // The figures for 500 steps: average density error, kinetic energy and surge front
+  // The required figures for 500 steps: average density error, kinetic energy and surge front
   // within 1% of one rank. The collapse is chaotic at the particle level and by step 500 the
   // fluid is nearly at rest (average compression ~4e-5, where rounding alone moves it by
   // several percent), so the error and the energy are compared as means over the run, which the
@@ -179,7 +179,7 @@ TEST(Distributed, FiveHundredStepsOfADamBreakAgreeWithOneRank)
     EXPECT_NEAR(kN, k1, 0.01 * k1) << ranks << " ranks";
     EXPECT_NEAR(fN, f1, 0.01 * f1) << ranks << " ranks";
     // Load balance: the cut follows the particles at every step. With two ranks it keeps the
-    // largest within the 20% of the mean; the start is exactly at it (five columns of 450
+    // largest within the required 20% of the mean; the start is exactly at it (five columns of 450
     // particles: 1350 against a mean of 1125), hence 1e-12 for the rounding of the ratio. With
     // three, whole columns of this small scene are too coarse for 20%, and the test only reports.
     double worst = 0;

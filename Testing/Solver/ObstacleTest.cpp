@@ -84,7 +84,7 @@ TEST(Obstacle, FluidAtRestOnAFlatSolidReadsRestDensityAsOnAMirrorWall)
     }
   }
   ASSERT_GT(near, 50);
-  // The bound is 1 %; the table is the continued lattice itself, so what remains is
+  // The required bound is 1 %; the table is the continued lattice itself, so what remains is
   // summation order and the table's linear interpolation, far below it.
   EXPECT_LT(worst, 0.01);
   EXPECT_LT(worstAgainstWall, 1e-6);

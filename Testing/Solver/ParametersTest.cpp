@@ -63,7 +63,7 @@ TEST(Parameters, BadValuesNameTheFieldAndTheValue)
 TEST(Parameters, CalibratedMassMakesTheLatticeReadRestDensity)
 {
   Parameters p;
-  // With m = rho_0 s^3 the lattice reads about 1% high at h = 2 s (the observation):
+  // With m = rho_0 s^3 the lattice reads about 1% high at h = 2 s:
   // the calibrated mass must differ from it by that much, and in the right direction.
   const double naive = p.restDensity * std::pow(p.particleSpacing, 3);
   const double calibrated = pbf::calibratedParticleMass(p);

@@ -41,7 +41,7 @@ TEST(Physics, RestingBlockStaysAtRest)
   simulation.advance(200);
   const Statistics s = simulation.stepper().statistics();
   ASSERT_TRUE(s.finite);
-  EXPECT_LT(s.averageDensityError, 0.01); // the bound: 1% average compression
+  EXPECT_LT(s.averageDensityError, 0.01); // the required bound: 1% average compression
   // Each step gravity adds g dt of fall that a finite number of Jacobi iterations undoes only
   // approximately, so PBF at rest keeps velocity noise of order g dt (0.04 m/s here). Require the
   // rms below g dt and the largest below 5 g dt, against the ~2 m/s a released column reaches.

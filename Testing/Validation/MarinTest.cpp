@@ -2,7 +2,7 @@
 // 0.8 s, on the CPU. The criteria of the issue (arrival within 5 %, RMS of H4 within 0.02 m over
 // 6 s) are for 2 cm and 1 cm on the GPU (Documentation/Validation.md); here the bounds are what
 // the coarse run must still meet, so that a lost box, a lost wave or a broken gauge fails. Then
-// issue 19's scenes of "no particle inside an obstacle" (ObstacleCheck.h) on the CPU backends.
+// the scenes of "no particle inside an obstacle" (ObstacleCheck.h) on the CPU backends.
 #include "Marin.h"
 #include "ObstacleCheck.h"
 
@@ -70,7 +70,7 @@ TEST(Marin, TheFirstWaveReachesH2AndNoParticleEntersTheBox)
 
 TEST(Obstacles, NoParticleCentreEntersASolidOnTheCpuBackends)
 {
-  // Issue 19's three scenes at 5 cm (the MARIN box to 2 s of its 6 here; pbf_obstacle_check
+  // The three obstacle scenes at 5 cm (the MARIN box to 2 s of its 6 here; pbf_obstacle_check
   // runs them whole), on OpenMP and decomposed over 2 CPU ranks; every frame (1/60 s) is scanned.
   Parameters p;
   p.particleSpacing = 0.05;

@@ -25,7 +25,7 @@ std::vector<FrontSample> experiment()
 }
 
 // The time-origin shift T0 of the Martin & Moyce criteria: fitted once, by least squares on T
-// over points 2-15 of the 80-across GPU run (Testing/Validation/resolution.py,
+// over points 2-15 of the 80-across GPU run (Utilities/validation/resolution.py,
 // Documentation/Validation.md), and applied unchanged at every resolution.
 constexpr double kReportTimeShift = PBF_REPORT_TIME_SHIFT;
 
@@ -323,7 +323,7 @@ TEST(Resolution, SmoothingRatiosNeitherExpandNorCollapseATank)
 TEST(Resolution, TallColumnStaysAtRest)
 {
   // 120 layers of s = 5 mm (0.6 m, 4 x 4 particles across between mirror walls: a slice of a
-  // wide tank), 1 s from the lattice. The bounds: mean compression <= 0.5 %, max <= 5 %,
+  // wide tank), 1 s from the lattice. The required bounds: mean compression <= 0.5 %, max <= 5 %,
   // max speed <= 0.25 m/s. Measured at 0.2 % tolerance: mean 0.2 %, max 0.7 %, 0.05 m/s,
   // 9.4 iterations per step.
   Scene column;

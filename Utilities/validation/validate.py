@@ -10,7 +10,7 @@ Groups: mm (Martin & Moyce at 10/20/40/80 across), mmdt (time-step and s_corr ch
 mmit (dam-break density error per iteration count at 20 across), tank (hydrostatic tank),
 stability (10,000 steps of the dam break with 100 x the confinement, and of every shipped scene).
 A run's name (e.g. mm_80) selects that run alone.
-Tools come from --build (default build/): Testing/Validation/pbf_martin_moyce, pbf_validation_run.
+Tools come from --build (default build/): pbf_martin_moyce and pbf_validation_run (Solver/Tools).
 Needs Debian's python3-numpy and python3-matplotlib. The 80-across run takes about half an hour
 on 2 cores; everything else together about as long.
 """
@@ -19,13 +19,13 @@ import os
 import subprocess
 import sys
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+DATA = os.path.join(ROOT, "Testing", "Validation")  # the experiments' records and the tank
 # Generated data stays out of the tree: output/ is git-ignored.
 RESULTS = os.path.join(ROOT, "output", "validation")
 # The table as the project received it (shared/validation/), copied here so tests and CI have it.
 EXPERIMENT_CANDIDATES = [
-    os.path.join(HERE, "martin_moyce_1952_surge_front_n2.csv"),
+    os.path.join(DATA, "martin_moyce_1952_surge_front_n2.csv"),
     os.path.join(ROOT, "..", "shared", "validation", "martin_moyce_1952_surge_front_n2.csv"),
 ]
 ACROSS = [10, 20, 40, 80]
@@ -42,10 +42,18 @@ def experiment_path():
              ", ".join(EXPERIMENT_CANDIDATES))
 
 
+def tool(build, name):
+    """A tool of Solver/Tools: in bin/ of a ParaView build, in Solver/Tools/ of a solver-only one."""
+    for folder in (os.path.join(build, "bin"), os.path.join(build, "Solver", "Tools")):
+        if os.path.exists(os.path.join(folder, name)):
+            return os.path.join(folder, name)
+    return os.path.join(build, "bin", name)
+
+
 def runs(build):
     """(group, name, argv): every run. Outputs go to output/validation/NAME.*"""
-    mm = os.path.join(build, "Testing", "Validation", "pbf_martin_moyce")
-    vr = os.path.join(build, "Testing", "Validation", "pbf_validation_run")
+    mm = tool(build, "pbf_martin_moyce")
+    vr = tool(build, "pbf_validation_run")
     r = lambda name: os.path.join(RESULTS, name)
     out = []
 
@@ -65,7 +73,7 @@ def runs(build):
         dam("mmit", "mm_20_it%d" % it, 20, ["--iterations", str(it)])
     dam("mmit", "mm_20_adaptive", 20, ADAPTIVE)
 
-    tank = os.path.join(HERE, "hydrostatic_tank.json")
+    tank = os.path.join(DATA, "hydrostatic_tank.json")
     for it in TANK_ITERATIONS + ["adaptive"]:
         solver = ADAPTIVE if it == "adaptive" else ["--iterations", str(it)]
         out.append(("tank", "tank_%s" % (it if it == "adaptive" else "it%d" % it),

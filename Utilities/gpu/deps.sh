@@ -3,9 +3,9 @@
 # machine lacks and cannot download, for the device tool to carry there (carry [".deps"]):
 #   .deps/json/nlohmann   Debian's header-only nlohmann-json   -> -DPBF_JSON_INCLUDE_DIR
 #   .deps/googletest      Debian's GoogleTest source           -> -DPBF_GTEST_SOURCE_DIR
-# Utilities/gpu-run.sh uses both.
+# Utilities/gpu/run.sh uses both.
 set -euo pipefail
-root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 deps=$root/.deps
 json=/usr/include/nlohmann
 gtest=/usr/src/googletest

@@ -1,15 +1,15 @@
 #!/usr/bin/env bash
 # Where the decomposed CUDA stepper's GPUs wait, in one call of the device tool on a
 # machine with several GPUs (carry [".deps"]): builds pbf_bench_mpi without ParaView and the CUPTI
-# tracer (Utilities/cupti_trace.cpp: the GPU machine has no Nsight Systems), runs pbf_bench_mpi
+# tracer (Utilities/gpu/cupti_trace.cpp: the GPU machine has no Nsight Systems), runs pbf_bench_mpi
 # with the tracer injected at P particles on N ranks and on 1 rank, and prints,
 # per rank and per step, the GPU's busy and idle time and the idle gaps grouped by the work around
-# them (Utilities/gpu_timeline.py). The analysis goes under $OUT (else
+# them (Utilities/gpu/timeline.py). The analysis goes under $OUT (else
 # output/gpu-timeline).
-#   Utilities/gpu-timeline.sh [--particles P] [--ranks N] [--steps S] [--no-single]
+#   Utilities/gpu/timeline.sh [--particles P] [--ranks N] [--steps S] [--no-single]
 # Extra environment (A/B switches of DeviceSubdomainStepper.h) passes through to the ranks.
 set -uo pipefail
-root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 out=${OUT:-$root/output/gpu-timeline}
 build=${PBF_GPU_BUILD:-/tmp/pbf-gpu-timeline-build}
 particles=32000000
@@ -53,7 +53,7 @@ else
 fi
 bench_mpi=$build/Solver/Tools/pbf_bench_mpi
 tracer=$build/libpbf_cupti_trace.so
-g++ -std=c++17 -O2 -shared -fPIC -I"$cupti_inc" "$root/Utilities/cupti_trace.cpp" -o "$tracer" \
+g++ -std=c++17 -O2 -shared -fPIC -I"$cupti_inc" "$root/Utilities/gpu/cupti_trace.cpp" -o "$tracer" \
   -L"$cupti_lib" -Wl,-rpath,"$cupti_lib" -lcupti || { echo "the CUPTI tracer did not build"; exit 1; }
 
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
@@ -64,7 +64,7 @@ profile() {
   mkdir -p "$out/$name"
   PBF_TRACE_DIR="$out/$name" CUDA_INJECTION64_PATH="$tracer" timeout 150 mpiexec -n "$n" \
     "$bench_mpi" --backend cuda --particles "$particles" --warmup 3 --steps "$steps" 2>&1 | tail -4
-  python3 "$root/Utilities/gpu_timeline.py" --steps $((steps - 1)) "$out/$name"/trace-*.csv
+  python3 "$root/Utilities/gpu/timeline.py" --steps $((steps - 1)) "$out/$name"/trace-*.csv
   gzip -f "$out/$name"/trace-*.csv
 }
 profile "ranks-$ranks" "$ranks"

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # One speed experiment on the GPU machine, in one call of the device tool (carry .deps):
-#   bash Utilities/probe.sh
+#   bash Utilities/gpu/probe.sh
 # builds the tree (A), times 1M particles in single and double precision, runs the fast GPU tests
 # and profiles the density and correction passes with ncu, source-level counters included
 # ($OUT/probe.tgz: .ncu-rep, details, per-SASS-instruction CSV; the log is $OUT/probe.log; without
@@ -18,7 +18,7 @@
 #                           precision with its per-kernel times, after A
 #                           (PBF_PROBE_VARIANT_F64=1: in double precision too)
 set -uo pipefail
-root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 out=${OUT:-$root/output/probe}
 mkdir -p "$out"
 exec > >(tee "$out/probe.log") 2>&1

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """The resolution tables and figure of Documentation/Validation.md from the CSVs that
-pbf_bench --refined and pbf_martin_moyce write (Utilities/gpu-run.sh with PBF_GPU_RESOLUTION=3
+pbf_bench --refined and pbf_martin_moyce write (Utilities/gpu/run.sh with PBF_GPU_RESOLUTION=3
 puts them in resolution.tar.gz):
 
-    Testing/Validation/resolution.py FOLDER [--plots [DIR]]
+    Utilities/validation/resolution.py FOLDER [--plots [DIR]]
 
 prints the tables and, with --plots, draws resolution_front.png into DIR (default
 Documentation/images/, where Validation.md shows it). Every number comes from the CSVs; nothing

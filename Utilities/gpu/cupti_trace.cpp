@@ -5,7 +5,7 @@
 // and end, stream and name, and the runtime calls that wait (names containing "Synchronize" or
 // "Wait"). At exit it writes one CSV per process, PBF_TRACE_DIR/trace-<rank or pid>.csv:
 //   kind,start_ns,end_ns,stream,name
-// Utilities/gpu_timeline.py reads them. A development tool only: nothing in the product links it.
+// Utilities/gpu/timeline.py reads them. A development tool only: nothing in the product links it.
 #include <cupti.h>
 
 #include <cxxabi.h>

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
-"""Plots ms/step against particle count from the bench.json that Utilities/gpu-run.sh writes.
+"""Plots ms/step against particle count from the bench.json that Utilities/gpu/run.sh writes.
 
-Usage: python3 Utilities/plot.py [BENCH_JSON [PNG]]
-BENCH_JSON defaults to output/gpu-run/bench.json (gpu-run.sh's output folder; copy the file the
+Usage: python3 Utilities/gpu/plot.py [BENCH_JSON [PNG]]
+BENCH_JSON defaults to output/gpu-run/bench.json (gpu/run.sh's output folder; copy the file the
 device tool returns there), PNG to Documentation/images/ms_per_step.png (Performance.md's plot).
 The serial backend is measured at a few counts only (it takes seconds per step at 1M); its line
 beyond the largest measured count is a linear extrapolation, drawn dashed.
@@ -55,7 +55,7 @@ def main(source, target):
     ax.set_ylabel("ms per step (median; 4 iterations, XSPH, vorticity)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
-    # gpu-run.sh's bench.json names no machine; a "machine" key, where added, goes in the title.
+    # gpu/run.sh's bench.json names no machine; a "machine" key, where added, goes in the title.
     machine = data.get("machine", "").split(" (")[0].replace("one ", "")
     ax.set_title("Position Based Fluids, dam break" + (": " + machine if machine else ""),
                  fontsize=10)
@@ -64,7 +64,7 @@ def main(source, target):
 
 
 if __name__ == "__main__":
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     source = os.path.join(root, "output", "gpu-run", "bench.json")
     target = os.path.join(root, "Documentation", "images", "ms_per_step.png")
     main(sys.argv[1] if len(sys.argv) > 1 else source, sys.argv[2] if len(sys.argv) > 2 else target)

@@ -2,14 +2,14 @@
 # The pipeline timing: how much the VTK layer adds to the solver on the GPU machine,
 # which has no ParaView and no VTK. Two halves:
 #
-#   Utilities/pipeline-gpu-run.sh prepare [BUILD]   # here: build pbf_pipeline (the CUDA backend is
+#   Utilities/gpu/pipeline-run.sh prepare [BUILD]   # here: build pbf_pipeline (the CUDA backend is
 #                                                   # compiled in by nvcc) and carry it, with
 #                                                   # libPBFFilters and the libraries ldd finds
 #                                                   # (VTK's Common* and vtksys, loguru, pugixml,
 #                                                   # kissfft; not glibc), into .pipeline/ (ignored)
-#   Utilities/pipeline-gpu-run.sh run               # there (device tool, carry [".pipeline"]):
+#   Utilities/gpu/pipeline-run.sh run               # there (device tool, carry [".pipeline"]):
 #                                                   # runs it with LD_LIBRARY_PATH=.pipeline/lib
-#   Utilities/pipeline-gpu-run.sh fault             # there: only the device-fault checks:
+#   Utilities/gpu/pipeline-run.sh fault             # there: only the device-fault checks:
 #                                                   # pbf_cuda_fault_tests, one test per process,
 #                                                   # and pbf_device_fault auto and cuda
 #
@@ -18,7 +18,7 @@
 # precision, and 4M particles; logs go to $OUT (else output/pipeline). Documentation/Performance.md
 # records the figures.
 set -euo pipefail
-root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 carry=$root/.pipeline
 
 # There: log to $OUT/LOG, check the carry holds PROGRAM, load its libraries, say what runs.

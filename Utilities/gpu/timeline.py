@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
-"""Where a rank's GPU is idle: reads the traces of Utilities/cupti_trace.cpp (one CSV per rank,
-made by Utilities/gpu-timeline.sh) and prints, per rank, over the last STEPS steps (a step starts
+"""Where a rank's GPU is idle: reads the traces of Utilities/gpu/cupti_trace.cpp (one CSV per rank,
+made by Utilities/gpu/timeline.sh) and prints, per rank, over the last STEPS steps (a step starts
 at a PredictStage kernel): the GPU's busy and idle time (the union over its streams), the largest
 idle gaps grouped by the work before and after them, the busiest kernels, and the host's time in
 CUDA synchronisation calls. All figures are per step, in ms.
 
-    gpu_timeline.py [--steps K] trace-0.csv [trace-1.csv ...]
+    gpu/timeline.py [--steps K] trace-0.csv [trace-1.csv ...]
 """
 import argparse
 import collections
@@ -28,7 +28,7 @@ def label_of(name):
 
 
 def load(path):
-    """A trace written by Utilities/cupti_trace.cpp: kind,start_ns,end_ns,stream,name."""
+    """A trace written by Utilities/gpu/cupti_trace.cpp: kind,start_ns,end_ns,stream,name."""
     work, calls = [], []  # (start, end, label, stream); (start, end, name)
     with open(path) as f:
         next(f, None)

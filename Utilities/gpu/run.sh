@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The GPU machine's whole job, in one call of the device tool (carry [".deps"], made on the build
-# machine by Utilities/gpu-deps.sh):
+# machine by Utilities/gpu/deps.sh):
 #   1. build Solver/ alone with CUDA for sm_90 (no ParaView there), all cores
 #   2. ctest, labels gpu and solver
 #   3. compute-sanitizer memcheck and racecheck on small scenes (must report 0 errors)
@@ -11,7 +11,7 @@
 # has a time limit inside a budget of PBF_GPU_BUDGET seconds (default 540), so the table comes
 # within the device tool's 10 minutes whatever happens.
 set -uo pipefail
-root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 out=${OUT:-$root/output/gpu-run}
 build=${PBF_GPU_BUILD:-/tmp/pbf-gpu-build}
 work=/tmp/pbf-gpu-run
@@ -51,7 +51,7 @@ else
 fi
 grep -E "warning|spill" "$work/build.log" | grep -v "^--" | head -20
 # The neighbour passes' machine code, for reading offline.
-for object in "$build"/Solver/CMakeFiles/pbf_solver.dir/Cuda/CudaStepperFloat.cu.o; do
+for object in "$build"/Solver/CMakeFiles/pbf_solver.dir/Cuda/CudaFloat.cu.o; do
   cuobjdump -sass "$object" 2>/dev/null | gzip >"$work/float.sass.gz" || true
 done
 bench=$build/Solver/Tools/pbf_bench
@@ -73,13 +73,13 @@ if ((quick)); then
   bench cuda_single 60 --backend cuda --sweep 64000,1000000 --warmup 20 --steps 100
   bench cuda_double 40 --backend cuda --precision double --particles 1000000 --warmup 20 --steps 100
   bench cuda_10M 40 --backend cuda --particles 10000000 --warmup 10 --steps 50
-  # What an obstacle costs at 1M: a sphere, and the MARIN box (issue 19's bound: 15 %).
+  # What an obstacle costs at 1M: a sphere, and the MARIN box (the bound: 15 %).
   bench cuda_sphere 30 --backend cuda --particles 1000000 --warmup 20 --steps 100 --solid 1
   bench cuda_box 30 --backend cuda --particles 1000000 --warmup 20 --steps 100 --solid 2
   # No particle inside an obstacle, on one GPU and decomposed over two (on this one GPU).
   for ranks in 1 2; do
     phase "obstacle check, $ranks rank(s)"
-    timeout "$(limit 120)" "$build/Testing/Validation/pbf_obstacle_check" --backend cuda \
+    timeout "$(limit 120)" "$build/Solver/Tools/pbf_obstacle_check" --backend cuda \
       --spacing 0.02 --ranks "$ranks" >"$work/obstacles_$ranks.txt" 2>&1
     cat "$work/obstacles_$ranks.txt"
     record "obstacles, $ranks rank(s): $(tail -n +2 "$work/obstacles_$ranks.txt" | cut -d, -f1,5-9 | tr '\n' ' ')"
@@ -191,7 +191,7 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
   res=$out/resolution
   mkdir -p "$res"
   bench=$build/Solver/Tools/pbf_bench
-  mm=$build/Testing/Validation/pbf_martin_moyce
+  mm=$build/Solver/Tools/pbf_martin_moyce
   experiment=$root/Testing/Validation/martin_moyce_1952_surge_front_n2.csv
   refine() { # refine NAME SECONDS ARGS...
     local name=$1 seconds=$2
@@ -221,7 +221,7 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
   if [[ $PBF_GPU_RESOLUTION == 6 ]]; then
     # MARIN (Kleefsman et al. 2005) to 6 s at 2, 1 and 0.75 cm: gauge heights against the records.
     phase "marin 0.02, 0.01 and 0.0075 to 6 s"
-    timeout "$(limit 400)" "$build/Testing/Validation/pbf_marin" --backend cuda \
+    timeout "$(limit 400)" "$build/Solver/Tools/pbf_marin" --backend cuda \
       --records "$root/Testing/Validation" --spacings 0.02,0.01,0.0075 --until 6 \
       --csv "$res/marin.csv" >"$res/marin.txt" 2>&1
     cat "$res/marin.txt"

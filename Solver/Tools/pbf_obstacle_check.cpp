@@ -1,4 +1,4 @@
-// pbf_obstacle_check: issue 19's "no particle inside any obstacle" on one backend: the MARIN box
+// pbf_obstacle_check: "no particle inside any obstacle" on one backend: the MARIN box
 // to 6 s, a sphere in the dam break's way to 2 s, a plate 1.5 spacings thick hit head-on at
 // 4 m/s, every frame (1/60 s) scanned against the solids' distance fields. --ranks N decomposes
 // the run over N threads (the CPU or the GPU sub-domain stepper, by --backend).

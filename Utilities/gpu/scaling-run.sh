@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Decomposed runs on GPUs, in one call of the device tool (carry [".deps"], made here by
-# Utilities/gpu-deps.sh):
+# Utilities/gpu/deps.sh):
 #   1. build Solver/ with CUDA (sm_90) and MPI, and its tests, without ParaView (all cores)
 #   2. the CUDA sub-domain tests (CudaSubdomain.*), the 1-2-3-rank 10-step test under
 #      compute-sanitizer memcheck and the float 1-step test under racecheck (--sanitize), then the
@@ -16,7 +16,7 @@
 # --ab "VAR=VALUE[ VAR=VALUE...]" (repeatable, with --quick): extra rows of strong 4 with the
 # given environment (an experiment's switch), each run after strong 4 and again after its repeat.
 set -uo pipefail
-root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 out=${OUT:-$root/output/gpu-scaling}
 build=${PBF_GPU_BUILD:-/tmp/pbf-gpu-scaling-build}
 budget=${PBF_GPU_BUDGET:-560}

@@ -1,7 +1,7 @@
 // pbf_marin: the MARIN dam break with a box (Data/marin_dam_break.json) at one or more spacings.
 // Prints, per spacing, the particle count, the first arrival at gauge H2 against the record's and
 // the RMS height error at H2 and H4; optionally writes the simulated heights as CSV (t, H2, H4 per
-// spacing) for Testing/Validation/plots.py. Documentation/Validation.md has the figures.
+// spacing) for Utilities/validation/plots.py. Documentation/Validation.md has the figures.
 #include "Marin.h"
 
 #include "ToolOptions.h"

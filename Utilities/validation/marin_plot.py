@@ -1,7 +1,7 @@
 """Figure of the MARIN dam break: the simulated water heights at gauges H2 and H4 (pbf_marin
 --csv, one pair of columns per spacing) against the measured records next to this script.
 
-    python3 Testing/Validation/marin_plot.py output/gpu-run/resolution/marin.csv OUT.png
+    python3 Utilities/validation/marin_plot.py output/gpu-run/resolution/marin.csv OUT.png
 """
 import os
 import sys
@@ -12,11 +12,12 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+DATA = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                    "Testing", "Validation")  # the experiments' records
 
 
 def record(name):
-    return np.genfromtxt(os.path.join(HERE, "marin_2005_%s.csv" % name), delimiter=",",
+    return np.genfromtxt(os.path.join(DATA, "marin_2005_%s.csv" % name), delimiter=",",
                          skip_header=2)
 
 

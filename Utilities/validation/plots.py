@@ -10,7 +10,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+DATA = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                    "Testing", "Validation")  # the experiments' records
 DPI = 80
 ACROSS = [10, 20, 40, 80]
 COLORS = {10: "tab:orange", 20: "tab:green", 40: "tab:blue", 80: "tab:purple"}
@@ -271,7 +272,7 @@ def stability(results):
 
 
 def main(results):
-    exp_path = os.path.join(HERE, "martin_moyce_1952_surge_front_n2.csv")
+    exp_path = os.path.join(DATA, "martin_moyce_1952_surge_front_n2.csv")
     exp = csv(exp_path)
     shift = martin_moyce(results, exp)
     print("\nfitted time shift T0 = %.4f" % shift)

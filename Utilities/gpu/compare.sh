@@ -2,14 +2,14 @@
 # pbf_bench of this tree against a baseline tree in the same call of the device tool, so that a
 # change can be held to "within N % of before" on the same GPU, driver and clocks:
 #   git archive <commit> | (mkdir -p .baseline && tar -x -C .baseline)     # here
-#   bash Utilities/gpu-compare.sh .baseline                                 # there, carry .deps and .baseline
-# Builds pbf_bench of both (sm_90, Release; this tree's build is gpu-run.sh's when it exists),
+#   bash Utilities/gpu/compare.sh .baseline                                 # there, carry .deps and .baseline
+# Builds pbf_bench of both (sm_90, Release; this tree's build is gpu/run.sh's when it exists),
 # then runs 1M single, 1M double and 10M single twice each, alternating baseline and this tree so
 # that a drift of the clocks hits both alike, and prints the median ms/step of each and the
 # change. JSON under $OUT (else output/gpu-compare). .baseline/ is git-ignored.
 set -uo pipefail
-root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-baseline=$(cd "${1:?usage: gpu-compare.sh BASELINE_TREE}" && pwd)
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+baseline=$(cd "${1:?usage: gpu/compare.sh BASELINE_TREE}" && pwd)
 out=${OUT:-$root/output/gpu-compare}
 mkdir -p "$out"
 generator=()

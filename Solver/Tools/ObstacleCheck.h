@@ -1,4 +1,4 @@
-// Whether any particle centre enters a solid: the scenes of issue 19's check (the MARIN box, a
+// Whether any particle centre enters a solid: the scenes of the obstacle check (the MARIN box, a
 // sphere in the dam break's way, a thin plate hit head-on at 4 m/s), run on any backend and any
 // number of ranks (threads), every frame scanned against the solids' own distance fields.
 #pragma once

@@ -1,7 +1,7 @@
 // pbf_martin_moyce: the Martin & Moyce (1952) dam break at one resolution. Prints, per tabulated
 // point, the experimental and simulated times and their relative difference, then the RMS
 // (T = 0 at release, the data's convention). Optionally writes the simulated front and the
-// density error over time as CSV. The figures come from Testing/Validation/validate.py.
+// density error over time as CSV. The figures come from Utilities/validation/validate.py.
 #include "MartinMoyce.h"
 #include "Measures.h"
 
