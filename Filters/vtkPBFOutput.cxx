@@ -192,6 +192,7 @@ vtkSmartPointer<vtkFieldData> vtkPBFOutput::FrameFieldData(
   AddValue(fieldData, "VorticityEpsilon", p.vorticityEpsilon);
   AddInteger(fieldData, "Unilateral", p.unilateral ? 1 : 0);
   AddInteger(fieldData, "MirrorWalls", p.mirrorWalls ? 1 : 0);
+  AddValue(fieldData, "WallFriction", p.wallFriction);
   vtkNew<vtkDoubleArray> gravity;
   gravity->SetName("Gravity");
   gravity->SetNumberOfComponents(3);

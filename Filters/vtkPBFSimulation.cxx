@@ -54,6 +54,7 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->VorticityEpsilon = defaults.vorticityEpsilon;
   this->Unilateral = defaults.unilateral;
   this->MirrorWalls = defaults.mirrorWalls;
+  this->WallFriction = defaults.wallFriction;
   this->ObstacleThickness = 0.0;
   this->Gravity[0] = defaults.gravity.x;
   this->Gravity[1] = defaults.gravity.y;
@@ -382,6 +383,7 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "VorticityEpsilon: " << this->VorticityEpsilon << "\n";
   os << indent << "Unilateral: " << (this->Unilateral ? "On" : "Off") << "\n";
   os << indent << "MirrorWalls: " << (this->MirrorWalls ? "On" : "Off") << "\n";
+  os << indent << "WallFriction: " << this->WallFriction << "\n";
   os << indent << "ObstacleThickness: " << this->ObstacleThickness << "\n";
   os << indent << "Gravity: (" << this->Gravity[0] << ", " << this->Gravity[1] << ", "
      << this->Gravity[2] << ")\n";

@@ -186,6 +186,8 @@ public:
   vtkSetMacro(MirrorWalls, bool);
   vtkGetMacro(MirrorWalls, bool);
   vtkBooleanMacro(MirrorWalls, bool);
+  vtkSetMacro(WallFriction, double);
+  vtkGetMacro(WallFriction, double);
   vtkSetVector3Macro(Gravity, double);
   vtkGetVector3Macro(Gravity, double);
   ///@}
@@ -349,6 +351,7 @@ protected:
   double VorticityEpsilon;
   bool Unilateral;
   bool MirrorWalls;
+  double WallFriction;
   double ObstacleThickness;
   double Gravity[3];
   bool AdaptiveIterations;

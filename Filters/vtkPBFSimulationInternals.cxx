@@ -110,6 +110,7 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
   p.vorticityEpsilon = self->VorticityEpsilon;
   p.unilateral = self->Unilateral;
   p.mirrorWalls = self->MirrorWalls;
+  p.wallFriction = self->WallFriction;
   p.gravity = pbf::Vec3d{ self->Gravity[0], self->Gravity[1], self->Gravity[2] };
   // Fixed: SubstepsPerFrame equal steps per frame. Automatic: steps chosen from the state, at
   // most MaxTimeStep, landing on every frame; SubstepsPerFrame then changes nothing.

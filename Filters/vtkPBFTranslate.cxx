@@ -105,6 +105,7 @@ std::string vtkPBFInUserTerms(std::string text)
     { "cflNumber", "CFL Number" },
     { "xsphViscosity", "XSPH Viscosity" },
     { "vorticityEpsilon", "Vorticity Epsilon" },
+    { "wallFriction", "Wall Friction" },
     { "sCorrDeltaQ", "S Corr Delta Q" },
     { "sCorrK", "S Corr K" },
     { "sCorrN", "S Corr N" },

@@ -33,6 +33,7 @@ struct Coefficients
   Vec3<Real> boxMin, boxMax;
   bool unilateral;
   bool mirrorWalls;
+  Real wallFriction;        // phi of wallFrictionImage: 0 free-slip, 1 no-slip
 
   // Throws InvalidInput when a constant does not fit Real (validatePrecision).
   static Coefficients make(const Parameters& p)
@@ -58,6 +59,7 @@ struct Coefficients
     c.boxMax = Vec3<Real>::from(p.domain.max);
     c.unilateral = p.unilateral;
     c.mirrorWalls = p.mirrorWalls;
+    c.wallFriction = static_cast<Real>(p.wallFriction);
     return c;
   }
 };
@@ -371,8 +373,28 @@ PBF_HD PBF_INLINE Real omegaLengthOf(std::uint32_t j, const FluidView<Real, Neig
   return f.omegaLength ? f.omegaLength[j] : length(f.omega[j]);
 }
 
+// Wall friction (Parameters::wallFriction, phi) as the walls' share of XSPH's smoothing: a wall's
+// image of a particle moves as the particle reflected in the wall, its normal velocity reversed
+// (the free-slip image) and its tangential velocity scaled by 1 - 2 phi (reversed at phi = 1: the
+// no-slip image, whose mean with the particle is at rest on the wall). The free-slip image is
+// left out of XSPH (the walls were always free-slip), so only the difference enters:
+// -2 phi v_t, weighted as a neighbour is. For a mirror wall (the box's) the images are those of
+// the neighbours, and an image's tangential components are the ones it was not reflected along;
+// for a solid, the image of the particle itself in the solid's tangent plane, weighted by the
+// solid's share of the density (Boundary.h), as the density and correction passes treat it.
+template <class Real>
+PBF_HD PBF_INLINE Vec3<Real> wallFrictionImage(
+  const Vec3<Real>& q, const Vec3<Real>& image, const Vec3<Real>& v, Real weight)
+{
+  return Vec3<Real>{ image.x == q.x ? v.x : Real(0), image.y == q.y ? v.y : Real(0),
+           image.z == q.z ? v.z : Real(0) } *
+    weight;
+}
+
 // Eq. 15 (vorticity omega_i) and eq. 17 (XSPH viscosity) from the same neighbour pass. Both sums
 // carry the SPH volume m / rho_j, so omega is a true curl in 1/s and c is a dimensionless blend.
+// With wall friction the walls' images join the smoothing (wallFrictionImage), in the same pass:
+// one neighbour walk, so the GPU stages its neighbour rows once.
 template <class Real, class Neighbors>
 PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
@@ -380,8 +402,16 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   const Vec3<Real> vi = f.v[i];
   Vec3<Real> omega{ Real(0), Real(0), Real(0) };
   Vec3<Real> smoothing{ Real(0), Real(0), Real(0) };
+  const Real friction = Real(-2) * f.c.wallFriction;
+  WallMirrors<Real> mirrors{ { 1, 1, 1 }, { { Real(0), Real(0) }, { Real(0), Real(0) }, { Real(0), Real(0) } } };
+  if (friction != Real(0))
+  {
+    mirrors = nearWalls(pi, f.c);
+  }
+  const bool images = mirrors.count[0] * mirrors.count[1] * mirrors.count[2] > 1;
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
-    const Vec3<Real> r = pi - f.p[j];
+    const Vec3<Real> pj = f.p[j];
+    const Vec3<Real> r = pi - pj;
     const Real r2 = dot(r, r);
     if (r2 < f.c.kernels.h2 && j != i)
     {
@@ -390,7 +420,28 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
       omega += cross(f.c.kernels.spikyGradientWithin(r, r2), vij) * volume;
       smoothing += vij * (volume * f.c.kernels.poly6Within(r2));
     }
+    if (images && r2 < f.c.kernels.h2)
+    {
+      // An image is never closer than its neighbour (both on the fluid's side of the wall).
+      const Vec3<Real> vj = f.v[j];
+      const Real volume = volumeOf(j, f);
+      forEachImage(mirrors, pj, [&](const Vec3<Real>& image, bool original) {
+        const Vec3<Real> ri = pi - image;
+        const Real ri2 = dot(ri, ri);
+        if (!original && ri2 < f.c.kernels.h2)
+        {
+          smoothing += wallFrictionImage(
+            pj, image, vj, friction * volume * f.c.kernels.poly6Within(ri2));
+        }
+      });
+    }
   });
+  if (friction != Real(0))
+  {
+    forEachNearSolid(pi, f, [&](const Vec3<Real>& n, const BoundarySample<Real>& b) {
+      smoothing += (vi - n * dot(vi, n)) * (friction * f.c.massOverRho0 * b.poly6);
+    });
+  }
   f.omega[i] = omega;
   if (f.omegaLength)
   {

@@ -208,6 +208,11 @@ void Parameters::validate() const
     reject("xsphViscosity", xsphViscosity,
       "must lie in [0, 1] (the artificial viscosity alpha of nu = alpha h v_scene)");
   }
+  requireNonNegative("wallFriction", wallFriction);
+  if (wallFriction > 1.0)
+  {
+    reject("wallFriction", wallFriction, "must lie in [0, 1] (0 free-slip, 1 no-slip)");
+  }
   requireNonNegative("sceneSpeedHint", sceneSpeedHint);
   requireNonNegative("vorticityEpsilon", vorticityEpsilon);
   requireFinite("gravity.x", gravity.x);
@@ -358,6 +363,7 @@ std::string describe(const Parameters& p)
                                        : "")
       << " epsilon=" << p.relaxation << " k=" << p.sCorrK << " n=" << p.sCorrN
       << " dq=" << p.sCorrDeltaQ << " xsph=" << p.xsphViscosity << " (nu " << p.xsphNu() << ")" << " vorticity=" << p.vorticityEpsilon
+      << (p.wallFriction > 0 ? " wallFriction=" + std::to_string(p.wallFriction) : "")
       << (p.timeStepping == TimeStepping::Automatic
              ? " dt=auto (CFL " + std::to_string(p.cflNumber) + ", at most " +
                std::to_string(p.timeStep) + ")"

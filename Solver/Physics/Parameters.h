@@ -83,6 +83,11 @@ struct Parameters
   double vorticityEpsilon = 0.01; // epsilon of eq. 16 [m/s]: confinement acceleration per |omega|
   bool unilateral = true;       // clamp C_i at 0: a free surface is not pulled together
   bool mirrorWalls = true;      // walls mirror the fluid near them (Equations.h, WallMirrors)
+  // Friction of the walls and solids, phi in [0, 1]: 0 lets the fluid slide along them
+  // (free-slip), 1 holds it as the fluid's own XSPH viscosity holds the fluid (no-slip at that
+  // viscosity): a wall's image of a particle moves with its tangential velocity scaled by
+  // 1 - 2 phi (Equations.h, wallFrictionImage). The box's walls take part when mirrorWalls is on.
+  double wallFriction = 0.0;
   Vec3d gravity{ 0.0, -9.81, 0.0 };
 
   // Time

@@ -86,6 +86,9 @@ std::map<std::string, std::pair<std::string, Setter>> parameterSetters()
         [](ToolOptions& o, const std::string& v) {
           o.parameters.mirrorWalls = toNumber(v) != 0.0;
         } } },
+    { "friction",
+      { "wall friction in [0, 1]: 0 free-slip, 1 no-slip",
+        [](ToolOptions& o, const std::string& v) { o.parameters.wallFriction = toNumber(v); } } },
     { "scene",
       { "preset name or .json path",
         [](ToolOptions& o, const std::string& v) { o.scene = v; } } },

@@ -307,6 +307,28 @@ TEST(DeviceStepperOnHost, SolidsMatchTheSerialBackend)
   test::expectBitIdentical(stateOf<double>(*serial), stateOf<double>(*device));
 }
 
+TEST(DeviceStepperOnHost, WallFrictionReproducesTheSerialBackendBitForBit)
+{
+  // Friction at the box's walls (the images of the neighbours) and at the solids (the image of
+  // the particle itself), in the vorticity pass of the device schedule.
+  const Scene scene = test::damBreakWithSolids();
+  Parameters p = fixedParameters({ "dam_break", 4, true, 0.02, false }, scene);
+  p.wallFriction = 0.7;
+  const std::vector<DistanceGrid> solids = solidFields(scene.solids, p);
+  std::size_t removed = 0;
+  const ParticleBatch initial = outsideSolids(fillScene(scene, p), solids, removed);
+  auto serial = makeStepper(Backend::Serial, Precision::Single, p, initial);
+  auto device = hostStepper<float>(p, initial, cuda::Options{});
+  serial->setObstacles(solids);
+  device->setObstacles(solids);
+  for (int s = 0; s < 40; ++s)
+  {
+    serial->step();
+    device->step();
+  }
+  test::expectBitIdentical(stateOf<float>(*serial), stateOf<float>(*device));
+}
+
 TEST(DeviceStepperOnHost, MoreParticlesThanFreeMemoryIsInvalidInputNamingTheCount)
 {
   const Scene scene = presetScene("dam_break");
