@@ -98,31 +98,17 @@ void DeviceSubdomainStepper<Real, Device>::solve(Roles4 r, const CellKey* sorted
   const FluidView<Real, MaskedNeighbors<Real>> f =
     detail::afterIterationsView(b, after, sortedKeys, x, v, positions);
   exec = device_->executor();
-  {
-    auto edge = device_->borderExecutor();
-    device_->forkBorder();
-    detail::firstPassOnPositions(edge,
-      VorticityStage{},
-      be,
-      after,
-      border,
-      f,
-      performed,
-      false,
-      detail::VorticityPass{},
-      onBorder);
-  }
-  sendRefresh<Vec3<Real>>(x, nullptr);
-  detail::firstPassOnPositions(exec,
-    VorticityStage{},
-    b,
-    after,
-    interior,
-    f,
-    performed,
-    false,
-    detail::VorticityPass{},
-    onInterior);
+  detail::withVorticityPass(k.c.wallFriction, [&](auto pass) {
+    {
+      auto edge = device_->borderExecutor();
+      device_->forkBorder();
+      detail::firstPassOnPositions(
+        edge, VorticityStage{}, be, after, border, f, performed, false, pass, onBorder);
+    }
+    sendRefresh<Vec3<Real>>(x, nullptr);
+    detail::firstPassOnPositions(
+      exec, VorticityStage{}, b, after, interior, f, performed, false, pass, onInterior);
+  });
   device_->joinBorder();
   receiveRefresh<Vec3<Real>>(x, nullptr);
   exec = device_->executor();

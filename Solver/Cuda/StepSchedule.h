@@ -308,14 +308,30 @@ struct DensityPass
   }
 };
 
+// With Friction false the walls' friction is compiled out (vorticityAndXsph says why).
+template <bool Friction>
 struct VorticityPass
 {
-  template <class View>
-  PBF_HD PBF_INLINE void operator()(std::uint32_t i, const View& f) const
+  template <class Real, class Neighbors>
+  PBF_HD PBF_INLINE void operator()(std::uint32_t i, const FluidView<Real, Neighbors>& f) const
   {
-    vorticityAndXsph(i, f);
+    vorticityAndXsph<Real, Neighbors, Friction>(i, f);
   }
 };
+
+// run(pass) with the vorticity pass for this friction: with it only when there is any.
+template <class Real, class Run>
+void withVorticityPass(Real wallFriction, Run&& run)
+{
+  if (wallFriction != Real(0))
+  {
+    run(VorticityPass<true>{});
+  }
+  else
+  {
+    run(VorticityPass<false>{});
+  }
+}
 
 
 // Lines 10-19 and, in the last iteration, 21: delta p_i (eq. 14) into f.scratch, then the Jacobi
@@ -418,8 +434,9 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
   // Lines 22-23 (vorticity confinement and XSPH) on the corrected positions.
   const FluidView<Real, MaskedNeighbors<Real>> f =
     detail::afterIterationsView(b, k, sortedKeys, D, C, positions);
-  detail::firstPassOnPositions(
-    exec, VorticityStage{}, b, k, n, f, k.iterations, false, detail::VorticityPass{});
+  detail::withVorticityPass(k.c.wallFriction, [&](auto pass) {
+    detail::firstPassOnPositions(exec, VorticityStage{}, b, k, n, f, k.iterations, false, pass);
+  });
   // The confined velocity overwrites the XSPH velocity in place: each particle reads only its
   // own, and f.scratch becomes v.
   FluidView<Real, MaskedNeighbors<Real>> confine = f;

@@ -394,17 +394,19 @@ PBF_HD PBF_INLINE Vec3<Real> wallFrictionImage(
 // Eq. 15 (vorticity omega_i) and eq. 17 (XSPH viscosity) from the same neighbour pass. Both sums
 // carry the SPH volume m / rho_j, so omega is a true curl in 1/s and c is a dimensionless blend.
 // With wall friction the walls' images join the smoothing (wallFrictionImage), in the same pass:
-// one neighbour walk, so the GPU stages its neighbour rows once.
-template <class Real, class Neighbors>
+// one neighbour walk, so the GPU stages its neighbour rows once. Friction = false compiles them
+// out: the GPU launches that pass when the friction is 0, as the images' code made the kernel
+// slower even where they were not visited (3 % a step in double at 1M particles on the H200).
+template <class Real, class Neighbors, bool Friction = true>
 PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
   const Vec3<Real> pi = f.p[i];
   const Vec3<Real> vi = f.v[i];
   Vec3<Real> omega{ Real(0), Real(0), Real(0) };
   Vec3<Real> smoothing{ Real(0), Real(0), Real(0) };
-  const Real friction = Real(-2) * f.c.wallFriction;
+  const Real friction = Friction ? Real(-2) * f.c.wallFriction : Real(0);
   WallMirrors<Real> mirrors{ { 1, 1, 1 }, { { Real(0), Real(0) }, { Real(0), Real(0) }, { Real(0), Real(0) } } };
-  if (friction != Real(0))
+  if (Friction && friction != Real(0))
   {
     mirrors = nearWalls(pi, f.c);
   }
@@ -420,7 +422,7 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
       omega += cross(f.c.kernels.spikyGradientWithin(r, r2), vij) * volume;
       smoothing += vij * (volume * f.c.kernels.poly6Within(r2));
     }
-    if (images && r2 < f.c.kernels.h2)
+    if (Friction && images && r2 < f.c.kernels.h2)
     {
       // An image is never closer than its neighbour (both on the fluid's side of the wall).
       const Vec3<Real> vj = f.v[j];
@@ -436,7 +438,7 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
       });
     }
   });
-  if (friction != Real(0))
+  if (Friction && friction != Real(0))
   {
     forEachNearSolid(pi, f, [&](const Vec3<Real>& n, const BoundarySample<Real>& b) {
       smoothing += (vi - n * dot(vi, n)) * (friction * f.c.massOverRho0 * b.poly6);
