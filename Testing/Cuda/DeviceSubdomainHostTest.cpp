@@ -51,6 +51,20 @@ void expectBitIdentical(const Snapshot<double>& a, const Snapshot<double>& b)
   EXPECT_EQ(differ, 0u) << "particles with a different bit";
 }
 
+// The serial backend's state after `steps` steps with one solid.
+Snapshot<double> serialWithSolid(const PresetFluid& setup, const DistanceGrid& solid, int steps)
+{
+  auto serial = makeStepper(Backend::Serial, Precision::Double, setup.parameters, setup.fluid);
+  serial->setObstacles({ solid });
+  for (int s = 0; s < steps; ++s)
+  {
+    serial->step();
+  }
+  Snapshot<double> state;
+  serial->read(state);
+  return state;
+}
+
 } // namespace
 
 TEST(DeviceSubdomainOnHost, OneRankIsBitIdenticalToTheSerialBackend)
@@ -291,14 +305,7 @@ TEST(DeviceSubdomainOnHost, SolidsMatchTheSerialBackend)
   // A sphere just beyond the column's face, within h of its front particles from the start.
   const PresetFluid setup = presetFluid("dam_break", 0.04);
   const DistanceGrid sphere = sphereDistance({ 0.5, 0.1, 0.3 }, 0.09, 0.02, 0.08);
-  auto serial = makeStepper(Backend::Serial, Precision::Double, setup.parameters, setup.fluid);
-  serial->setObstacles({ sphere });
-  for (int s = 0; s < 10; ++s)
-  {
-    serial->step();
-  }
-  Snapshot<double> reference;
-  serial->read(reference);
+  const Snapshot<double> reference = serialWithSolid(setup, sphere, 10);
   const DecomposedFactory plain = onHost<double>();
   const DecomposedFactory withSphere = [&](distributed::Communicator& communicator,
                                          const PresetFluid& fluid) {
@@ -327,14 +334,7 @@ TEST(DeviceSubdomainOnHost, WallFrictionMatchesTheSerialBackendOnBothDecomposedS
   PresetFluid setup = presetFluid("dam_break", 0.04);
   setup.parameters.wallFriction = 0.8;
   const DistanceGrid sphere = sphereDistance({ 0.5, 0.1, 0.3 }, 0.09, 0.02, 0.08);
-  auto serial = makeStepper(Backend::Serial, Precision::Double, setup.parameters, setup.fluid);
-  serial->setObstacles({ sphere });
-  for (int s = 0; s < 10; ++s)
-  {
-    serial->step();
-  }
-  Snapshot<double> reference;
-  serial->read(reference);
+  const Snapshot<double> reference = serialWithSolid(setup, sphere, 10);
   PresetFluid slipping = setup;
   slipping.parameters.wallFriction = 0.0;
   const DecomposedFactory onDevice = onHost<double>();
