@@ -126,12 +126,12 @@ void vtkPBFReadMeshFiles(pbf::Scene& scene)
 }
 
 //------------------------------------------------------------------------------
-std::string vtkPBFMeshFileVersions(const std::string& sceneFile)
+std::vector<std::string> vtkPBFSceneMeshFiles(const std::string& sceneFile)
 {
-  std::string versions;
+  std::vector<std::string> files;
   if (sceneFile.empty())
   {
-    return versions;
+    return files;
   }
   try
   {
@@ -139,16 +139,27 @@ std::string vtkPBFMeshFileVersions(const std::string& sceneFile)
     {
       if (!solid.file.empty())
       {
-        std::error_code error;
-        const auto size = std::filesystem::file_size(solid.file, error);
-        const auto time = std::filesystem::last_write_time(solid.file, error);
-        versions += "\nmesh " + solid.file + " " + std::to_string(error ? 0 : size) + " " +
-          std::to_string(error ? 0 : time.time_since_epoch().count());
+        files.push_back(solid.file);
       }
     }
   }
   catch (const std::exception&)
   {
+  }
+  return files;
+}
+
+//------------------------------------------------------------------------------
+std::string vtkPBFFileVersions(const std::vector<std::string>& files)
+{
+  std::string versions;
+  for (const std::string& file : files)
+  {
+    std::error_code error;
+    const auto size = std::filesystem::file_size(file, error);
+    const auto time = std::filesystem::last_write_time(file, error);
+    versions += "\nmesh " + file + " " + std::to_string(error ? 0 : size) + " " +
+      std::to_string(error ? 0 : time.time_since_epoch().count());
   }
   return versions;
 }

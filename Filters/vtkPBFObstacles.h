@@ -7,6 +7,7 @@
 #include "Solids.h"
 
 #include <string>
+#include <vector>
 
 class vtkDataSet;
 
@@ -23,9 +24,12 @@ pbf::SolidRegion vtkPBFSolidFromInput(vtkDataSet* input, double thickness, const
 // surface.
 void vtkPBFReadMeshFiles(pbf::Scene& scene);
 
-// The size and modification time of each mesh file a scene file names: a mesh edited in place
-// is another run, as an edited scene file is. A scene file that does not parse gives nothing here;
-// building the run reports it.
-std::string vtkPBFMeshFileVersions(const std::string& sceneFile);
+// The mesh files a scene file names (their paths resolved against the scene file's folder). A
+// scene file that does not parse gives none here; building the run reports it.
+std::vector<std::string> vtkPBFSceneMeshFiles(const std::string& sceneFile);
+
+// The size and modification time of each file: a mesh edited in place is another run, as an
+// edited scene file is.
+std::string vtkPBFFileVersions(const std::vector<std::string>& files);
 
 #endif

@@ -94,7 +94,14 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
   const std::string sceneFile = self->SceneFile ? self->SceneFile : "";
   key.scene = sceneFile.empty() ? std::string("preset ") + self->GetPresetName()
                                 : "file " + sceneFile + "\n" + ReadWholeFile(sceneFile);
-  key.scene += vtkPBFMeshFileVersions(sceneFile);
+  // The scene is parsed for its mesh files only when its path or text changed, not at every
+  // request; the files themselves are looked at every time (an STL rewritten in place).
+  if (key.scene != this->MeshFilesOf)
+  {
+    this->MeshFiles = vtkPBFSceneMeshFiles(sceneFile);
+    this->MeshFilesOf = key.scene;
+  }
+  key.scene += vtkPBFFileVersions(this->MeshFiles);
   pbf::Parameters& p = key.parameters;
   p.restDensity = self->RestDensity;
   p.particleSpacing = self->ParticleSpacing;

@@ -52,6 +52,9 @@ public:
   // The run Domain was built for: the tank and the scene's obstacles change only with it.
   pbf::PlaybackKey DomainKey;
   bool DomainBuilt = false;
+  // The mesh files of the scene file whose path and text MeshFilesOf holds.
+  std::string MeshFilesOf;
+  std::vector<std::string> MeshFiles;
   // Reused from frame to frame while the particle count stays.
   vtkSmartPointer<vtkCellArray> Vertices;
   // The diagnostics table of the rows of version TableVersion.
