@@ -43,11 +43,8 @@ def experiment_path():
 
 
 def tool(build, name):
-    """A tool of Solver/Tools: in bin/ of a ParaView build, in Solver/Tools/ of a solver-only one."""
-    for folder in (os.path.join(build, "bin"), os.path.join(build, "Solver", "Tools")):
-        if os.path.exists(os.path.join(folder, name)):
-            return os.path.join(folder, name)
-    return os.path.join(build, "bin", name)
+    """A tool of Solver/Tools, built into the build tree's Solver/Tools/ (every kind of build)."""
+    return os.path.join(build, "Solver", "Tools", name)
 
 
 def runs(build):
