@@ -50,8 +50,9 @@
 // Neighbour masks across ranks: rebuilt at every pass (see the constructor): a ghost moves by
 // its owner's corrections, which a pass over the border cannot wait for.
 //
-// Adaptive iterations (densityErrorTolerance > 0) are not implemented here: the constructor
-// throws InvalidInput naming the field.
+// Adaptive iterations (densityErrorTolerance > 0): after each density pass the ranks' mean and
+// largest compression are reduced together (DeviceSubdomainSolve.h), so every rank ends the loop
+// after the same projection.
 #pragma once
 
 #include "Distributed/Communicator.h"
