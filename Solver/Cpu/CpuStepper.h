@@ -22,11 +22,13 @@ public:
   Statistics statistics() const override;
   Health health() const override;
   // Density and lambda are evaluated again at the current positions, with the solids.
-  void setObstacles(const std::vector<DistanceGrid>& obstacles) override
+  void setObstacles(
+    const std::vector<DistanceGrid>& obstacles, const std::vector<SolidPose>& poses = {}) override
   {
-    fluid_.setObstacles(obstacles);
+    fluid_.setObstacles(obstacles, poses);
     evaluateDensityAtRest();
   }
+  void setObstaclePoses(const std::vector<SolidPose>& poses) override { fluid_.setPoses(poses); }
   // Nothing else is state: the next step predicts, re-sorts (stably, from this order) and
   // recomputes every other array.
   void load(const Snapshot<float>& state) override { loadState(state); }

@@ -62,9 +62,10 @@ struct HostFluid
     return f;
   }
 
-  // The solids and the table of their sums (Boundary.h), in this precision.
-  void setObstacles(const std::vector<DistanceGrid>& solids)
+  // The solids and the table of their sums (Boundary.h), in this precision, placed at `poses`.
+  void setObstacles(const std::vector<DistanceGrid>& solids, const std::vector<SolidPose>& poses)
   {
+    checkPoseCount(poses.size(), solids.size());
     obstacles = solids;
     obstacleViews.clear();
     for (const DistanceGrid& g : obstacles)
@@ -74,6 +75,17 @@ struct HostFluid
     const BoundaryTableData table = makeBoundaryTable(parameters);
     boundaryValues = table.packed<Real>();
     boundary = table.view(boundaryValues.data());
+    setPoses(poses);
+  }
+
+  // Where the solids are from now on (SolidMotion.h); none: as sampled.
+  void setPoses(const std::vector<SolidPose>& poses)
+  {
+    checkPoseCount(poses.size(), obstacles.size());
+    for (std::size_t k = 0; k < poses.size(); ++k)
+    {
+      obstacleViews[k] = placed(obstacleViews[k], poses[k]);
+    }
   }
 
   // Sorts the particles by the cell of p (Green 2008): keys, a counting sort (O(N + cells),

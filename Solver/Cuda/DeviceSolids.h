@@ -14,12 +14,15 @@ namespace pbf::cuda
 {
 
 // Waits for the queued work, releases the previous block (`old`, may be null), points
-// `constants` at the new solids (none: null, 0 and an empty table) and returns their block, or
-// nullptr without solids. The copies are done when it returns (the host arrays die here).
+// `constants` at the new solids (none: null, 0 and an empty table) placed at `poses` (none: as
+// sampled) and returns their block, or nullptr without solids; `views` receives the views as
+// sampled, for placeSolids. The copies are done when it returns (the host arrays die here).
 template <class Real, class Device>
 void* replaceSolids(Device& device, void* old, const std::vector<DistanceGrid>& obstacles,
-  const Parameters& parameters, StepConstants<Real>& constants)
+  const std::vector<SolidPose>& poses, const Parameters& parameters,
+  StepConstants<Real>& constants, std::vector<DistanceGridView<Real>>& views)
 {
+  checkPoseCount(poses.size(), obstacles.size());
   device.activate();
   device.synchronize();
   if (old)
@@ -46,14 +49,16 @@ void* replaceSolids(Device& device, void* old, const std::vector<DistanceGrid>& 
   }
   void* block = device.allocate(total);
   char* base = static_cast<char*>(block);
-  std::vector<DistanceGridView<Real>> views;
+  views.clear();
+  std::vector<DistanceGridView<Real>> placedViews;
   for (std::size_t k = 0; k < obstacles.size(); ++k)
   {
     const DistanceGrid& g = obstacles[k];
     device.upload(base + nodesAt[k], g.phi.data(), g.phi.size() * sizeof(float));
     views.push_back(g.view<Real>(reinterpret_cast<const float*>(base + nodesAt[k])));
+    placedViews.push_back(poses.empty() ? views.back() : placed(views.back(), poses[k]));
   }
-  device.upload(base, views.data(), views.size() * sizeof(DistanceGridView<Real>));
+  device.upload(base, placedViews.data(), placedViews.size() * sizeof(DistanceGridView<Real>));
   Real* onDevice = reinterpret_cast<Real*>(base + viewBytes);
   device.upload(onDevice, table.data(), table.size() * sizeof(Real));
   device.synchronize();
@@ -61,6 +66,28 @@ void* replaceSolids(Device& device, void* old, const std::vector<DistanceGrid>& 
   constants.obstacleCount = static_cast<int>(obstacles.size());
   constants.boundary = t.view(onDevice);
   return block;
+}
+
+// The solids' views placed at `poses` (one per solid), copied over those the steps read, ordered
+// before the next step (the policy stages the bytes, so the host copy may go at once). A graph
+// captured before reads them too: it holds their address, not their values.
+template <class Real, class Device>
+void placeSolids(Device& device, const StepConstants<Real>& constants,
+  const std::vector<DistanceGridView<Real>>& views, const std::vector<SolidPose>& poses)
+{
+  checkPoseCount(poses.size(), views.size());
+  if (poses.empty())
+  {
+    return;
+  }
+  std::vector<DistanceGridView<Real>> placedViews;
+  for (std::size_t k = 0; k < views.size(); ++k)
+  {
+    placedViews.push_back(placed(views[k], poses[k]));
+  }
+  device.activate();
+  device.upload(const_cast<DistanceGridView<Real>*>(constants.obstacles), placedViews.data(),
+    placedViews.size() * sizeof(DistanceGridView<Real>));
 }
 
 } // namespace pbf::cuda

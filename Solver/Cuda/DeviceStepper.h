@@ -78,7 +78,9 @@ public:
 
   // Uploads the solids' distance grids and the boundary table (one allocation, DeviceSolids.h)
   // and captures the step again with them.
-  void setObstacles(const std::vector<DistanceGrid>& obstacles) override;
+  void setObstacles(
+    const std::vector<DistanceGrid>& obstacles, const std::vector<SolidPose>& poses = {}) override;
+  void setObstaclePoses(const std::vector<SolidPose>& poses) override;
 
   Diagnostics diagnostics() const override;
   const Options& options() const override { return options_; }
@@ -124,6 +126,7 @@ private:
   double dt_ = 0;
   StepTime<Real>* deviceTime_ = nullptr; // constants_.time, in the fixed arrays
   void* solids_ = nullptr; // constants_.obstacles and .boundary: the solids' views, table, nodes
+  std::vector<DistanceGridView<Real>> solidViews_; // as sampled, for placeSolids
   unsigned long long* healthBits_ = nullptr; // health(): three maxima as double bits
 
   std::size_t n_ = 0;

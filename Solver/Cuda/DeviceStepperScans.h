@@ -114,11 +114,19 @@ Diagnostics DeviceStepper<Real, Device>::diagnostics() const
 }
 
 template <class Real, class Device>
-void DeviceStepper<Real, Device>::setObstacles(const std::vector<DistanceGrid>& obstacles)
+void DeviceStepper<Real, Device>::setObstacles(
+  const std::vector<DistanceGrid>& obstacles, const std::vector<SolidPose>& poses)
 {
-  solids_ = replaceSolids(*device_, solids_, obstacles, parameters_, constants_);
+  solids_ =
+    replaceSolids(*device_, solids_, obstacles, poses, parameters_, constants_, solidViews_);
   // The captured step holds the constants it was captured with.
   settle();
+}
+
+template <class Real, class Device>
+void DeviceStepper<Real, Device>::setObstaclePoses(const std::vector<SolidPose>& poses)
+{
+  placeSolids(*device_, constants_, solidViews_, poses);
 }
 
 } // namespace cuda

@@ -13,12 +13,21 @@ namespace pbf::cuda
 {
 
 template <class Real, class Device>
-void DeviceSubdomainStepper<Real, Device>::setObstacles(const std::vector<DistanceGrid>& obstacles)
+void DeviceSubdomainStepper<Real, Device>::setObstacles(
+  const std::vector<DistanceGrid>& obstacles, const std::vector<SolidPose>& poses)
 {
-  solids_ = replaceSolids(*device_, solids_, obstacles, parameters_, constants_);
+  solids_ =
+    replaceSolids(*device_, solids_, obstacles, poses, parameters_, constants_, solidViews_);
   // As after an append: the state at rest, p = x, evaluated with the solids on every rank.
   cut(xBuffer_, -1);
   evaluateAtRest();
+}
+
+// Every rank places every solid alike: a pose is a function of the time alone.
+template <class Real, class Device>
+void DeviceSubdomainStepper<Real, Device>::setObstaclePoses(const std::vector<SolidPose>& poses)
+{
+  placeSolids(*device_, constants_, solidViews_, poses);
 }
 
 } // namespace pbf::cuda

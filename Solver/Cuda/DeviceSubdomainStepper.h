@@ -246,7 +246,9 @@ public:
   // Collective (every rank gives the same solids): their grids, views and the boundary table go
   // up in one allocation, then density and lambda are evaluated again with them
   // (DeviceSubdomainSolids.h).
-  void setObstacles(const std::vector<DistanceGrid>& obstacles) override;
+  void setObstacles(
+    const std::vector<DistanceGrid>& obstacles, const std::vector<SolidPose>& poses = {}) override;
+  void setObstaclePoses(const std::vector<SolidPose>& poses) override;
 
   std::string description() const override
   {
@@ -699,6 +701,7 @@ private:
   // Fixed-size device arrays.
   std::vector<void*> fixed_;
   void* solids_ = nullptr; // constants_.obstacles and .boundary: views, table, nodes
+  std::vector<DistanceGridView<Real>> solidViews_; // as sampled, for placeSolids
   std::uint32_t* cellOffsets_ = nullptr;
   unsigned long long* maxMoved_ = nullptr;
   unsigned long long* maskBuilds_ = nullptr;

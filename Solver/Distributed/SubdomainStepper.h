@@ -86,11 +86,14 @@ public:
   void load(const Snapshot<double>& state) override { loadFromSnapshot(state, fluid_.particles()); }
   // Collective: every rank holds every solid (their fields are small beside the fluid), and
   // density and lambda are evaluated again with them, as CpuStepper does.
-  void setObstacles(const std::vector<DistanceGrid>& obstacles) override
+  void setObstacles(
+    const std::vector<DistanceGrid>& obstacles, const std::vector<SolidPose>& poses = {}) override
   {
-    fluid_.setObstacles(obstacles);
+    fluid_.setObstacles(obstacles, poses);
     evaluateAtRest();
   }
+  // Every rank places every solid alike: a pose is a function of the time alone.
+  void setObstaclePoses(const std::vector<SolidPose>& poses) override { fluid_.setPoses(poses); }
 
   // Collective: the particles of each rank.
   std::vector<std::uint64_t> particlesPerRank() const override;

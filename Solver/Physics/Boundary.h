@@ -11,7 +11,10 @@
 // lambda's denominator (eq. 11) and the position correction (eq. 14, with lambda_i for the
 // solid's share, as a mirror image carries its particle's lambda, and s_corr), and nothing else:
 // the walls are free-slip, as the mirror walls are. A particle found inside a solid is moved to
-// its surface along the field's gradient, as the box's collision moves it to the wall.
+// its surface along the field's gradient, as the box's collision moves it to the wall. A moving
+// solid (Scene/SolidMotion.h) is read through its pose at the step's end (DistanceGridView's
+// rotation and translation): the constraint and the collision push the fluid it moves into, and
+// with wall friction its surface velocity is what the fluid is smoothed towards.
 #pragma once
 
 #include "HostDevice.h"
@@ -33,11 +36,24 @@ struct DistanceGridView
   Real inverseCell;
   int nx, ny, nz;
   const float* phi; // x fastest
+  // Where the solid is this step (Scene/SolidMotion.h, SolidPose): a point x of the grid's frame
+  // is at rotation x + translation, and moves at pivotVelocity + angularVelocity x (y - pivot).
+  // A solid that never moves skips all of it (moving false), at the bits it always had.
+  bool moving;
+  Real rotation[9]; // rows
+  Vec3<Real> translation, pivot, pivotVelocity, angularVelocity;
 
   // The trilinear field at q and its gradient, clamped to the grid (a particle beyond the grid is
   // farther than h from the solid, whose grid is padded by h).
-  PBF_HD PBF_INLINE Real at(const Vec3<Real>& q, Vec3<Real>* gradient) const
+  PBF_HD PBF_INLINE Real at(Vec3<Real> q, Vec3<Real>* gradient) const
   {
+    if (moving)
+    {
+      const Vec3<Real> d = q - translation;
+      q = { rotation[0] * d.x + rotation[3] * d.y + rotation[6] * d.z,
+        rotation[1] * d.x + rotation[4] * d.y + rotation[7] * d.z,
+        rotation[2] * d.x + rotation[5] * d.y + rotation[8] * d.z };
+    }
     const Real u[3] = { (q.x - origin.x) * inverseCell, (q.y - origin.y) * inverseCell,
       (q.z - origin.z) * inverseCell };
     const int n[3] = { nx, ny, nz };
@@ -73,8 +89,25 @@ struct DistanceGridView
     if (gradient)
     {
       *gradient = Vec3<Real>{ g[0], g[1], g[2] } * inverseCell;
+      if (moving)
+      {
+        const Vec3<Real> l = *gradient;
+        *gradient = { rotation[0] * l.x + rotation[1] * l.y + rotation[2] * l.z,
+          rotation[3] * l.x + rotation[4] * l.y + rotation[5] * l.z,
+          rotation[6] * l.x + rotation[7] * l.y + rotation[8] * l.z };
+      }
     }
     return value;
+  }
+
+  // The solid's velocity at the world point q (zero when it does not move).
+  PBF_HD PBF_INLINE Vec3<Real> velocityAt(const Vec3<Real>& q) const
+  {
+    if (!moving)
+    {
+      return { Real(0), Real(0), Real(0) };
+    }
+    return pivotVelocity + cross(angularVelocity, q - pivot);
   }
 };
 

@@ -126,8 +126,8 @@ struct FluidView
   BoundaryTable<Real> boundary;
 };
 
-// Calls visit(n, b) for each solid within h of q: n its outward unit normal there (the field's
-// gradient), b the table's sums at q's distance from it.
+// Calls visit(n, b, solid) for each solid within h of q: n its outward unit normal there (the
+// field's gradient), b the table's sums at q's distance from it, solid its view (for its velocity).
 template <class Real, class Neighbors, class Visit>
 PBF_HD PBF_INLINE void forEachNearSolid(
   const Vec3<Real>& q, const FluidView<Real, Neighbors>& f, Visit&& visit)
@@ -139,7 +139,7 @@ PBF_HD PBF_INLINE void forEachNearSolid(
     const Real g = length(gradient);
     if (d < f.c.kernels.h && g > Real(0))
     {
-      visit(gradient * (Real(1) / g), sampleBoundary(f.boundary, d));
+      visit(gradient * (Real(1) / g), sampleBoundary(f.boundary, d), f.obstacles[o]);
     }
   }
 }
@@ -295,7 +295,8 @@ PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real, N
     });
   });
   // Each solid within h: its share, the lattice reflected in its tangent plane (Boundary.h).
-  forEachNearSolid(pi, f, [&](const Vec3<Real>& n, const BoundarySample<Real>& b) {
+  forEachNearSolid(pi, f,
+    [&](const Vec3<Real>& n, const BoundarySample<Real>& b, const DistanceGridView<Real>&) {
     rho += b.poly6;
     gradI += n * (b.spiky * f.c.massOverRho0);
     sumGradJ2 += b.spiky2 * f.c.massOverRho0 * f.c.massOverRho0;
@@ -334,7 +335,8 @@ PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real,
     });
   });
   // The solid's share carries lambda_i, as a mirror image does (Boundary.h).
-  forEachNearSolid(pi, f, [&](const Vec3<Real>& n, const BoundarySample<Real>& b) {
+  forEachNearSolid(pi, f,
+    [&](const Vec3<Real>& n, const BoundarySample<Real>& b, const DistanceGridView<Real>&) {
     delta += n * (b.spiky * (lambdaI + lambdaI) + tensile * b.tensile);
   });
   f.scratch[i] = delta * f.c.massOverRho0;
@@ -440,8 +442,11 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   });
   if (Friction && friction != Real(0))
   {
-    forEachNearSolid(pi, f, [&](const Vec3<Real>& n, const BoundarySample<Real>& b) {
-      smoothing += (vi - n * dot(vi, n)) * (friction * f.c.massOverRho0 * b.poly6);
+    forEachNearSolid(pi, f,
+      [&](const Vec3<Real>& n, const BoundarySample<Real>& b, const DistanceGridView<Real>& solid) {
+      // The velocity relative to the solid's surface (a moving obstacle drags the fluid along).
+      const Vec3<Real> slip = vi - solid.velocityAt(pi);
+      smoothing += (slip - n * dot(slip, n)) * (friction * f.c.massOverRho0 * b.poly6);
     });
   }
   f.omega[i] = omega;

@@ -54,10 +54,14 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   , layersEmitted_(scene.emitters.size(), 0)
 {
   parameters_.validate();
-  // The solids, and the fluid not inside them (seeded inside, it would be thrown out at once).
+  // The solids where they are at t = 0, and the fluid not inside them (seeded inside, it would
+  // be thrown out at once).
   const std::vector<DistanceGrid> solids = solidFields(scene_.solids, parameters_);
+  motions_ = pbf::solidMotions(scene_.solids);
+  solidReach_ = solidReaches(scene_.solids, motions_);
+  const std::vector<SolidPose> poses = posesAt(motions_, 0.0);
   const ParticleBatch initial =
-    solids.empty() ? given : outsideSolids(given, solids, seededInsideSolids_);
+    solids.empty() ? given : outsideSolids(given, solids, poses, seededInsideSolids_);
   if (initial.position.empty() && scene_.emitters.empty())
   {
     if (!scene_.boxes.empty() || !scene_.spheres.empty())
@@ -93,7 +97,7 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
     : makeStepper(backend, precision, parameters_, initial);
   if (!solids.empty())
   {
-    stepper_->setObstacles(solids);
+    stepper_->setObstacles(solids, poses);
   }
   nextId_ = static_cast<std::int64_t>(initial.position.size());
 
@@ -323,7 +327,8 @@ double Simulation::nextTimeStep() const
     return p.timeStep;
   }
   const double s = p.particleSpacing;
-  const double v = std::max(healthValid_ ? health_.maxSpeed : 0.0, limits_.sceneSpeed);
+  const double v = std::max(
+    { healthValid_ ? health_.maxSpeed : 0.0, limits_.sceneSpeed, fastestSolidPoint() });
   double dt = std::min(p.timeStep, xsphStepLimit_);
   if (v > 0)
   {
@@ -335,6 +340,48 @@ double Simulation::nextTimeStep() const
     dt = std::min(dt, p.cflNumber * std::sqrt(s / g));
   }
   return dt;
+}
+
+// The fastest point of a moving solid now and one largest step on (the next step may begin a
+// faster keyframe segment): a function of the time alone, so the steps stay a function of the
+// state.
+double Simulation::fastestSolidPoint() const
+{
+  double fastest = 0;
+  for (std::size_t k = 0; k < motions_.size(); ++k)
+  {
+    if (!motions_[k].moves())
+    {
+      continue;
+    }
+    for (double t : { time_, time_ + parameters_.timeStep })
+    {
+      const SolidPose pose = motions_[k].at(t);
+      fastest = std::max(
+        fastest, length(pose.pivotVelocity) + length(pose.angularVelocity) * solidReach_[k]);
+    }
+  }
+  return fastest;
+}
+
+void Simulation::setSolidMotion(std::size_t solid, SolidMotion motion)
+{
+  if (solid >= motions_.size())
+  {
+    throw InvalidInput("solid = " + std::to_string(solid) + ": the scene has " +
+      std::to_string(motions_.size()) + " solid(s)");
+  }
+  const std::string name = scene_.solids[solid].name.empty()
+    ? "obstacles[" + std::to_string(solid) + "]"
+    : scene_.solids[solid].name;
+  motion.validate(name + ".motion");
+  if (motion.moves() && std::isnan(motion.pivot.x))
+  {
+    throw InvalidInput(name + ".motion.pivot: must be given");
+  }
+  motions_[solid] = std::move(motion);
+  scene_.solids[solid].motion = motions_[solid];
+  solidReach_ = solidReaches(scene_.solids, motions_);
 }
 
 double Simulation::checkedTimeStep() const
@@ -353,11 +400,17 @@ double Simulation::checkedTimeStep() const
   return dt;
 }
 
-void Simulation::stepOnce(double dt, AdvanceReport& report)
+void Simulation::stepOnce(double dt, double end, AdvanceReport& report)
 {
   if (dt != stepper_->timeStep())
   {
     stepper_->setTimeStep(dt);
+  }
+  // The constraints hold at the step's end, with the solids where they are then.
+  const std::vector<SolidPose> poses = posesAt(motions_, end);
+  if (!poses.empty())
+  {
+    stepper_->setObstaclePoses(poses);
   }
   stepper_->step();
   ++steps_;
@@ -382,7 +435,7 @@ AdvanceReport Simulation::advance(std::uint64_t steps)
       checkDivergence(); // the fastest particle, and the check for free
     }
     const double dt = checkedTimeStep();
-    stepOnce(dt, report);
+    stepOnce(dt, time_ + dt, report);
     time_ += dt;
     if (automatic || (checkInterval_ > 0 && steps_ % checkInterval_ == 0))
     {
@@ -417,8 +470,8 @@ bool Simulation::stepToward(double until, AdvanceReport& report)
   // Fixed steps stay exactly timeStep; only a remainder that is no multiple of it is shortened.
   const double dt = fixedFits || count == 1.0 ? (count == 1.0 ? remaining : largest)
                                               : remaining / count;
-  stepOnce(dt, report);
   const bool landed = count == 1.0;
+  stepOnce(dt, landed ? until : time_ + dt, report);
   time_ = landed ? until : time_ + dt;
   if (automatic || landed || (checkInterval_ > 0 && steps_ % checkInterval_ == 0))
   {

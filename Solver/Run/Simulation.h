@@ -153,6 +153,13 @@ public:
   SimulationCheckpoint checkpoint() const;
   void restore(const SimulationCheckpoint& checkpoint);
 
+  // Replaces how solid `solid` of the scene moves from now on (its pivot given). The steps
+  // already taken stay as they were, so the new motion must agree with the old one up to time():
+  // the VTK filter appends the keyframes it observes on its Obstacles input as frames are asked.
+  // Throws InvalidInput for a bad motion or index.
+  void setSolidMotion(std::size_t solid, SolidMotion motion);
+  const std::vector<SolidMotion>& solidMotions() const { return motions_; }
+
   // Initial particles that lay inside a solid obstacle of the scene and were removed.
   std::size_t seededInsideSolids() const { return seededInsideSolids_; }
 
@@ -166,7 +173,7 @@ public:
   const Stepper& stepper() const { return *stepper_; }
 
 private:
-  void stepOnce(double dt, AdvanceReport& report);
+  void stepOnce(double dt, double end, AdvanceReport& report); // `end`: time() after it
   double checkedTimeStep() const; // nextTimeStep(), or SimulationDiverged below the smallest
   void emit();
   void checkEmitters(std::size_t initialParticles) const;
@@ -187,6 +194,9 @@ private:
   DivergenceLimits limits_;
   std::uint64_t checkInterval_ = 1;
   std::size_t seededInsideSolids_ = 0;
+  double fastestSolidPoint() const; // [m/s], a floor of the automatic step's speed
+  std::vector<SolidMotion> motions_; // per solid of the scene, pivots given
+  std::vector<double> solidReach_;   // per solid: its farthest point from its pivot [m]
   std::uint64_t lastGoodStep_ = 0;
   double lastGoodSpeed_ = 0; // max speed at lastGoodStep_; NaN when not known (after restore)
 };

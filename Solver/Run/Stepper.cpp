@@ -9,7 +9,7 @@
 namespace pbf
 {
 
-void Stepper::setObstacles(const std::vector<DistanceGrid>& obstacles)
+void Stepper::setObstacles(const std::vector<DistanceGrid>& obstacles, const std::vector<SolidPose>&)
 {
   if (!obstacles.empty())
   {
@@ -17,6 +17,20 @@ void Stepper::setObstacles(const std::vector<DistanceGrid>& obstacles)
       " solid(s) given to the " + description() +
       " backend, which has no solid obstacles (every backend of this build has them: a stepper "
       "outside it must implement Stepper::setObstacles)");
+  }
+}
+
+void Stepper::setObstaclePoses(const std::vector<SolidPose>& poses)
+{
+  checkPoseCount(poses.size(), 0);
+}
+
+void checkPoseCount(std::size_t poses, std::size_t solids)
+{
+  if (poses != 0 && poses != solids)
+  {
+    throw InvalidInput("obstacle poses = " + std::to_string(poses) + ": there are " +
+      std::to_string(solids) + " solid(s), one pose each");
   }
 }
 

@@ -155,11 +155,20 @@ public:
   virtual void load(const Snapshot<double>& state) = 0;
 
   // Solid obstacles the fluid flows around, as signed distance grids (Scene/SignedDistance.h,
-  // Physics/Boundary.h), replacing any set before; static, part of the configuration like the
-  // parameters. Every stepper of the solver has them; the default, for a stepper without, throws
-  // InvalidInput naming the backend.
-  virtual void setObstacles(const std::vector<DistanceGrid>& obstacles);
+  // Physics/Boundary.h), replacing any set before; part of the configuration like the
+  // parameters. `poses` (none: every solid as sampled) places each solid now (SolidMotion.h):
+  // the density and lambda at rest are evaluated with the solids there. Every stepper of the
+  // solver has them; the default, for a stepper without, throws InvalidInput naming the backend.
+  virtual void setObstacles(
+    const std::vector<DistanceGrid>& obstacles, const std::vector<SolidPose>& poses = {});
+  // Where the solids are at the end of the next step, one pose per solid: Simulation sets them
+  // before every step of a scene whose solids move. Nothing is evaluated here; the steps that
+  // follow read the solids there. Throws InvalidInput when the count differs from the solids'.
+  virtual void setObstaclePoses(const std::vector<SolidPose>& poses);
 };
+
+// Throws InvalidInput unless there is one pose per solid (or none).
+void checkPoseCount(std::size_t poses, std::size_t solids);
 
 // Throws InvalidInput naming the step when dt is not a positive finite number.
 void checkTimeStep(double dt);

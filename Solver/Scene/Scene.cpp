@@ -129,6 +129,39 @@ bool inside(const Vec3d& p, const Box& box)
     p.y <= box.max.y && p.z <= box.max.z;
 }
 
+// An obstacle's "motion": {"pivot": [x, y, z], "keyframes": [{"time": t, "translation": [...],
+// "rotation": [degrees about x, y, z]}, ...]}: the pivot (default: the centre of the solid's
+// bounds, filled in by solidFields) is carried by the translation and the solid turns about it.
+SolidMotion parseMotion(const json& motion, const std::string& path)
+{
+  requireKeys(motion, path, { "pivot", "keyframes" }, { "keyframes" });
+  SolidMotion m;
+  m.pivot = vector3(motion, path, "pivot", { std::nan(""), 0, 0 });
+  const json& frames = motion["keyframes"];
+  constexpr std::size_t kMostKeyframes = 100000;
+  if (!frames.is_array() || frames.empty() || frames.size() > kMostKeyframes)
+  {
+    reject(path + ".keyframes", frames,
+      "must be an array of 1 to " + std::to_string(kMostKeyframes) + " keyframes");
+  }
+  for (std::size_t k = 0; k < frames.size(); ++k)
+  {
+    const std::string at = path + ".keyframes[" + std::to_string(k) + "]";
+    const json& frame = frames[k];
+    requireKeys(frame, at, { "time", "translation", "rotation" }, { "time" });
+    Keyframe key;
+    key.time = number(frame, at, "time");
+    if (k > 0 && !(key.time > m.keyframes.back().time))
+    {
+      reject(at + ".time", frame["time"], "keyframe times must increase");
+    }
+    key.translation = vector3(frame, at, "translation");
+    key.rotation = Rotation::fromDegrees(vector3(frame, at, "rotation"));
+    m.keyframes.push_back(key);
+  }
+  return m;
+}
+
 // "obstacles": [{"type": "box", "min": [...], "max": [...]}, {"type": "sphere", "center": [...],
 // "radius": r}, {"type": "mesh", "file": "part.stl", "thickness": t}]. Where they lie against the
 // domain is checked when the run is built (solidFields); a mesh file is read there by the
@@ -161,21 +194,21 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
     SolidRegion solid;
     if (type == "box")
     {
-      requireKeys(item, path, { "type", "min", "max" }, { "min", "max" });
+      requireKeys(item, path, { "type", "min", "max", "motion" }, { "min", "max" });
       solid.kind = SolidRegion::Kind::Box;
       solid.box = { vector3(item, path, "min"), vector3(item, path, "max") };
       requireOrdered(solid.box.min, solid.box.max, path, item["max"]);
     }
     else if (type == "sphere")
     {
-      requireKeys(item, path, { "type", "center", "radius" }, { "center", "radius" });
+      requireKeys(item, path, { "type", "center", "radius", "motion" }, { "center", "radius" });
       solid.kind = SolidRegion::Kind::Sphere;
       solid.center = vector3(item, path, "center");
       solid.radius = positive(item, path, "radius");
     }
     else if (type == "mesh")
     {
-      requireKeys(item, path, { "type", "file", "thickness" }, { "file" });
+      requireKeys(item, path, { "type", "file", "thickness", "motion" }, { "file" });
       if (!item["file"].is_string() || item["file"].get<std::string>().empty())
       {
         reject(path + ".file", item["file"], "must be the path of an STL, OBJ, PLY or VTP file");
@@ -191,6 +224,10 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
     else
     {
       reject(path + ".type", item["type"], "must be \"box\", \"sphere\" or \"mesh\"");
+    }
+    if (item.contains("motion"))
+    {
+      solid.motion = parseMotion(item["motion"], path + ".motion");
     }
     solids.push_back(solid);
   }

@@ -7,6 +7,7 @@
 
 #include "Boundary.h"
 #include "Parameters.h"
+#include "SolidMotion.h"
 
 #include <array>
 #include <cstdint>
@@ -16,6 +17,22 @@
 
 namespace pbf
 {
+
+// A solid's view with its pose of this step (the pose's values in Real).
+template <class Real>
+DistanceGridView<Real> placed(DistanceGridView<Real> view, const SolidPose& pose)
+{
+  view.moving = pose.moving;
+  for (int k = 0; k < 9; ++k)
+  {
+    view.rotation[k] = static_cast<Real>(pose.rotation[k]);
+  }
+  view.translation = Vec3<Real>::from(pose.translation);
+  view.pivot = Vec3<Real>::from(pose.pivot);
+  view.pivotVelocity = Vec3<Real>::from(pose.pivotVelocity);
+  view.angularVelocity = Vec3<Real>::from(pose.angularVelocity);
+  return view;
+}
 
 struct DistanceGrid
 {
@@ -44,7 +61,14 @@ struct DistanceGrid
   template <class Real>
   DistanceGridView<Real> view(const float* nodes) const
   {
-    return { Vec3<Real>::from(origin), static_cast<Real>(1.0 / cell), nx, ny, nz, nodes };
+    DistanceGridView<Real> v{};
+    v.origin = Vec3<Real>::from(origin);
+    v.inverseCell = static_cast<Real>(1.0 / cell);
+    v.nx = nx;
+    v.ny = ny;
+    v.nz = nz;
+    v.phi = nodes;
+    return placed(v, SolidPose{});
   }
 };
 

@@ -35,7 +35,84 @@ Box boundsOf(const SolidRegion& s, const std::string& name)
   return Box{ b.min - Vec3d{ t, t, t }, b.max + Vec3d{ t, t, t } };
 }
 
+// The world box around `box` placed at `pose`.
+Box placedBounds(const Box& box, const SolidPose& pose)
+{
+  Box out{ { HUGE_VAL, HUGE_VAL, HUGE_VAL }, { -HUGE_VAL, -HUGE_VAL, -HUGE_VAL } };
+  for (int corner = 0; corner < 8; ++corner)
+  {
+    const Vec3d c = pose.toWorld({ corner & 1 ? box.max.x : box.min.x,
+      corner & 2 ? box.max.y : box.min.y, corner & 4 ? box.max.z : box.min.z });
+    out.min = { std::min(out.min.x, c.x), std::min(out.min.y, c.y), std::min(out.min.z, c.z) };
+    out.max = { std::max(out.max.x, c.x), std::max(out.max.y, c.y), std::max(out.max.z, c.z) };
+  }
+  return out;
+}
+
+bool overlaps(const Box& a, const Box& b)
+{
+  return a.min.x < b.max.x && b.min.x < a.max.x && a.min.y < b.max.y && b.min.y < a.max.y &&
+    a.min.z < b.max.z && b.min.z < a.max.z;
+}
+
+std::string nameOf(const SolidRegion& s, std::size_t k)
+{
+  return s.name.empty() ? "obstacles[" + std::to_string(k) + "]" : s.name;
+}
+
 } // namespace
+
+std::vector<SolidMotion> solidMotions(const std::vector<SolidRegion>& solids)
+{
+  std::vector<SolidMotion> motions;
+  for (std::size_t k = 0; k < solids.size(); ++k)
+  {
+    SolidMotion m = solids[k].motion;
+    if (m.moves() && std::isnan(m.pivot.x))
+    {
+      const Box b = boundsOf(solids[k], nameOf(solids[k], k));
+      m.pivot = (b.min + b.max) * 0.5;
+    }
+    m.validate(nameOf(solids[k], k) + ".motion");
+    motions.push_back(m);
+  }
+  return motions;
+}
+
+std::vector<SolidPose> posesAt(const std::vector<SolidMotion>& motions, double time)
+{
+  const bool any =
+    std::any_of(motions.begin(), motions.end(), [](const SolidMotion& m) { return m.moves(); });
+  std::vector<SolidPose> poses;
+  for (const SolidMotion& m : motions)
+  {
+    if (any)
+    {
+      poses.push_back(m.at(time));
+    }
+  }
+  return poses;
+}
+
+std::vector<double> solidReaches(
+  const std::vector<SolidRegion>& solids, const std::vector<SolidMotion>& motions)
+{
+  std::vector<double> reaches(solids.size(), 0.0);
+  for (std::size_t k = 0; k < solids.size() && k < motions.size(); ++k)
+  {
+    if (!motions[k].moves())
+    {
+      continue;
+    }
+    const Box b = boundsOf(solids[k], nameOf(solids[k], k));
+    const Vec3d p = motions[k].pivot;
+    const Vec3d far{ std::max(std::abs(b.min.x - p.x), std::abs(b.max.x - p.x)),
+      std::max(std::abs(b.min.y - p.y), std::abs(b.max.y - p.y)),
+      std::max(std::abs(b.min.z - p.z), std::abs(b.max.z - p.z)) };
+    reaches[k] = length(far);
+  }
+  return reaches;
+}
 
 std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, const Parameters& p)
 {
@@ -45,13 +122,28 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
   for (std::size_t k = 0; k < solids.size(); ++k)
   {
     const SolidRegion& s = solids[k];
-    const std::string name = s.name.empty() ? "obstacles[" + std::to_string(k) + "]" : s.name;
+    const std::string name = nameOf(s, k);
     const Box bounds = boundsOf(s, name);
-    // Only what the fluid can reach: the solid within h of the domain.
-    const Box reach{ { std::max(bounds.min.x, d.min.x - h), std::max(bounds.min.y, d.min.y - h),
-                       std::max(bounds.min.z, d.min.z - h) },
-      { std::min(bounds.max.x, d.max.x + h), std::min(bounds.max.y, d.max.y + h),
-        std::min(bounds.max.z, d.max.z + h) } };
+    // Only what the fluid can reach: the solid within h of the domain; a moving solid whole,
+    // when some keyframe brings it within h of the domain.
+    const Box padded{ d.min - Vec3d{ h, h, h }, d.max + Vec3d{ h, h, h } };
+    Box reach{ { std::max(bounds.min.x, padded.min.x), std::max(bounds.min.y, padded.min.y),
+                 std::max(bounds.min.z, padded.min.z) },
+      { std::min(bounds.max.x, padded.max.x), std::min(bounds.max.y, padded.max.y),
+        std::min(bounds.max.z, padded.max.z) } };
+    if (s.motion.moves())
+    {
+      reach = Box{ { 1, 1, 1 }, { 0, 0, 0 } }; // empty unless a keyframe overlaps
+      SolidMotion m = s.motion;
+      m.pivot = std::isnan(m.pivot.x) ? (bounds.min + bounds.max) * 0.5 : m.pivot;
+      for (const Keyframe& key : m.keyframes)
+      {
+        if (overlaps(placedBounds(bounds, m.at(key.time)), padded))
+        {
+          reach = bounds;
+        }
+      }
+    }
     if (!(reach.min.x < reach.max.x && reach.min.y < reach.max.y && reach.min.z < reach.max.z))
     {
       std::ostringstream text;
@@ -86,17 +178,19 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
   return fields;
 }
 
-ParticleBatch outsideSolids(
-  const ParticleBatch& batch, const std::vector<DistanceGrid>& fields, std::size_t& removed)
+ParticleBatch outsideSolids(const ParticleBatch& batch, const std::vector<DistanceGrid>& fields,
+  const std::vector<SolidPose>& poses, std::size_t& removed)
 {
+  checkPoseCount(poses.size(), fields.size());
   ParticleBatch kept;
   removed = 0;
   for (std::size_t i = 0; i < batch.position.size(); ++i)
   {
     bool inside = false;
-    for (const DistanceGrid& g : fields)
+    for (std::size_t k = 0; k < fields.size(); ++k)
     {
-      inside = inside || g.at(batch.position[i]) < 0.0;
+      const Vec3d x = batch.position[i];
+      inside = inside || fields[k].at(poses.empty() ? x : poses[k].toLocal(x)) < 0.0;
     }
     if (inside)
     {

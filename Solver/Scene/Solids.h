@@ -5,6 +5,7 @@
 
 #include "Parameters.h"
 #include "SignedDistance.h"
+#include "SolidMotion.h"
 #include "Stepper.h"
 
 #include <string>
@@ -29,6 +30,8 @@ struct SolidRegion
   std::string file;      // ... or, until a reader fills `mesh`, the file that holds it
   double thickness = 0;  // [m]
   std::string name;      // what errors call the solid ("obstacles[k]" when empty)
+  // How it moves (none: it stays where it is). A NaN pivot.x stands for the centre of its bounds.
+  SolidMotion motion;
 };
 
 // The field of each solid: nodes s/2 apart (coarser only beyond 2^24 nodes) over the part of the
@@ -38,9 +41,20 @@ struct SolidRegion
 // InvalidInput naming the solid when it lies wholly outside the domain or its mesh is bad.
 std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, const Parameters& p);
 
-// The particles whose centres are outside every solid (the field >= 0), in order, their ids
-// renumbered 0..N-1; `removed` receives how many were inside.
-ParticleBatch outsideSolids(
-  const ParticleBatch& batch, const std::vector<DistanceGrid>& fields, std::size_t& removed);
+// The particles whose centres are outside every solid (the field >= 0) with the solids at
+// `poses` (none: as sampled), in order, their ids renumbered 0..N-1; `removed` receives how many
+// were inside.
+ParticleBatch outsideSolids(const ParticleBatch& batch, const std::vector<DistanceGrid>& fields,
+  const std::vector<SolidPose>& poses, std::size_t& removed);
+
+// The solids' motions with every pivot given (a NaN pivot.x becomes the centre of the solid's
+// bounds), and checked (InvalidInput naming the solid).
+std::vector<SolidMotion> solidMotions(const std::vector<SolidRegion>& solids);
+// Where each solid is at `time`; empty when no solid moves.
+std::vector<SolidPose> posesAt(const std::vector<SolidMotion>& motions, double time);
+// Per solid, the distance from its motion's pivot to the farthest corner of its bounds [m] (0 for
+// a solid that does not move): what turns an angular velocity into the fastest surface speed.
+std::vector<double> solidReaches(
+  const std::vector<SolidRegion>& solids, const std::vector<SolidMotion>& motions);
 
 } // namespace pbf

@@ -31,8 +31,10 @@ struct DecomposedOutcome
 using DecomposedFactory = std::function<std::unique_ptr<distributed::DecomposedStepper>(
   distributed::Communicator&, const PresetFluid&)>;
 
+// beforeStep(stepper, s), when given, runs on every rank before step s (a moving solid's pose).
 inline DecomposedOutcome runDecomposed(int ranks, const PresetFluid& setup, int steps,
-  const DecomposedFactory& make, bool history = false)
+  const DecomposedFactory& make, bool history = false,
+  const std::function<void(Stepper&, int)>& beforeStep = {})
 {
   std::vector<Snapshot<double>> parts(static_cast<std::size_t>(ranks));
   std::vector<std::uint64_t> migrated(static_cast<std::size_t>(ranks), 0);
@@ -43,6 +45,10 @@ inline DecomposedOutcome runDecomposed(int ranks, const PresetFluid& setup, int 
     std::unique_ptr<distributed::DecomposedStepper> stepper = make(communicator, setup);
     for (int s = 0; s < steps; ++s)
     {
+      if (beforeStep)
+      {
+        beforeStep(*stepper, s);
+      }
       stepper->step();
       migrated[r] += stepper->lastExchange().migrated;
       ghosts[r] += stepper->lastExchange().ghosts;
