@@ -203,13 +203,17 @@ int vtkPBFSimulation::RequestInformation(
 
 //------------------------------------------------------------------------------
 int vtkPBFSimulation::RequestUpdateExtent(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector*)
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   // Every input (the fluid's points, the obstacles) whole, in one piece, on every rank alike so
   // that a collective upstream filter sees the same request everywhere; only piece 0 simulates.
-  // Each is read at its first time, not at the frame being computed: the fluid's points are the
-  // initial state and the obstacles stand still, so playing the animation does not re-execute
-  // them.
+  // The fluid's points are the initial state, read at their first time, so playing the animation
+  // does not re-execute them; the obstacles are read at the frame's time, so that one that moves
+  // with time (a reader's time steps) is seen where it is (vtkPBFObstacleMotion.h).
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  const bool timed = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
+  const double frameTime =
+    timed ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()) : 0.0;
   for (int port = 0; port < 2; ++port)
   {
     for (int c = 0; c < this->GetNumberOfInputConnections(port); ++c)
@@ -222,7 +226,8 @@ int vtkPBFSimulation::RequestUpdateExtent(
         inInfo->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) > 0)
       {
         inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP(),
-          inInfo->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS())[0]);
+          port == 1 && timed ? frameTime
+                             : inInfo->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS())[0]);
       }
       else
       {
@@ -273,7 +278,8 @@ int vtkPBFSimulation::RequestFrame(
   pbf::Playback& playback = internals.Playback;
   try
   {
-    internals.Adopt(this, internals.MakeKey(this, input, obstacles, r), r.Frame);
+    internals.Adopt(this, internals.MakeKey(this, input, obstacles, r));
+    internals.UpdateObstacleMotion(obstacles.size());
     if (internals.LastFrame == r.Frame)
     {
       internals.DeliverAgain(r, output, table);

@@ -131,15 +131,20 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
     self->Precision == PRECISION_DOUBLE ? pbf::Precision::Double : pbf::Precision::Single;
   key.hasInput = input != nullptr;
   key.inputVersion = input ? input->GetMTime() : 0;
-  // A new obstacle, a changed one or another thickness is another run; none: empty.
+  // The obstacles as read at this frame's time: a rigid motion since they were first seen
+  // extends their motion; a new obstacle, a new shape, a change of the motion before its end or
+  // another thickness is another run; none: empty.
+  const std::string warning =
+    this->ObstacleMotion.Observe(obstacles, r.Frame * self->FrameInterval);
+  if (!warning.empty() && (!r.Decomposed || r.Piece == 0))
+  {
+    vtkWarningWithObjectMacro(self, << warning);
+  }
   if (!obstacles.empty())
   {
     std::ostringstream solids;
-    solids << obstacles.size() << " thickness " << self->ObstacleThickness;
-    for (vtkDataSet* obstacle : obstacles)
-    {
-      solids << " " << (obstacle ? obstacle->GetMTime() : 0);
-    }
+    solids << obstacles.size() << " thickness " << self->ObstacleThickness
+           << this->ObstacleMotion.Key();
     key.obstacles = solids.str();
   }
 
@@ -174,19 +179,8 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
 }
 
 //------------------------------------------------------------------------------
-void vtkPBFSimulation::vtkInternals::Adopt(
-  vtkPBFSimulation* self, const pbf::PlaybackKey& key, int frame)
+void vtkPBFSimulation::vtkInternals::Adopt(vtkPBFSimulation* self, const pbf::PlaybackKey& key)
 {
-  // Obstacles are static: one that changes (moved by hand, or by an animated Transform upstream)
-  // starts the run again with the obstacle where it is now. Said whenever a later frame is asked
-  // (playing, scrubbing), so that an animated obstacle is not mistaken for a moving one.
-  const std::string& before = this->Playback.key().obstacles;
-  if (frame > 0 && !before.empty() && !key.obstacles.empty() && before != key.obstacles)
-  {
-    vtkWarningWithObjectMacro(self, << "the Obstacles input changed: the simulation starts "
-                                       "again from frame 0 with the obstacles as they are now "
-                                       "(obstacles stand still; a moving one is not simulated).");
-  }
   if (this->Playback.adopt(key) && !this->Playback.deviceFaulted())
   {
     this->LastFrame = -1; // another run: nothing delivered belongs to it
@@ -210,7 +204,10 @@ std::unique_ptr<pbf::Simulation> vtkPBFSimulation::vtkInternals::Build(vtkPBFSim
     const std::string name = "Obstacles input " + std::to_string(c + 1) + " of " +
       std::to_string(obstacles.size()) + " (" +
       (obstacles[c] ? obstacles[c]->GetClassName() : "no data") + ")";
-    scene.solids.push_back(vtkPBFSolidFromInput(obstacles[c], self->ObstacleThickness, name));
+    // The shape first seen, moved as it has been seen to move (vtkPBFObstacleMotion.h).
+    vtkDataSet* shape = c < obstacles.size() && obstacles[c] ? this->ObstacleMotion.Reference(c) : nullptr;
+    scene.solids.push_back(vtkPBFSolidFromInput(shape, self->ObstacleThickness, name));
+    scene.solids.back().motion = this->ObstacleMotion.MotionOf(c);
   }
   // Decomposed, every rank builds the whole fluid (from the whole input, which
   // RequestUpdateExtent asks for on every rank) and keeps its slab.
@@ -230,6 +227,22 @@ std::unique_ptr<pbf::Simulation> vtkPBFSimulation::vtkInternals::Build(vtkPBFSim
                                        "removed before the first step.");
   }
   return simulation;
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::vtkInternals::UpdateObstacleMotion(std::size_t connections)
+{
+  pbf::Simulation* live = this->Playback.live();
+  if (!live || connections == 0)
+  {
+    return;
+  }
+  // The port's solids follow the scene's own.
+  const std::size_t first = live->solidMotions().size() - connections;
+  for (std::size_t c = 0; c < connections; ++c)
+  {
+    live->setSolidMotion(first + c, this->ObstacleMotion.MotionOf(c));
+  }
 }
 
 //------------------------------------------------------------------------------

@@ -6,6 +6,8 @@
 
 #include "vtkPBFSimulation.h"
 
+#include "vtkPBFObstacleMotion.h"
+
 #include "vtkCellArray.h"
 #include "vtkPolyData.h"
 #include "vtkSmartPointer.h"
@@ -52,6 +54,8 @@ public:
   // The run Domain was built for: the tank and the scene's obstacles change only with it.
   pbf::PlaybackKey DomainKey;
   bool DomainBuilt = false;
+  // The Obstacles port's connections as first seen, and their motion as seen since.
+  vtkPBFObstacleMotion ObstacleMotion;
   // The mesh files of the scene file whose path and text MeshFilesOf holds.
   std::string MeshFilesOf;
   std::vector<std::string> MeshFiles;
@@ -95,9 +99,12 @@ public:
   pbf::PlaybackKey MakeKey(vtkPBFSimulation* self, vtkPointSet* input,
     const std::vector<vtkDataSet*>& obstacles, const FrameRequest& r);
   // Makes `key` the playback's and applies the checkpoint settings.
-  void Adopt(vtkPBFSimulation* self, const pbf::PlaybackKey& key, int frame);
+  void Adopt(vtkPBFSimulation* self, const pbf::PlaybackKey& key);
   std::unique_ptr<pbf::Simulation> Build(vtkPBFSimulation* self, const pbf::PlaybackKey& key,
     vtkPointSet* input, const std::vector<vtkDataSet*>& obstacles);
+  // Hands the live simulation the Obstacles port's motion as seen up to this request (keyframes
+  // past every frame it computed).
+  void UpdateObstacleMotion(std::size_t connections);
   void OnDeviceFault(vtkPBFSimulation* self, const pbf::DeviceFault& fault, int frame);
   // The frame's particles and field data on port 0, the diagnostics on port 1.
   void Deliver(vtkPBFSimulation* self, const FrameRequest& r, const pbf::FrameReached& reached,
