@@ -107,17 +107,39 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
   }
   batch = ParticleBatch{}; // the host copy is not needed any more
   r.device = stepper->description();
-  if (solid == 1)
+  // Solid 3: where the rolling sphere is at the end of step s (its pose uploaded before each
+  // step, as Simulation does; that copy is part of what it costs).
+  SolidMotion rolling;
+  auto place = [&](int s) {
+    if (solid == 3)
+    {
+      stepper->setObstaclePoses({ rolling.at((s + 1) * parameters.timeStep) });
+    }
+  };
+  if (solid == 1 || solid == 3)
   {
     // A sphere standing on the floor in the surge's way, a fifth of the tank's height across:
-    // what one solid costs a step (its distance lookups in every pass near it).
+    // what one solid costs a step (its distance lookups in every pass near it). Solid 3 rolls it
+    // towards the column at 1 m/s, turning at 1 rad/s: what a moving solid adds (the rotation
+    // into its frame at every lookup, its pose's upload before each step).
     const Box& d = parameters.domain;
     SolidRegion sphere;
     sphere.kind = SolidRegion::Kind::Sphere;
     sphere.radius = 0.2 * (d.max.y - d.min.y);
     sphere.center = { d.min.x + 0.6 * (d.max.x - d.min.x), d.min.y + sphere.radius,
       0.5 * (d.min.z + d.max.z) };
-    stepper->setObstacles(solidFields({ sphere }, parameters));
+    if (solid == 3)
+    {
+      rolling.pivot = sphere.center;
+      rolling.keyframes = { { 0.0, { 0, 0, 0 }, Rotation{} },
+        { 1.0, { -1.0, 0, 0 }, Rotation::fromDegrees({ 0, 0, 57.29577951308232 }) } };
+      sphere.motion = rolling;
+      stepper->setObstacles(solidFields({ sphere }, parameters), { rolling.at(0.0) });
+    }
+    else
+    {
+      stepper->setObstacles(solidFields({ sphere }, parameters));
+    }
   }
   else if (solid == 2)
   {
@@ -134,6 +156,7 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
 
   for (int s = 0; s < warmup; ++s)
   {
+    place(s);
     stepper->step();
   }
 #ifdef PBF_WITH_CUDA
@@ -147,6 +170,7 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
     timer.mark(*gpu);
     for (int s = 0; s < steps; ++s)
     {
+      place(warmup + s);
       gpu->step();
       timer.mark(*gpu);
     }
@@ -164,6 +188,7 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
     for (int s = 0; s < steps; ++s)
     {
       const auto t0 = std::chrono::steady_clock::now();
+      place(warmup + s);
       stepper->step();
       const auto t1 = std::chrono::steady_clock::now();
       ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
@@ -285,8 +310,8 @@ int main(int argc, char** argv)
     { "frame", "--refined: frame interval [s] (default 1/60)" },
     { "modes", "--refined: comma-separated of fixed, fixed4, defaults (default all three)" },
     { "csv", "--refined: a folder for one CSV of frames per run" },
-    { "solid", "1: a sphere solid in the surge's way, 2: the MARIN box (what a solid costs; "
-               "default 0: none)" },
+    { "solid", "1: a sphere solid in the surge's way, 2: the MARIN box, 3: the sphere rolling "
+               "at 1 m/s (what a solid costs; default 0: none)" },
   };
   try
   {
@@ -325,9 +350,9 @@ int main(int argc, char** argv)
     const bool graphs = extra("graphs", "1") != "0";
     const int block = std::stoi(extra("block", "128"));
     const std::string solid = extra("solid", "0");
-    if (solid != "0" && solid != "1" && solid != "2")
+    if (solid != "0" && solid != "1" && solid != "2" && solid != "3")
     {
-      throw InvalidInput("--solid = " + solid + ": must be 0 (none), 1 (a sphere) or 2 (a box)");
+      throw InvalidInput("--solid = " + solid + ": must be 0 (none), 1 (a sphere), 2 (a box) or 3 (a rolling sphere)");
     }
     if (steps < 1 || warmup < 0)
     {

@@ -76,6 +76,7 @@ if ((quick)); then
   # What an obstacle costs at 1M: a sphere, and the MARIN box (the bound: 15 %).
   bench cuda_sphere 30 --backend cuda --particles 1000000 --warmup 20 --steps 100 --solid 1
   bench cuda_box 30 --backend cuda --particles 1000000 --warmup 20 --steps 100 --solid 2
+  bench cuda_rolling 30 --backend cuda --particles 1000000 --warmup 20 --steps 100 --solid 3
   # No particle inside an obstacle, on one GPU and decomposed over two (on this one GPU).
   for ranks in 1 2; do
     phase "obstacle check, $ranks rank(s)"
