@@ -60,8 +60,8 @@ inline void check(cudaError_t error, const char* what)
 // A launch bound of 256 made ptxas cap the correction pass at 48 registers and spill.
 //
 // minBlocks: blocks of kMaxBlock threads that each multiprocessor must hold, which caps the
-// registers a thread (65536 / (minBlocks * 128), rounded down to 8). The caps below bind only in
-// double precision, where ptxas otherwise took 78 (density), 98 (correction), 74 (vorticity) and
+// registers a thread (65536 / (minBlocks * 128), rounded down to 8). The caps below bind in
+// double precision (and the density pass's in single, see there), where ptxas otherwise took 78 (density), 98 (correction), 74 (vorticity) and
 // 72 (confinement) registers, and the correction pass ran at 4 blocks. Measured at 1M particles
 // on the H200 (Utilities/gpu/probe.sh variants, one session): 5.09 -> 4.54 ms a step in double, single
 // unchanged (2.858 / 2.851 ms: its kernels take 45-55 registers, under every cap). A cap of 7
@@ -73,11 +73,14 @@ struct Launch
   static constexpr bool neighborPass = false;
   static constexpr int minBlocks = 1;
 };
-template <>
-struct Launch<DensityStage>
+// In single precision the density pass took 48 registers (10 blocks) until the moving solids'
+// rotation (Boundary.h), seldom taken, made ptxas allocate 56 (9 blocks, 1 % of a step without any
+// solid); the cap keeps it at 48.
+template <class Real>
+struct Launch<DensityStage<Real>>
 {
   static constexpr bool neighborPass = true;
-  static constexpr int minBlocks = 7; // <= 72 registers
+  static constexpr int minBlocks = sizeof(Real) == 4 ? 10 : 7; // <= 48 (single), 72 registers
 };
 template <>
 struct Launch<CorrectionStage>

@@ -45,10 +45,10 @@ void DeviceSubdomainStepper<Real, Device>::solve(Roles4 r, const CellKey* sorted
     auto edge = device_->borderExecutor();
     device_->forkBorder();
     detail::firstPassOnPositions(
-      edge, DensityStage{}, be, k, border, f, iteration, false, detail::DensityPass{}, onBorder);
+      edge, DensityStage<Real>{}, be, k, border, f, iteration, false, detail::DensityPass{}, onBorder);
     sendRefresh<Real>(density_, lambda_);
     detail::firstPassOnPositions(
-      exec, DensityStage{}, b, k, interior, f, iteration, false, detail::DensityPass{}, onInterior);
+      exec, DensityStage<Real>{}, b, k, interior, f, iteration, false, detail::DensityPass{}, onInterior);
     device_->joinBorder();
     receiveRefresh<Real>(density_, lambda_);
     if (adaptive)
@@ -194,7 +194,7 @@ void DeviceSubdomainStepper<Real, Device>::evaluateAtRest()
   FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, constants_, keys);
   f.p = vec_[r.p];
   detail::firstPassOnPositions(exec,
-    DensityStage{},
+    DensityStage<Real>{},
     b,
     constants_,
     count(n_),

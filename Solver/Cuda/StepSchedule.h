@@ -38,10 +38,12 @@ namespace pbf
 namespace cuda
 {
 
-// Stage tags: they name the kernels (profilers show them) and pick launch bounds.
+// Stage tags: they name the kernels (profilers show them) and pick launch bounds; the density
+// pass's depends on the precision (CudaRuntime.cuh's Launch).
 struct PredictStage {};
 struct KeyStage {};
 struct GatherStage {};
+template <class Real>
 struct DensityStage {};
 struct CorrectionStage {};
 struct VorticityStage {};
@@ -419,7 +421,7 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
     const FluidView<Real, MaskedNeighbors<Real>> f =
       detail::iterationView(b, k, sortedKeys, D, C, positions, iteration);
     detail::firstPassOnPositions(
-      exec, DensityStage{}, b, k, n, f, iteration, adaptive, detail::DensityPass{});
+      exec, DensityStage<Real>{}, b, k, n, f, iteration, adaptive, detail::DensityPass{});
     if (adaptive)
     {
       // The first projection always runs: it carries the step's tensile push.
@@ -476,7 +478,7 @@ void enqueueEvaluateAtRest(Exec& exec, const StepBuffers<Real>& b, const StepCon
   // A = x (sorted, equal to D), C = v.
   FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
   f.p = A;
-  detail::firstPassOnPositions(exec, DensityStage{}, b, k, n, f, 0, false, detail::DensityPass{});
+  detail::firstPassOnPositions(exec, DensityStage<Real>{}, b, k, n, f, 0, false, detail::DensityPass{});
   exec.copy(B, C, static_cast<std::size_t>(n) * sizeof(Vec3<Real>));
 }
 

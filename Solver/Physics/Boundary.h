@@ -54,6 +54,20 @@ struct DistanceGridView
         rotation[1] * d.x + rotation[4] * d.y + rotation[7] * d.z,
         rotation[2] * d.x + rotation[5] * d.y + rotation[8] * d.z };
     }
+    const Real value = atInGridFrame(q, gradient);
+    if (moving && gradient)
+    {
+      const Vec3<Real> l = *gradient;
+      *gradient = { rotation[0] * l.x + rotation[1] * l.y + rotation[2] * l.z,
+        rotation[3] * l.x + rotation[4] * l.y + rotation[5] * l.z,
+        rotation[6] * l.x + rotation[7] * l.y + rotation[8] * l.z };
+    }
+    return value;
+  }
+
+  // The field at q given in the grid's own frame.
+  PBF_HD PBF_INLINE Real atInGridFrame(const Vec3<Real>& q, Vec3<Real>* gradient) const
+  {
     const Real u[3] = { (q.x - origin.x) * inverseCell, (q.y - origin.y) * inverseCell,
       (q.z - origin.z) * inverseCell };
     const int n[3] = { nx, ny, nz };
@@ -89,13 +103,6 @@ struct DistanceGridView
     if (gradient)
     {
       *gradient = Vec3<Real>{ g[0], g[1], g[2] } * inverseCell;
-      if (moving)
-      {
-        const Vec3<Real> l = *gradient;
-        *gradient = { rotation[0] * l.x + rotation[1] * l.y + rotation[2] * l.z,
-          rotation[3] * l.x + rotation[4] * l.y + rotation[5] * l.z,
-          rotation[6] * l.x + rotation[7] * l.y + rotation[8] * l.z };
-      }
     }
     return value;
   }
