@@ -1,0 +1,169 @@
+// The fluid's surface (Surface/SurfaceExtraction.h): a sphere of fluid at rest gives a closed
+// surface within half a spacing of the sphere, facing out; the mesh is the same with and without
+// threads; the interpolated fields are the particles'; bad options name the property.
+#include "Scene.h"
+#include "SurfaceExtraction.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <utility>
+
+using namespace pbf;
+
+namespace
+{
+
+constexpr double kSpacing = 0.01;
+constexpr double kRadius = 20 * kSpacing;
+const Vec3d kCentre{ 0.5, 0.5, 0.5 };
+
+// A sphere of 20 spacings' radius on the lattice, every particle moving at (1, 2, 3) m/s with
+// the rest density.
+struct Sphere
+{
+  Parameters parameters;
+  std::vector<Vec3d> x, v;
+  std::vector<double> rho;
+};
+
+Sphere fluidSphere()
+{
+  Sphere s;
+  s.parameters.particleSpacing = kSpacing;
+  Scene scene;
+  scene.domain = { { 0, 0, 0 }, { 1, 1, 1 } };
+  scene.spheres.push_back({ kCentre, kRadius, { 1, 2, 3 } });
+  s.parameters.domain = scene.domain;
+  const ParticleBatch batch = fillScene(scene, s.parameters);
+  s.x = batch.position;
+  s.v = batch.velocity;
+  s.rho.assign(s.x.size(), s.parameters.restDensity);
+  return s;
+}
+
+SurfaceMesh surfaceOf(const Sphere& s, bool parallel, SurfaceOptions options = {})
+{
+  return extractSurface<double>(s.x.data(), s.v.data(), s.rho.data(), s.x.size(), s.parameters,
+    options, parallel);
+}
+
+} // namespace
+
+TEST(Surface, ASphereOfFluidGivesAClosedSurfaceWithinHalfASpacing)
+{
+  const Sphere s = fluidSphere();
+  ASSERT_GT(s.x.size(), 30000u);
+  const SurfaceMesh mesh = surfaceOf(s, true);
+  ASSERT_GT(mesh.triangles.size(), 1000u);
+  // Within half a spacing of the true sphere: the lattice's sphere holds the volume of a sphere
+  // of radius R (to the lattice's rounding), and the level 1/2 lies s/2 beyond a flat lattice's
+  // last layer, where that volume ends.
+  double nearest = HUGE_VAL, farthest = 0;
+  for (const Vec3<float>& p : mesh.points)
+  {
+    const double r = length(Vec3d::from(p) - kCentre);
+    nearest = std::min(nearest, r);
+    farthest = std::max(farthest, r);
+  }
+  std::printf("sphere of %zu particles: %zu triangles, %zu vertices, radius %.5f to %.5f m "
+              "(R %.3f m), %zu blocks sampled, %zu interior, %zu bytes at most\n",
+    s.x.size(), mesh.triangles.size(), mesh.points.size(), nearest, farthest, kRadius,
+    mesh.sampledBlocks, mesh.interiorBlocks, mesh.peakBytes);
+  EXPECT_GT(nearest, kRadius - 0.5 * kSpacing);
+  EXPECT_LT(farthest, kRadius + 0.5 * kSpacing);
+  // Closed: every edge in exactly two triangles, once in each direction (consistently oriented).
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+  for (const auto& t : mesh.triangles)
+  {
+    for (int e = 0; e < 3; ++e)
+    {
+      ++edges[{ t[e], t[(e + 1) % 3] }];
+    }
+  }
+  std::size_t open = 0;
+  for (const auto& [edge, count] : edges)
+  {
+    const auto back = edges.find({ edge.second, edge.first });
+    open += (count != 1 || back == edges.end() || back->second != 1) ? 1 : 0;
+  }
+  EXPECT_EQ(open, 0u);
+  // Facing out: the normals and the triangles' winding point away from the centre.
+  std::size_t inward = 0;
+  for (std::size_t i = 0; i < mesh.points.size(); ++i)
+  {
+    inward += dot(Vec3d::from(mesh.normals[i]), Vec3d::from(mesh.points[i]) - kCentre) <= 0 ? 1 : 0;
+  }
+  EXPECT_EQ(inward, 0u);
+  double signedVolume = 0; // by the divergence theorem, positive for outward winding
+  for (const auto& t : mesh.triangles)
+  {
+    const Vec3d a = Vec3d::from(mesh.points[t[0]]) - kCentre;
+    const Vec3d b = Vec3d::from(mesh.points[t[1]]) - kCentre;
+    const Vec3d c = Vec3d::from(mesh.points[t[2]]) - kCentre;
+    signedVolume += dot(a, cross(b, c)) / 6.0;
+  }
+  const double sphereVolume = 4.0 / 3.0 * 3.14159265358979 * std::pow(kRadius, 3);
+  EXPECT_NEAR(signedVolume / sphereVolume, 1.0, 0.05);
+  // Narrow band: the interior blocks are skipped, not sampled.
+  EXPECT_GT(mesh.interiorBlocks, 0u);
+  // The fields are the particles': all move at (1, 2, 3) m/s with rho_0 (rounding of the
+  // Shepard average in float, 1e-6 relative).
+  for (std::size_t i = 0; i < mesh.points.size(); i += 97)
+  {
+    EXPECT_NEAR(mesh.velocity[i].x, 1.0f, 1e-5f);
+    EXPECT_NEAR(mesh.velocity[i].z, 3.0f, 1e-5f);
+    EXPECT_NEAR(mesh.density[i], 1000.0f, 1e-2f);
+  }
+}
+
+TEST(Surface, ThreadsChangeNoBitAndSmoothingKeepsItClosedAndNear)
+{
+  const Sphere s = fluidSphere();
+  const SurfaceMesh a = surfaceOf(s, false), b = surfaceOf(s, true);
+  ASSERT_EQ(a.points.size(), b.points.size());
+  ASSERT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(std::memcmp(a.points.data(), b.points.data(), a.points.size() * sizeof(a.points[0])), 0);
+  EXPECT_EQ(std::memcmp(a.normals.data(), b.normals.data(), a.normals.size() * sizeof(a.normals[0])), 0);
+  SurfaceOptions smooth;
+  smooth.smoothing = 5;
+  const SurfaceMesh c = surfaceOf(s, true, smooth);
+  EXPECT_EQ(c.triangles, a.triangles); // smoothing moves vertices, it does not change the mesh
+  double worst = 0;
+  for (const Vec3<float>& p : c.points)
+  {
+    worst = std::max(worst, std::abs(length(Vec3d::from(p) - kCentre) - kRadius));
+  }
+  EXPECT_LT(worst, 0.5 * kSpacing);
+}
+
+TEST(Surface, BadOptionsNameTheProperty)
+{
+  const Sphere s = fluidSphere();
+  auto error = [&](SurfaceOptions o) {
+    try
+    {
+      surfaceOf(s, false, o);
+    }
+    catch (const InvalidInput& e)
+    {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  SurfaceOptions o;
+  o.resolution = 0;
+  EXPECT_NE(error(o).find("SurfaceResolution = 0"), std::string::npos);
+  o = SurfaceOptions{};
+  o.isoValue = 1.5;
+  EXPECT_NE(error(o).find("SurfaceIsoValue = 1.5"), std::string::npos);
+  o = SurfaceOptions{};
+  o.smoothing = -1;
+  EXPECT_NE(error(o).find("SurfaceSmoothing = -1"), std::string::npos);
+  // No particles: an empty surface, not an error.
+  EXPECT_TRUE(extractSurface<float>(nullptr, nullptr, nullptr, 0, s.parameters, {}, true)
+                .triangles.empty());
+}
