@@ -17,13 +17,16 @@
 #include "vtkSphereSource.h"
 #include "vtkStringArray.h"
 #include "vtkTable.h"
+#include "vtkTypeInt64Array.h"
 
 #include "Parameters.h"
 #include "Playback.h"
 #include "Scene.h"
 #include "Simulation.h"
 #include "Stepper.h"
+#include "SurfaceExtraction.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <initializer_list>
 #include <type_traits>
@@ -292,6 +295,62 @@ vtkSmartPointer<vtkTable> vtkPBFOutput::DiagnosticsTable(
     table->AddColumn(imbalance);
   }
   return table;
+}
+
+//------------------------------------------------------------------------------
+vtkSmartPointer<vtkPolyData> vtkPBFOutput::Surface(const pbf::SurfaceMesh& mesh, double milliseconds)
+{
+  auto output = vtkSmartPointer<vtkPolyData>::New();
+  const auto n = static_cast<vtkIdType>(mesh.points.size());
+  auto vectors = [n](const char* name, const std::vector<pbf::Vec3<float>>& values) {
+    auto array = vtkSmartPointer<vtkFloatArray>::New();
+    array->SetName(name);
+    array->SetNumberOfComponents(3);
+    array->SetNumberOfTuples(values.empty() ? 0 : n);
+    std::copy_n(&values.data()->x, 3 * values.size(), array->GetPointer(0));
+    return array;
+  };
+  vtkNew<vtkPoints> points;
+  points->SetData(vectors("Points", mesh.points));
+  output->SetPoints(points);
+  // The triangles as offsets 0, 3, 6, ... and the connectivity, without a cell at a time.
+  const auto triangles = static_cast<vtkIdType>(mesh.triangles.size());
+  vtkNew<vtkTypeInt64Array> offsets, connectivity;
+  offsets->SetNumberOfValues(triangles + 1);
+  connectivity->SetNumberOfValues(3 * triangles);
+  for (vtkIdType t = 0; t <= triangles; ++t)
+  {
+    offsets->SetValue(t, 3 * t);
+  }
+  for (vtkIdType t = 0; t < triangles; ++t)
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      connectivity->SetValue(3 * t + k, mesh.triangles[static_cast<std::size_t>(t)][k]);
+    }
+  }
+  vtkNew<vtkCellArray> polys;
+  polys->SetData(offsets, connectivity);
+  output->SetPolys(polys);
+  vtkPointData* pd = output->GetPointData();
+  pd->SetNormals(vectors("Normals", mesh.normals));
+  if (!mesh.velocity.empty())
+  {
+    pd->SetVectors(vectors("velocity", mesh.velocity));
+  }
+  if (!mesh.density.empty())
+  {
+    auto density = vtkSmartPointer<vtkFloatArray>::New();
+    density->SetName("density");
+    density->SetNumberOfValues(n);
+    std::copy(mesh.density.begin(), mesh.density.end(), density->GetPointer(0));
+    pd->SetScalars(density);
+  }
+  vtkFieldData* fd = output->GetFieldData();
+  AddInteger(fd, "SurfaceTriangles", triangles);
+  AddValue(fd, "SurfaceMilliseconds", milliseconds);
+  AddInteger(fd, "SurfaceBytes", static_cast<vtkIdType>(mesh.peakBytes));
+  return output;
 }
 
 //------------------------------------------------------------------------------

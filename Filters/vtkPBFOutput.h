@@ -30,6 +30,7 @@ class Stepper;
 struct Box;
 struct Scene;
 struct FrameRow;
+struct SurfaceMesh;
 }
 
 class vtkPBFOutput
@@ -55,6 +56,10 @@ public:
   // spheres and mesh files: those of the Obstacles port are the user's to show), with field data
   // Scene.
   static vtkSmartPointer<vtkPolyData> DomainOutline(const pbf::Box& box, const pbf::Scene& scene);
+
+  // The fluid's surface (port 3): its triangles, Normals, velocity (the active vectors) and
+  // density (the active scalars), and field data SurfaceTriangles, SurfaceMilliseconds.
+  static vtkSmartPointer<vtkPolyData> Surface(const pbf::SurfaceMesh& mesh, double milliseconds);
 
   static void AddValue(vtkFieldData* fieldData, const char* name, double value);
   static void AddInteger(vtkFieldData* fieldData, const char* name, vtkIdType value);

@@ -16,6 +16,7 @@
 
 #include "Parameters.h"
 #include "Playback.h"
+#include "SurfaceExtraction.h"
 
 #include <cmath>
 #include <new>
@@ -55,6 +56,11 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->Unilateral = defaults.unilateral;
   this->MirrorWalls = defaults.mirrorWalls;
   this->WallFriction = defaults.wallFriction;
+  const pbf::SurfaceOptions surface;
+  this->SurfaceResolution = surface.resolution;
+  this->SurfaceIsoValue = surface.isoValue;
+  this->SurfaceSmoothing = surface.smoothing;
+  this->GenerateSurface = false;
   this->ObstacleThickness = 0.0;
   this->Gravity[0] = defaults.gravity.x;
   this->Gravity[1] = defaults.gravity.y;
@@ -81,8 +87,9 @@ vtkPBFSimulation::vtkPBFSimulation()
   // Port 0 is optional: without an input the algorithm is a source. Port 1: the obstacles.
   this->SetNumberOfInputPorts(2);
   // Port 0: the particles of the frame; port 1: the diagnostics table; port 2: the outline of
-  // the domain (the tank), so that a view shows and frames the whole of it from frame 0 on.
-  this->SetNumberOfOutputPorts(3);
+  // the domain (the tank), so that a view shows and frames the whole of it from frame 0 on;
+  // port 3: the fluid's surface, when asked for.
+  this->SetNumberOfOutputPorts(4);
 }
 
 //------------------------------------------------------------------------------
@@ -244,7 +251,8 @@ int vtkPBFSimulation::RequestData(
 {
   const int result = this->RequestFrame(request, inputVector, outputVector);
   this->RequestDomain(outputVector);
-  return result;
+  const int surface = this->RequestSurface(outputVector);
+  return result && surface;
 }
 
 //------------------------------------------------------------------------------
@@ -362,6 +370,41 @@ void vtkPBFSimulation::RequestDomain(vtkInformationVector* outputVector)
 }
 
 //------------------------------------------------------------------------------
+int vtkPBFSimulation::RequestSurface(vtkInformationVector* outputVector)
+{
+  vtkPolyData* surface = vtkPolyData::GetData(outputVector, 3);
+  vtkPolyData* particles = vtkPolyData::GetData(outputVector, 0);
+  vtkInformation* shown = particles->GetInformation();
+  if (!this->GenerateSurface || !shown->Has(vtkDataObject::DATA_TIME_STEP()))
+  {
+    surface->Initialize();
+    if (shown->Has(vtkDataObject::DATA_TIME_STEP()))
+    {
+      surface->GetInformation()->Set(
+        vtkDataObject::DATA_TIME_STEP(), shown->Get(vtkDataObject::DATA_TIME_STEP()));
+    }
+    return 1;
+  }
+  pbf::SurfaceOptions options;
+  options.resolution = this->SurfaceResolution;
+  options.isoValue = this->SurfaceIsoValue;
+  options.smoothing = this->SurfaceSmoothing;
+  try
+  {
+    this->Internals->DeliverSurface(options, particles, surface);
+  }
+  catch (const std::exception& error)
+  {
+    vtkErrorMacro(<< error.what());
+    surface->ShallowCopy(this->Internals->LastSurface);
+    return 0;
+  }
+  surface->GetInformation()->Set(
+    vtkDataObject::DATA_TIME_STEP(), shown->Get(vtkDataObject::DATA_TIME_STEP()));
+  return 1;
+}
+
+//------------------------------------------------------------------------------
 std::string vtkPBFSimulation::InvalidTimeProperty() const
 {
   return vtkPBFInvalidTimeProperty(this->FrameInterval, this->NumberOfFrames,
@@ -390,6 +433,10 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Unilateral: " << (this->Unilateral ? "On" : "Off") << "\n";
   os << indent << "MirrorWalls: " << (this->MirrorWalls ? "On" : "Off") << "\n";
   os << indent << "WallFriction: " << this->WallFriction << "\n";
+  os << indent << "GenerateSurface: " << this->GenerateSurface << "\n";
+  os << indent << "SurfaceResolution: " << this->SurfaceResolution << "\n";
+  os << indent << "SurfaceIsoValue: " << this->SurfaceIsoValue << "\n";
+  os << indent << "SurfaceSmoothing: " << this->SurfaceSmoothing << "\n";
   os << indent << "ObstacleThickness: " << this->ObstacleThickness << "\n";
   os << indent << "Gravity: (" << this->Gravity[0] << ", " << this->Gravity[1] << ", "
      << this->Gravity[2] << ")\n";

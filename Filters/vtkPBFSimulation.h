@@ -207,6 +207,27 @@ public:
 
   ///@{
   /**
+   * Surface (output port 3): the fluid's surface as triangles with Normals, velocity and density
+   * (pbf::extractSurface: the level SurfaceIsoValue, default 0.5, of the SPH colour function,
+   * sampled every SurfaceResolution spacings, default 0.5, on a narrow band around the particles,
+   * then SurfaceSmoothing Laplacian passes, default 0), from the same frame as the particles.
+   * Computed only when GenerateSurface is on (default off; port 3 is then empty): ParaView
+   * updates every output port of a source together (Apply, UpdatePipeline), so port 3 cannot
+   * tell whether a view shows it. Changing a surface property recomputes only the surface.
+   */
+  vtkSetMacro(GenerateSurface, bool);
+  vtkGetMacro(GenerateSurface, bool);
+  vtkBooleanMacro(GenerateSurface, bool);
+  vtkSetMacro(SurfaceResolution, double);
+  vtkGetMacro(SurfaceResolution, double);
+  vtkSetMacro(SurfaceIsoValue, double);
+  vtkGetMacro(SurfaceIsoValue, double);
+  vtkSetMacro(SurfaceSmoothing, int);
+  vtkGetMacro(SurfaceSmoothing, int);
+  ///@}
+
+  ///@{
+  /**
    * Time: the interval between animation frames [s] (default 1/60), how the solver's step is
    * chosen (TimeStepping: TIME_STEPPING_AUTOMATIC, the default, or TIME_STEPPING_FIXED), for
    * Automatic the CFL number (default 0.4: the fastest particle moves at most that many spacings
@@ -326,6 +347,9 @@ protected:
   int RequestFrame(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
   // The domain's outline (port 2), from the simulation just run.
   void RequestDomain(vtkInformationVector* outputVector);
+  // The surface of the particles on port 0 (port 3) when GenerateSurface is on. Returns 0 after
+  // an error (the previous surface stays).
+  int RequestSurface(vtkInformationVector* outputVector);
   // What is wrong with FrameInterval, NumberOfFrames, SubstepsPerFrame or MaxTimeStep, in the
   // GUI's words and the value typed; empty when nothing is.
   std::string InvalidTimeProperty() const;
@@ -353,6 +377,10 @@ protected:
   bool MirrorWalls;
   double WallFriction;
   double ObstacleThickness;
+  bool GenerateSurface;
+  double SurfaceResolution;
+  double SurfaceIsoValue;
+  int SurfaceSmoothing;
   double Gravity[3];
   bool AdaptiveIterations;
   double DensityErrorTolerance;

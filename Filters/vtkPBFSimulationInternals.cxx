@@ -4,6 +4,7 @@
 #include "vtkPBFRankCommunicator.h"
 #include "vtkPBFTranslate.h"
 
+#include "vtkDataArray.h"
 #include "vtkDataSet.h"
 #include "vtkFieldData.h"
 #include "vtkIdTypeArray.h"
@@ -12,6 +13,8 @@
 #include "vtkMultiProcessController.h"
 #include "vtkNew.h"
 #include "vtkOutputWindow.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
 #include "vtkPointSet.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 
@@ -227,6 +230,59 @@ std::unique_ptr<pbf::Simulation> vtkPBFSimulation::vtkInternals::Build(vtkPBFSim
                                        "removed before the first step.");
   }
   return simulation;
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::vtkInternals::DeliverSurface(
+  const pbf::SurfaceOptions& options, vtkPolyData* particles, vtkPolyData* surface)
+{
+  options.validate();
+  if (!this->Playback.hasKey())
+  {
+    surface->Initialize();
+    return;
+  }
+  const pbf::Parameters& p = this->Playback.key().parameters;
+  std::ostringstream of;
+  of.precision(17);
+  of << particles->GetMTime() << " " << options.resolution << " " << options.isoValue << " "
+     << options.smoothing << " " << p.particleSpacing << " " << p.smoothingRatio << " "
+     << p.restDensity;
+  if (of.str() != this->LastSurfaceOf)
+  {
+    const auto start = std::chrono::steady_clock::now();
+    vtkDataArray* x = particles->GetPoints() ? particles->GetPoints()->GetData() : nullptr;
+    vtkDataArray* v = particles->GetPointData()->GetArray("velocity");
+    vtkDataArray* rho = particles->GetPointData()->GetArray("density");
+    const std::size_t n = x ? static_cast<std::size_t>(x->GetNumberOfTuples()) : 0;
+    pbf::SurfaceMesh mesh;
+    // The frame's own arrays, in the run's precision, read in place.
+    auto extract = [&](auto real) {
+      using Real = decltype(real);
+      auto pointer = [](vtkDataArray* a) { return a ? static_cast<Real*>(a->GetVoidPointer(0)) : nullptr; };
+      mesh = pbf::extractSurface<Real>(reinterpret_cast<const pbf::Vec3<Real>*>(pointer(x)),
+        reinterpret_cast<const pbf::Vec3<Real>*>(pointer(v)), pointer(rho), n, p, options, true);
+    };
+    const int type = x ? x->GetDataType() : VTK_FLOAT;
+    const bool same = (!v || v->GetDataType() == type) && (!rho || rho->GetDataType() == type);
+    if (n > 0 && (!same || (type != VTK_FLOAT && type != VTK_DOUBLE)))
+    {
+      throw pbf::InvalidInput("Surface: the particles' arrays are not all float or all double");
+    }
+    if (type == VTK_DOUBLE)
+    {
+      extract(double{});
+    }
+    else
+    {
+      extract(float{});
+    }
+    const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    this->LastSurface = vtkPBFOutput::Surface(mesh, ms);
+    this->LastSurfaceOf = of.str();
+  }
+  surface->ShallowCopy(this->LastSurface);
 }
 
 //------------------------------------------------------------------------------

@@ -18,6 +18,7 @@
 #include "Distributed/Communicator.h"
 #include "Playback.h"
 #include "Simulation.h"
+#include "SurfaceExtraction.h"
 
 #include <memory>
 #include <string>
@@ -66,6 +67,11 @@ public:
   std::uint64_t TableVersion = 0;
   vtkSmartPointer<vtkTable> EmptyTable = vtkSmartPointer<vtkTable>::New();
 
+  // The last surface delivered on port 3 and what it was made from (the frame's particles'
+  // modification time and the options), so that asking again reuses it.
+  vtkSmartPointer<vtkPolyData> LastSurface = vtkSmartPointer<vtkPolyData>::New();
+  std::string LastSurfaceOf;
+
   // The cost of the last request.
   pbf::FrameReached Costs;
   double DeliveryMilliseconds = 0;
@@ -110,6 +116,10 @@ public:
   void Deliver(vtkPBFSimulation* self, const FrameRequest& r, const pbf::FrameReached& reached,
     vtkPolyData* output, vtkTable* table);
   void ReportAbort(vtkPBFSimulation* self, const FrameRequest& r);
+  // The surface of `particles` (port 0's output) into `surface` (port 3). Throws InvalidInput
+  // for bad options.
+  void DeliverSurface(
+    const pbf::SurfaceOptions& options, vtkPolyData* particles, vtkPolyData* surface);
   void DeliverAgain(const FrameRequest& r, vtkPolyData* output, vtkTable* table);
   void DeliverPrevious(vtkPolyData* output, vtkTable* table);
   vtkTable* DiagnosticsTable();

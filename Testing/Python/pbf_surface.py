@@ -1,0 +1,88 @@
+"""The Surface output (port 3): the fluid's surface as closed triangles with Normals, velocity and
+density, computed only when GenerateSurface is on, from the same frame as the particles.
+
+The dam break at 4 cm: without GenerateSurface port 3 is empty; with it, a filter on port 3 gives a
+surface that has no boundary edge, encloses at least 98 % of the particles
+(vtkSelectEnclosedPoints) in every frame asked, carries the frame's time, and changes with the
+frame. A bad SurfaceResolution is an error naming it, and the particles stay."""
+import os
+import sys
+
+import numpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import pbf_testing as T  # noqa: E402
+from paraview import simple  # noqa: E402
+from vtkmodules.numpy_interface import dataset_adapter as dsa  # noqa: E402
+from vtkmodules.vtkFiltersCore import vtkFeatureEdges  # noqa: E402
+from vtkmodules.vtkFiltersModeling import vtkSelectEnclosedPoints  # noqa: E402
+
+T.load_plugin(globals())
+expect = T.expect
+
+INTERVAL = 1.0 / 30.0
+fluid = PositionBasedFluids(ParticleSpacing=0.04, NumberOfFrames=12,  # noqa: F821
+                            FrameInterval=INTERVAL)
+algorithm = fluid.GetClientSideObject()
+
+# Off by default: port 3 is empty.
+fluid.UpdatePipeline(0.0)
+expect(algorithm.GetOutputDataObject(3).GetNumberOfCells() == 0,
+       "the surface was computed though GenerateSurface is off")
+fluid.GenerateSurface = 1
+# A filter on port 3, as a user would make one.
+downstream = simple.PassArrays(Input=simple.OutputPort(fluid, 3))
+
+previous = None
+for f in (0, 6, 12):
+    t = f * INTERVAL
+    downstream.UpdatePipeline(t)
+    surface = algorithm.GetOutputDataObject(3)
+    particles = algorithm.GetOutputDataObject(0)
+    n = particles.GetNumberOfPoints()
+    triangles = surface.GetNumberOfCells()
+    expect(triangles > 100, "frame %d: %d triangles" % (f, triangles))
+    for name in ("Normals", "velocity", "density"):
+        expect(surface.GetPointData().GetArray(name) is not None, "frame %d: no %s" % (f, name))
+    info = surface.GetInformation()
+    expect(abs(info.Get(surface.DATA_TIME_STEP()) - t) < 1e-12,
+           "frame %d: the surface is of time %r" % (f, info.Get(surface.DATA_TIME_STEP())))
+    # Closed: no edge used by one triangle only.
+    edges = vtkFeatureEdges()
+    edges.SetInputData(surface)
+    edges.BoundaryEdgesOn()
+    edges.FeatureEdgesOff()
+    edges.NonManifoldEdgesOff()
+    edges.ManifoldEdgesOff()
+    edges.Update()
+    open_edges = edges.GetOutput().GetNumberOfCells()
+    expect(open_edges == 0, "frame %d: %d boundary edges" % (f, open_edges))
+    # The particles inside it.
+    enclosed = vtkSelectEnclosedPoints()
+    enclosed.SetInputData(particles)
+    enclosed.SetSurfaceData(surface)
+    enclosed.Update()
+    inside = dsa.WrapDataObject(enclosed.GetOutput()).PointData["SelectedPoints"]
+    fraction = float(numpy.count_nonzero(inside)) / n
+    expect(fraction >= 0.98, "frame %d: the surface encloses %.2f %% of the particles"
+           % (f, 100 * fraction))
+    # Interpolated fields: the density within the particles' range.
+    density = dsa.WrapDataObject(surface).PointData["density"]
+    expect(numpy.all(numpy.isfinite(density)) and density.min() > 0,
+           "frame %d: surface density %g..%g" % (f, density.min(), density.max()))
+    points = dsa.WrapDataObject(surface).Points
+    if previous is not None:
+        expect(points.shape != previous.shape or not numpy.array_equal(points, previous),
+               "frame %d: the same surface as the frame before" % f)
+    previous = numpy.array(points)
+    print("frame %d: %d particles, surface of %d triangles, no boundary edge, encloses %.2f %%, "
+          "%.0f ms" % (f, n, triangles, 100 * fraction,
+                       T.field_value(surface, "SurfaceMilliseconds")))
+
+# A bad resolution: an error naming it; the particles are still delivered.
+fluid.SurfaceResolution = 0.0
+_, text = T.capture_messages(lambda: downstream.UpdatePipeline(6 * INTERVAL))
+expect("SurfaceResolution = 0" in text, "no error naming SurfaceResolution: %r" % text)
+expect(algorithm.GetOutputDataObject(0).GetNumberOfPoints() > 0, "the particles were lost")
+fluid.SurfaceResolution = 0.5
+T.passed("pbf_surface")
