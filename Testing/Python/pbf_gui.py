@@ -3,7 +3,8 @@ source with its defaults, shows it as the proxy's hints say, plays the animation
 and saves a screenshot in which the particles must be visible and colored by |velocity|. Going
 back in time resumes from a checkpoint, display changes re-execute nothing, a preset and its
 scene file give the same fluid, and the Diagnostics output, shown in a Line Chart View, holds a
-row per frame and plots the density errors as lines.
+row per frame and plots the density errors as lines. The Surface output of the dam break (with
+GenerateSurface) is shown colored by |velocity|.
 
 PBF_GUI_FRAMES, when set, shortens the animation (NumberOfFrames); everything else is default."""
 import os
@@ -121,6 +122,40 @@ simple.SaveScreenshot(os.path.join(output_dir, "pbf_gui_dam_break_pillar.png"), 
                       ImageResolution=[800, 450])
 print("pbf_gui: the STL example: %d particles by the pillar, the closest %.4f m from its axis"
       % ((axis < 0.16).sum(), axis.min()))
+simple.Delete(fluid)
+del fluid
+
+# The fluid's surface (port 3, GenerateSurface): the dam break's last frame shown as a surface
+# colored by |velocity| instead of particles. It must cover the fluid's part of the view (the
+# pixels that change when it is hidden) in many colors, and be lit by its Normals.
+fluid = simple.PositionBasedFluids(ParticleSpacing=0.04, GenerateSurface=1,
+                                   NumberOfFrames=int(os.environ.get("PBF_GUI_FRAMES", 24)))
+apply(fluid, view)
+scene.UpdateAnimationUsingDataTimeSteps()
+scene.AnimationTime = keeper.TimestepValues[-1]
+simple.Hide(fluid, view)
+surface = simple.Show(simple.OutputPort(fluid, 3), view)
+simple.ColorBy(surface, ("POINTS", "velocity", "Magnitude"))
+view.CameraPosition = [0.8, 0.9, 2.6]
+view.CameraFocalPoint = [0.8, 0.2, 0.3]
+view.CameraViewUp = [0.0, 1.0, 0.0]
+simple.Render(view)
+mesh = fluid.GetClientSideObject().GetOutputDataObject(3)
+expect(mesh.GetNumberOfPolys() > 1000 and mesh.GetPointData().GetNormals() is not None,
+       "the surface has %d triangles, normals %s" % (mesh.GetNumberOfPolys(),
+                                                     mesh.GetPointData().GetNormals()))
+surface_shot = os.path.join(output_dir, "pbf_gui_dam_break_surface.png")
+simple.SaveScreenshot(surface_shot, view, ImageResolution=[800, 450])
+simple.Hide(simple.OutputPort(fluid, 3), view)
+bare_shot = os.path.join(output_dir, "pbf_gui_dam_break_no_surface.png")
+simple.SaveScreenshot(bare_shot, view, ImageResolution=[800, 450])
+with_surface, bare = read_png(surface_shot), read_png(bare_shot)
+changed = numpy.any(with_surface != bare, axis=2)
+shades = {tuple(c // 16) for c in with_surface[changed]}
+expect(changed.mean() > 0.02, "only %.2f%% of the view shows the surface" % (100 * changed.mean()))
+expect(len(shades) >= 8, "the surface shows only %d distinct colors" % len(shades))
+print("pbf_gui: the surface at the last frame: %d triangles, %.1f%% of the view in %d colors"
+      % (mesh.GetNumberOfPolys(), 100 * changed.mean(), len(shades)))
 simple.Delete(fluid)
 del fluid
 

@@ -11,7 +11,7 @@ from paraview.simple import PointSource  # noqa: E402
 
 T.load_plugin(globals())
 
-GROUPS = ["Scene", "Fluid", "Solver", "Time", "Backend"]
+GROUPS = ["Scene", "Fluid", "Solver", "Time", "Surface", "Backend"]
 BOUNDING_DOMAINS = {"vtkSMIntRangeDomain", "vtkSMDoubleRangeDomain", "vtkSMEnumerationDomain",
                     "vtkSMFileListDomain", "vtkSMBooleanDomain"}
 
@@ -90,16 +90,19 @@ def check_proxy(proxy, label):
            representation.GetAttribute("type") in ("Point Gaussian", "Points"),
            "%s: no RepresentationType hint that shows particles" % label)
 
-    # Three output ports: the particles; the diagnostics table, which Apply shows in no view
+    # Four output ports: the particles; the diagnostics table, which Apply shows in no view
     # (a chart opened on Apply would split the layout and draw a single row), a Line Chart
     # View plots it when its eye is clicked (pbf_diagnostics.py checks what Apply does); the
-    # domain's outline, shown with the particles so that the camera frames the tank.
+    # domain's outline, shown with the particles so that the camera frames the tank; the
+    # surface, which Apply does not show either (the particles stay the default display).
     ports = [sm.GetOutputPortName(i) for i in range(sm.GetNumberOfOutputPorts())]
-    expect(ports == ["Particles", "Diagnostics", "Domain"], "%s: output ports %s" % (label, ports))
+    expect(ports == ["Particles", "Diagnostics", "Domain", "Surface"],
+           "%s: output ports %s" % (label, ports))
     views = [hints.GetNestedElement(i) for i in range(hints.GetNumberOfNestedElements())
              if hints.GetNestedElement(i).GetName() == "View"]
     expect([(v.GetAttribute("type"), v.GetAttribute("port")) for v in views] ==
-           [("None", "1")], "%s: the diagnostics port's View hint is %s, not None"
+           [("None", "1"), ("None", "3")],
+           "%s: the diagnostics' and surface's View hints are %s, not None"
            % (label, [(v.GetAttribute("type"), v.GetAttribute("port")) for v in views]))
 
     # SceneFile: the GUI's file dialog, filtered to JSON scenes.
