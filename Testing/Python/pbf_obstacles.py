@@ -4,7 +4,8 @@ A Sphere source and an STL file (a Box written by vtkSTLWriter, read by ParaView
 stand in the dam break's way; no particle centre enters either in any frame, while the surge
 reaches them. Fluid seeded inside an obstacle is removed with a warning giving the count. Moving
 an obstacle by hand puts it there for the whole run; an animated Transform moves it frame by frame
-(a paddle pushing the surge back). An open surface, an empty dataset, an obstacle outside the tank and
+(a paddle pushing the surge back), and so does a reader with time steps (a ball rolling towards the
+column). An open surface, an empty dataset, an obstacle outside the tank and
 a NaN point are errors naming the input, with the previous output kept; a thickness makes the
 open surface a thin shell. A scene file's mesh obstacle (the shipped STL pillar) is read too."""
 import math
@@ -164,6 +165,44 @@ for f in (FRAMES // 2, 5):
                        "frame %d of the animated paddle asked again" % f)
 print("an animated Transform moved the paddle 0.3 m: closest particle %.4f m from it, none inside "
       "in %d frames" % (nearest, FRAMES + 1))
+
+# A reader with time steps moves an obstacle too: a programmable source that reports times 0..0.8 s
+# and puts a ball on the floor at x = 1.2 - 0.5 t. Read at each frame's time, its motion is fitted
+# frame by frame; no particle centre enters the ball where it is at that frame.
+timed = ProgrammableSource(OutputDataSetType="vtkPolyData", Script="""
+from vtkmodules.vtkFiltersSources import vtkSphereSource
+info = self.GetOutputInformation(0)
+t = info.Get(self.GetExecutive().UPDATE_TIME_STEP()) if info.Has(self.GetExecutive().UPDATE_TIME_STEP()) else 0.0
+ball = vtkSphereSource()
+ball.SetCenter(1.2 - 0.5 * t, 0.1, 0.3)
+ball.SetRadius(0.1)
+ball.SetThetaResolution(16)
+ball.SetPhiResolution(16)
+ball.Update()
+self.GetOutput().ShallowCopy(ball.GetOutput())
+self.GetOutput().GetInformation().Set(self.GetOutput().DATA_TIME_STEP(), t)
+""", ScriptRequestInformation="""
+executive = self.GetExecutive()
+info = executive.GetOutputInformation(0)
+info.Remove(executive.TIME_STEPS())
+for k in range(25):
+    info.Append(executive.TIME_STEPS(), k / 30.0)
+info.Set(executive.TIME_RANGE(), [0.0, 0.8], 2)
+""")
+rolling = PositionBasedFluids(Obstacles=[timed], ParticleSpacing=SPACING,  # noqa: F821
+                              NumberOfFrames=FRAMES, FrameInterval=INTERVAL)
+INSCRIBED_BALL = 0.1 * math.cos(math.pi / 16)
+closest_ball = numpy.inf
+for f in range(0, FRAMES + 1, 2):
+    t = f * INTERVAL
+    p = T.frame(rolling, t)["points"]
+    d = numpy.linalg.norm(p - numpy.array([1.2 - 0.5 * t, 0.1, 0.3]), axis=1)
+    expect(d.min() >= INSCRIBED_BALL - 1e-5, "frame %d: a particle %.4f m from the moving ball's "
+           "centre (inside below %.4f)" % (f, d.min(), INSCRIBED_BALL))
+    closest_ball = numpy.minimum(closest_ball, d.min() - 0.1)  # not min(), as below
+expect(closest_ball < SPACING, "the surge never reached the moving ball (%.3f m)" % closest_ball)
+print("a reader with time steps moved a ball 0.4 m: closest particle %.4f m from it, none inside"
+      % closest_ball)
 
 # A change that is not rigid (the paddle made thicker: the same points, moved apart) samples the
 # solid again from the new shape and starts the run again, said once, not at every change.
