@@ -379,9 +379,18 @@ void Simulation::setSolidMotion(std::size_t solid, SolidMotion motion)
   {
     throw InvalidInput(name + ".motion.pivot: must be given");
   }
+  const SolidMotion& old = motions_[solid];
+  const bool samePivot = old.pivot.x == motion.pivot.x && old.pivot.y == motion.pivot.y &&
+    old.pivot.z == motion.pivot.z;
+  const bool startsMoving = old.moves() != motion.moves();
   motions_[solid] = std::move(motion);
   scene_.solids[solid].motion = motions_[solid];
-  solidReach_ = solidReaches(scene_.solids, motions_);
+  // The reach (a mesh's bounds, checked whole) only when the pivot moved or the solid began to
+  // move: the VTK filter calls this at every request.
+  if (!samePivot || startsMoving)
+  {
+    solidReach_ = solidReaches(scene_.solids, motions_);
+  }
 }
 
 double Simulation::checkedTimeStep() const
