@@ -282,9 +282,18 @@ void SurfaceOptions::validate() const
   }
 }
 
+double surfaceGhostReach(const Parameters& p, const SurfaceOptions& options)
+{
+  // A share's blocks reach one block beyond its slab; a node there sums particles within h, and
+  // the interior test counts the cells of h within h of the block.
+  const double cell = options.resolution * p.particleSpacing;
+  return kBlock * cell + 3 * p.smoothingLength();
+}
+
 template <class Real>
 SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real* rho,
-  std::size_t n, const Parameters& p, const SurfaceOptions& options, bool parallel)
+  std::size_t n, const Parameters& p, const SurfaceOptions& options, bool parallel,
+  const SurfaceShare& share)
 {
   options.validate();
   SurfaceMesh mesh;
@@ -296,9 +305,11 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
   const Kernels<double> kernels = Kernels<double>::make(h);
   const double volume = calibratedParticleMass(p) / p.restDensity;
 
-  // The sampled region: the particles' bounds padded by h and two nodes, so that the colour is
-  // below any level at the grid's faces and the surface closes inside it.
-  Vec3d lo{ HUGE_VAL, HUGE_VAL, HUGE_VAL }, hi{ -HUGE_VAL, -HUGE_VAL, -HUGE_VAL };
+  // The sampled region: the domain (where the particles are) padded by h and two nodes, so that
+  // the colour is below any level at the grid's faces and the surface closes inside it. Anchored
+  // at the domain, it is the same grid on every rank of a decomposed run.
+  // (A particle a rounding beyond a wall is still well inside the padding.)
+  const Vec3d lo = p.domain.min, hi = p.domain.max;
   for (std::size_t i = 0; i < n; ++i)
   {
     const Vec3d q = Vec3d::from(x[i]);
@@ -306,8 +317,6 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
     {
       throw InvalidInput("surface: particle " + std::to_string(i) + " has a non-finite position");
     }
-    lo = { std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z) };
-    hi = { std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z) };
   }
   NodeGrid grid;
   grid.cell = options.resolution * p.particleSpacing;
@@ -339,6 +348,25 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
   std::vector<std::uint32_t> cursor;
   sorted.offsets.resize(static_cast<std::size_t>(sorted.geometry.cellCount()) + 1);
   countingSortByCell(keys, sorted.offsets, sorted.order, cursor);
+  // Within a cell, by position: the sums over a cell's particles then have one order whatever
+  // order the particles came in (a rank's own and its ghosts).
+  for (std::size_t c = 0; c + 1 < sorted.offsets.size(); ++c)
+  {
+    std::sort(sorted.order.begin() + sorted.offsets[c], sorted.order.begin() + sorted.offsets[c + 1],
+      [&](std::uint32_t a, std::uint32_t b) {
+        const Vec3<Real>& pa = x[a];
+        const Vec3<Real>& pb = x[b];
+        if (pa.x != pb.x)
+        {
+          return pa.x < pb.x;
+        }
+        if (pa.y != pb.y)
+        {
+          return pa.y < pb.y;
+        }
+        return pa.z != pb.z ? pa.z < pb.z : a < b;
+      });
+  }
   sorted.x.resize(n);
   for (std::size_t k = 0; k < n; ++k)
   {
@@ -368,6 +396,12 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
       {
         for (std::int64_t b = first[0]; b <= last[0]; ++b)
         {
+          // Only this share's blocks: those whose lower x lies in its range.
+          const double blockX = grid.origin.x + static_cast<double>(b * kBlock) * grid.cell;
+          if (!(blockX >= share.xMin && blockX < share.xMax))
+          {
+            continue;
+          }
           blockKeys.push_back((static_cast<std::uint64_t>(z) * by + static_cast<std::uint64_t>(y)) * bx +
             static_cast<std::uint64_t>(b));
         }
@@ -575,8 +609,8 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
 }
 
 template SurfaceMesh extractSurface<float>(const Vec3<float>*, const Vec3<float>*, const float*,
-  std::size_t, const Parameters&, const SurfaceOptions&, bool);
+  std::size_t, const Parameters&, const SurfaceOptions&, bool, const SurfaceShare&);
 template SurfaceMesh extractSurface<double>(const Vec3<double>*, const Vec3<double>*,
-  const double*, std::size_t, const Parameters&, const SurfaceOptions&, bool);
+  const double*, std::size_t, const Parameters&, const SurfaceOptions&, bool, const SurfaceShare&);
 
 } // namespace pbf

@@ -21,6 +21,7 @@
 #include "Vec3.h"
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -53,12 +54,26 @@ struct SurfaceMesh
   std::size_t peakBytes = 0; // the largest working memory of the extraction [bytes]
 };
 
+// A rank's share of a decomposed run's surface: the cells of the blocks whose lower x lies in
+// [xMin, xMax) (its slab). Given its own particles and its neighbours' within surfaceGhostReach()
+// of the slab, every rank's share is exactly the part of the whole surface in those blocks: the
+// grid is anchored at the domain, and the particles of a cell are summed in the order of their
+// positions, so the vertices where two shares meet are the same bits on both sides.
+struct SurfaceShare
+{
+  double xMin = -HUGE_VAL;
+  double xMax = HUGE_VAL;
+};
+// How far beyond a share's x-range the particles it needs reach [m].
+double surfaceGhostReach(const Parameters& parameters, const SurfaceOptions& options);
+
 // The surface of n particles (positions x, velocities v, densities rho; v and rho may be null:
-// their arrays are then left empty) under the parameters' spacing, h, rest density and mass.
-// `parallel`: OpenMP over the blocks (the same mesh either way). Throws InvalidInput for bad
-// options or non-finite positions.
+// their arrays are then left empty) under the parameters' domain, spacing, h, rest density and
+// mass. `parallel`: OpenMP over the blocks (the same mesh either way). Throws InvalidInput for
+// bad options or non-finite positions.
 template <class Real>
 SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real* rho,
-  std::size_t n, const Parameters& parameters, const SurfaceOptions& options, bool parallel);
+  std::size_t n, const Parameters& parameters, const SurfaceOptions& options, bool parallel,
+  const SurfaceShare& share = {});
 
 } // namespace pbf

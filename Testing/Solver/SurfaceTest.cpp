@@ -2,13 +2,17 @@
 // surface within half a spacing of the sphere, facing out; the mesh is the same with and without
 // threads; the interpolated fields are the particles'; bad options name the property.
 #include "Scene.h"
+#include "Distributed/ThreadCluster.h"
 #include "SurfaceExtraction.h"
+#include "SurfaceShare.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <algorithm>
+#include <array>
 #include <map>
 #include <utility>
 
@@ -166,4 +170,103 @@ TEST(Surface, BadOptionsNameTheProperty)
   // No particles: an empty surface, not an error.
   EXPECT_TRUE(extractSurface<float>(nullptr, nullptr, nullptr, 0, s.parameters, {}, true)
                 .triangles.empty());
+}
+
+TEST(Surface, TwoSharesOfADecomposedRunMeetWithoutACrack)
+{
+  // The sphere split at x = 0.5 m (its centre) into two ranks' shares, each given its own
+  // particles and the other's within the ghost reach: together they are the whole surface,
+  // vertex for vertex (the same float bits where they meet) and triangle for triangle.
+  const Sphere s = fluidSphere();
+  const SurfaceOptions options;
+  const SurfaceMesh whole = surfaceOf(s, true, options);
+  const double cut = 0.5, reach = surfaceGhostReach(s.parameters, options);
+  std::map<std::array<float, 3>, std::size_t> seen; // vertex -> how many shares made it
+  std::size_t triangles = 0, shared = 0;
+  std::vector<std::array<std::array<float, 3>, 3>> pieces;
+  for (int rank = 0; rank < 2; ++rank)
+  {
+    SurfaceShare share;
+    (rank == 0 ? share.xMax : share.xMin) = cut;
+    Sphere part = s;
+    part.x.clear();
+    part.v.clear();
+    part.rho.clear();
+    for (std::size_t i = 0; i < s.x.size(); ++i)
+    {
+      const bool mine = rank == 0 ? s.x[i].x < cut : s.x[i].x >= cut;
+      const bool ghost = rank == 0 ? s.x[i].x < cut + reach : s.x[i].x >= cut - reach;
+      if (mine || ghost)
+      {
+        part.x.push_back(s.x[i]);
+        part.v.push_back(s.v[i]);
+        part.rho.push_back(s.rho[i]);
+      }
+    }
+    // Another order: the rank's ghosts first.
+    std::reverse(part.x.begin(), part.x.end());
+    std::reverse(part.v.begin(), part.v.end());
+    const SurfaceMesh mesh = extractSurface<double>(part.x.data(), part.v.data(), part.rho.data(),
+      part.x.size(), part.parameters, options, true, share);
+    ASSERT_GT(mesh.triangles.size(), 1000u) << "rank " << rank;
+    triangles += mesh.triangles.size();
+    for (const Vec3<float>& p : mesh.points)
+    {
+      shared += ++seen[{ p.x, p.y, p.z }] == 2 ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(triangles, whole.triangles.size());
+  EXPECT_EQ(seen.size(), whole.points.size()); // no vertex of the cut made twice in other bits
+  for (const Vec3<float>& p : whole.points)
+  {
+    EXPECT_EQ(seen.count({ p.x, p.y, p.z }), 1u);
+  }
+  EXPECT_GT(shared, 100u); // the ring where the shares meet
+}
+
+TEST(Surface, ThreeRanksExchangeTheirBordersAndMakeTheWholeSurface)
+{
+  // The sphere's particles dealt to three ranks (threads) by slab, each rank's in another order:
+  // the shares exchanged through the communicator make the whole surface, triangle for triangle
+  // and vertex for vertex.
+  const Sphere s = fluidSphere();
+  const SurfaceMesh whole = surfaceOf(s, true);
+  const double h = s.parameters.smoothingLength();
+  distributed::Slabs slabs;
+  const int columns = static_cast<int>(std::ceil(1.0 / h));
+  slabs.first = { 0, static_cast<int>(0.45 / h), static_cast<int>(0.55 / h), columns };
+  std::vector<SurfaceMesh> shares(3);
+  distributed::runThreadCluster(3, [&](distributed::Communicator& communicator) {
+    const int r = communicator.rank();
+    const SurfaceShare mine = slabShare(slabs, r, s.parameters);
+    std::vector<Vec3d> x, v;
+    std::vector<double> rho;
+    for (std::size_t i = s.x.size(); i-- > 0;)
+    {
+      if (s.x[i].x >= mine.xMin && s.x[i].x < mine.xMax)
+      {
+        x.push_back(s.x[i]);
+        v.push_back(s.v[i]);
+        rho.push_back(s.rho[i]);
+      }
+    }
+    shares[static_cast<std::size_t>(r)] = extractSurfaceShare<double>(communicator, slabs,
+      x.data(), v.data(), rho.data(), x.size(), s.parameters, SurfaceOptions{}, false);
+  });
+  std::map<std::array<float, 3>, int> seen;
+  std::size_t triangles = 0;
+  for (const SurfaceMesh& m : shares)
+  {
+    triangles += m.triangles.size();
+    for (const Vec3<float>& p : m.points)
+    {
+      ++seen[{ p.x, p.y, p.z }];
+    }
+  }
+  EXPECT_EQ(triangles, whole.triangles.size());
+  EXPECT_EQ(seen.size(), whole.points.size());
+  for (const Vec3<float>& p : whole.points)
+  {
+    EXPECT_EQ(seen.count({ p.x, p.y, p.z }), 1u);
+  }
 }
