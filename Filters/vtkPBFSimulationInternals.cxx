@@ -21,6 +21,8 @@
 #include "Parameters.h"
 #include "Scene.h"
 #include "Stepper.h"
+#include "SurfaceShare.h"
+#include "Distributed/SubdomainStepper.h"
 
 #include <algorithm>
 #include <chrono>
@@ -243,12 +245,30 @@ void vtkPBFSimulation::vtkInternals::DeliverSurface(
     return;
   }
   const pbf::Parameters& p = this->Playback.key().parameters;
+  // A decomposed run: every rank its slab's share, the border particles exchanged (collective,
+  // so every rank computes it every time: no rank may skip on a cache of its own).
+  const pbf::Simulation* live = this->Playback.live();
+  const auto* decomposed = live && this->Playback.key().ranks > 1 && this->Ranks
+    ? dynamic_cast<const pbf::distributed::DecomposedStepper*>(&live->stepper())
+    : nullptr;
+  pbf::SurfaceOptions used = options;
+  if (decomposed && used.smoothing > 0)
+  {
+    // Smoothing moves a vertex by its neighbours, which a border vertex has on two ranks.
+    used.smoothing = 0;
+    if (!this->SmoothingDecomposedSaid)
+    {
+      this->SmoothingDecomposedSaid = true;
+      vtkOutputWindowDisplayWarningText("SurfaceSmoothing is not applied in a decomposed run: "
+                                        "it would open cracks at the slab borders.\n");
+    }
+  }
   std::ostringstream of;
   of.precision(17);
   of << particles->GetMTime() << " " << options.resolution << " " << options.isoValue << " "
      << options.smoothing << " " << p.particleSpacing << " " << p.smoothingRatio << " "
      << p.restDensity;
-  if (of.str() != this->LastSurfaceOf)
+  if (decomposed || of.str() != this->LastSurfaceOf)
   {
     const auto start = std::chrono::steady_clock::now();
     vtkDataArray* x = particles->GetPoints() ? particles->GetPoints()->GetData() : nullptr;
@@ -260,8 +280,11 @@ void vtkPBFSimulation::vtkInternals::DeliverSurface(
     auto extract = [&](auto real) {
       using Real = decltype(real);
       auto pointer = [](vtkDataArray* a) { return a ? static_cast<Real*>(a->GetVoidPointer(0)) : nullptr; };
-      mesh = pbf::extractSurface<Real>(reinterpret_cast<const pbf::Vec3<Real>*>(pointer(x)),
-        reinterpret_cast<const pbf::Vec3<Real>*>(pointer(v)), pointer(rho), n, p, options, true);
+      const auto* px = reinterpret_cast<const pbf::Vec3<Real>*>(pointer(x));
+      const auto* pv = reinterpret_cast<const pbf::Vec3<Real>*>(pointer(v));
+      mesh = decomposed ? pbf::extractSurfaceShare<Real>(*this->Ranks, decomposed->slabs(), px,
+                            pv, pointer(rho), n, p, used, true)
+                        : pbf::extractSurface<Real>(px, pv, pointer(rho), n, p, used, true);
     };
     const int type = x ? x->GetDataType() : VTK_FLOAT;
     const bool same = (!v || v->GetDataType() == type) && (!rho || rho->GetDataType() == type);

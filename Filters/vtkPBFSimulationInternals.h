@@ -71,6 +71,7 @@ public:
   // modification time and the options), so that asking again reuses it.
   vtkSmartPointer<vtkPolyData> LastSurface = vtkSmartPointer<vtkPolyData>::New();
   std::string LastSurfaceOf;
+  bool SmoothingDecomposedSaid = false;
 
   // The cost of the last request.
   pbf::FrameReached Costs;

@@ -10,7 +10,8 @@ fluid and outputs its own particles. Checked against the same source with Decomp
   chaotic at the particle level, so single frames are not compared);
 - particles come from every rank, ids are unique and complete, ParticlesPerRank adds up;
 - frames asked out of order are bit-identical, and so is the filter seeded by points;
-- with a Sphere on the Obstacles port, 10 steps agree to 1e-9 and no particle enters it.
+- with a Sphere on the Obstacles port, 10 steps agree to 1e-9 and no particle enters it;
+- the Surface output of the decomposed run is closed across the slab borders.
 
 Run with: mpiexec -n N pvbatch pbf_mpi.py --plugin PATH --ranks N [--500-steps]"""
 import os
@@ -21,7 +22,9 @@ import numpy
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import pbf_testing as T  # noqa: E402
 from paraview import servermanager  # noqa: E402
-from paraview.simple import PointSource, ProcessIdScalars, Sphere  # noqa: E402
+from paraview.simple import (OutputPort, PassArrays, PointSource, ProcessIdScalars,  # noqa: E402
+                             Sphere)
+from vtkmodules.vtkFiltersCore import vtkCleanPolyData, vtkFeatureEdges  # noqa: E402
 from vtkmodules.util import numpy_support  # noqa: E402
 
 ranks_expected = int(sys.argv[sys.argv.index("--ranks") + 1]) if "--ranks" in sys.argv else 2
@@ -181,5 +184,42 @@ seeded = [PositionBasedFluidsFromPoints(Input=seed, ParticleSpacing=SPACING,  # 
 error = relative_error(fetched(seeded[0], 2), fetched(seeded[1], 2), "filter")
 print("%d ranks, filter, 10 steps: max relative position difference %.3g" % (ranks, error))
 expect(error <= 1e-9, "filter: positions differ by %.3g relative (bound 1e-9)" % error)
+
+# The surface (GenerateSurface) of a decomposed run: each rank extracts its slab's share, with
+# its neighbours' border particles; gathered here and merged where the shares' vertices coincide
+# (exactly: the same bits on both sides), it is closed (no boundary edge: no crack at a slab
+# border), every rank made part of it, and it is the single-rank run's surface to a percent of
+# its triangles (the particles themselves differ by rounding).
+def fetched_surface(proxy, frame):
+    owners = ProcessIdScalars(Input=PassArrays(Input=OutputPort(proxy, 3)))
+    owners.UpdatePipeline(frame * FRAME)
+    return servermanager.Fetch(owners)
+
+
+surfaces = [source(flag, 4) for flag in (1, 0)]
+for proxy in surfaces:
+    proxy.GenerateSurface = 1
+split_mesh, whole_mesh = fetched_surface(surfaces[0], 2), fetched_surface(surfaces[1], 2)
+merged = vtkCleanPolyData()
+merged.SetInputData(split_mesh)
+merged.SetTolerance(0.0)
+merged.Update()
+edges = vtkFeatureEdges()
+edges.SetInputConnection(merged.GetOutputPort())
+edges.BoundaryEdgesOn()
+edges.FeatureEdgesOff()
+edges.NonManifoldEdgesOff()
+edges.ManifoldEdgesOff()
+edges.Update()
+makers = numpy.unique(numpy_support.vtk_to_numpy(split_mesh.GetPointData().GetArray("ProcessId")))
+triangles = (split_mesh.GetNumberOfCells(), whole_mesh.GetNumberOfCells())
+print("%d ranks, surface: %d triangles from ranks %s (one rank: %d), %d boundary edges after "
+      "merging" % (ranks, triangles[0], list(makers), triangles[1],
+                   edges.GetOutput().GetNumberOfCells()))
+expect(edges.GetOutput().GetNumberOfCells() == 0, "the decomposed surface has %d boundary edges"
+       % edges.GetOutput().GetNumberOfCells())
+expect(len(makers) == ranks, "only ranks %s made part of the surface" % list(makers))
+expect(abs(triangles[0] - triangles[1]) <= 0.01 * triangles[1],
+       "the decomposed surface has %d triangles, the single-rank one %d" % triangles)
 
 T.passed("MPI %d ranks" % ranks)
