@@ -239,16 +239,17 @@ void vtkPBFSimulation::vtkInternals::DeliverSurface(
   const pbf::SurfaceOptions& options, vtkPolyData* particles, vtkPolyData* surface)
 {
   options.validate();
-  if (!this->Playback.hasKey())
+  // The run's own parameters: the domain (which anchors the surface's grid) is the scene's.
+  const pbf::Simulation* live = this->Playback.live();
+  if (!this->Playback.hasKey() || !live)
   {
     surface->Initialize();
     return;
   }
-  const pbf::Parameters& p = this->Playback.key().parameters;
+  const pbf::Parameters& p = live->parameters();
   // A decomposed run: every rank its slab's share, the border particles exchanged (collective,
   // so every rank computes it every time: no rank may skip on a cache of its own).
-  const pbf::Simulation* live = this->Playback.live();
-  const auto* decomposed = live && this->Playback.key().ranks > 1 && this->Ranks
+  const auto* decomposed = this->Playback.key().ranks > 1 && this->Ranks
     ? dynamic_cast<const pbf::distributed::DecomposedStepper*>(&live->stepper())
     : nullptr;
   pbf::SurfaceOptions used = options;

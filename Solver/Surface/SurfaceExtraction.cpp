@@ -86,7 +86,6 @@ struct BlockResult
   std::vector<EdgeVertex> vertices;
   std::vector<std::array<std::uint64_t, 3>> triangles; // vertex keys
   bool sampled = false;
-  bool interior = false;
 };
 
 // Kuhn's six tetrahedra of a cell, as corner bits (x 1, y 2, z 4): 0, a, a | b, 7 for every
@@ -284,10 +283,10 @@ void SurfaceOptions::validate() const
 
 double surfaceGhostReach(const Parameters& p, const SurfaceOptions& options)
 {
-  // A share's blocks reach one block beyond its slab; a node there sums particles within h, and
-  // the interior test counts the cells of h within h of the block.
+  // A share's blocks reach one block beyond its slab, and a node there sums particles within h
+  // (the cells of h around it: one more h).
   const double cell = options.resolution * p.particleSpacing;
-  return kBlock * cell + 3 * p.smoothingLength();
+  return kBlock * cell + 2 * p.smoothingLength();
 }
 
 template <class Real>
@@ -411,50 +410,6 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
   std::sort(blockKeys.begin(), blockKeys.end());
   blockKeys.erase(std::unique(blockKeys.begin(), blockKeys.end()), blockKeys.end());
 
-  // A block is interior when the cells of h within h of it hold at least 90 % of the particles
-  // the lattice would, none of them empty: its colour is above any level of (0, 1) there. (Per
-  // cell the count is no guide: lattice sites on a cell's face fall either way by rounding.)
-  const double perVolume = 1.0 / std::pow(p.particleSpacing, 3.0);
-  const GridGeometry<double>& g = sorted.geometry;
-  auto interior = [&](std::int64_t b0, std::int64_t b1, std::int64_t b2) {
-    const std::int64_t bb[3] = { b0, b1, b2 };
-    int from[3], to[3];
-    const int cells[3] = { g.nx, g.ny, g.nz };
-    const double origin[3] = { g.origin.x, g.origin.y, g.origin.z };
-    const double nodeOrigin[3] = { grid.origin.x, grid.origin.y, grid.origin.z };
-    for (int a = 0; a < 3; ++a)
-    {
-      const double low = nodeOrigin[a] + static_cast<double>(bb[a] * kBlock) * grid.cell - h;
-      const double high = nodeOrigin[a] + static_cast<double>((bb[a] + 1) * kBlock) * grid.cell + h;
-      from[a] = g.clampedCell(low, origin[a], cells[a]);
-      to[a] = g.clampedCell(high, origin[a], cells[a]);
-      if (from[a] == 0 || to[a] == cells[a] - 1)
-      {
-        return false; // at the region's edge: nothing is known beyond
-      }
-    }
-    std::uint64_t particles = 0;
-    for (int z = from[2]; z <= to[2]; ++z)
-    {
-      for (int y = from[1]; y <= to[1]; ++y)
-      {
-        for (int c = from[0]; c <= to[0]; ++c)
-        {
-          const std::size_t cell = (static_cast<std::size_t>(z) * g.ny + y) * g.nx + c;
-          const std::uint32_t count = sorted.offsets[cell + 1] - sorted.offsets[cell];
-          if (count == 0)
-          {
-            return false;
-          }
-          particles += count;
-        }
-      }
-    }
-    const double cellsVolume = static_cast<double>(to[0] - from[0] + 1) * (to[1] - from[1] + 1) *
-      (to[2] - from[2] + 1) * h * h * h;
-    return static_cast<double>(particles) >= 0.9 * cellsVolume * perVolume;
-  };
-
   const Extractor extractor(grid, sorted, kernels, volume, options.isoValue);
   std::vector<BlockResult> results(blockKeys.size());
   const auto count = static_cast<std::int64_t>(blockKeys.size());
@@ -465,13 +420,7 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
     const auto b0 = static_cast<std::int64_t>(key % bx);
     const auto b1 = static_cast<std::int64_t>((key / bx) % by);
     const auto b2 = static_cast<std::int64_t>(key / (bx * by));
-    BlockResult& r = results[static_cast<std::size_t>(b)];
-    if (interior(b0, b1, b2))
-    {
-      r.interior = true;
-      continue;
-    }
-    extractor.run(b0, b1, b2, r);
+    extractor.run(b0, b1, b2, results[static_cast<std::size_t>(b)]);
   }
 
   // Vertices in key order, shared wherever their edge is.
@@ -482,7 +431,7 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
     vertices.insert(vertices.end(), r.vertices.begin(), r.vertices.end());
     triangleCount += r.triangles.size();
     mesh.sampledBlocks += r.sampled ? 1 : 0;
-    mesh.interiorBlocks += r.interior ? 1 : 0;
+    mesh.keptBlocks += r.triangles.empty() ? 0 : 1;
   }
   mesh.sampledNodes = mesh.sampledBlocks * (kBlock + 1) * (kBlock + 1) * (kBlock + 1);
   // The working memory at its largest, here: the sorted particles, the block list, every block's

@@ -3,10 +3,11 @@
 // at isoValue (1/2: where the smoothed occupancy is half, s/2 beyond the last layer of a flat
 // lattice), sampled on a grid of nodes resolution x s apart, triangulated cell by cell.
 //
-// Narrow band: the grid exists only as blocks of 8^3 cells within h of a particle; a block whose
-// particle cells around it are all full (the fluid's interior) is not sampled, and a sampled block
-// whose nodes all lie on one side of the level is dropped. What is kept grows with the surface's
-// area, not with the box or the fluid's volume.
+// Narrow band: the grid exists only as blocks of 8^3 cells within h of a particle, sampled one at
+// a time; a block whose nodes all lie on one side of the level is dropped at once. What is kept
+// grows with the surface's area, not with the box or the fluid's volume. (Every block within h of
+// a particle is sampled: a test that skipped the fluid's interior by counting the particles of
+// its cells left holes where a surface ran through a nearly full region.)
 //
 // Triangulation: each cell is cut into six tetrahedra around its main diagonal (Kuhn's
 // triangulation, the same diagonal on both sides of every face), each tetrahedron cut by the
@@ -47,9 +48,10 @@ struct SurfaceMesh
   std::vector<float> density;        // likewise
   std::vector<std::array<std::uint32_t, 3>> triangles; // counter-clockwise seen from outside
 
-  // What the narrow band held: blocks sampled, blocks skipped as interior, nodes sampled.
+  // What the narrow band held: blocks sampled, blocks kept (the level passes through them),
+  // nodes sampled.
   std::size_t sampledBlocks = 0;
-  std::size_t interiorBlocks = 0;
+  std::size_t keptBlocks = 0;
   std::size_t sampledNodes = 0;
   std::size_t peakBytes = 0; // the largest working memory of the extraction [bytes]
 };

@@ -52,6 +52,16 @@ void expectBitIdentical(const Snapshot<double>& a, const Snapshot<double>& b)
 }
 
 // The serial backend's state after `steps` steps with one solid.
+// The CPU sub-domain stepper, serial on each rank: the other decomposed stepper the GPU one is
+// held to.
+DecomposedFactory serialSubdomains()
+{
+  return [](distributed::Communicator& communicator, const PresetFluid& fluid) {
+    return std::unique_ptr<distributed::DecomposedStepper>(new distributed::SubdomainStepper<double>(
+      communicator, false, fluid.parameters, fluid.fluid));
+  };
+}
+
 // A sphere that rolls along -x at 1 m/s and turns about z at 10 rad/s, from t = 0 (the fixed
 // steps' time).
 SolidMotion rollingSphere()
@@ -360,11 +370,7 @@ TEST(DeviceSubdomainOnHost, WallFrictionMatchesTheSerialBackendOnBothDecomposedS
   PresetFluid slipping = setup;
   slipping.parameters.wallFriction = 0.0;
   const DecomposedFactory onDevice = onHost<double>();
-  const DecomposedFactory onCpu = [](distributed::Communicator& communicator,
-                                    const PresetFluid& fluid) {
-    return std::unique_ptr<distributed::DecomposedStepper>(new distributed::SubdomainStepper<double>(
-      communicator, false, fluid.parameters, fluid.fluid));
-  };
+  const DecomposedFactory onCpu = serialSubdomains();
   for (const DecomposedFactory& plain : { onDevice, onCpu })
   {
     const DecomposedFactory withSphere = [&](distributed::Communicator& communicator,
@@ -401,11 +407,7 @@ TEST(DeviceSubdomainOnHost, MovingSolidsMatchTheSerialBackendOnBothDecomposedSte
     stepper.setObstaclePoses(poseAfterStep(motion, setup.parameters, s));
   };
   const DecomposedFactory onDevice = onHost<double>();
-  const DecomposedFactory onCpu = [](distributed::Communicator& communicator,
-                                    const PresetFluid& fluid) {
-    return std::unique_ptr<distributed::DecomposedStepper>(new distributed::SubdomainStepper<double>(
-      communicator, false, fluid.parameters, fluid.fluid));
-  };
+  const DecomposedFactory onCpu = serialSubdomains();
   for (const DecomposedFactory& plain : { onDevice, onCpu })
   {
     const DecomposedFactory withSphere = [&](distributed::Communicator& communicator,

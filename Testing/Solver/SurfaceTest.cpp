@@ -74,9 +74,9 @@ TEST(Surface, ASphereOfFluidGivesAClosedSurfaceWithinHalfASpacing)
     farthest = std::max(farthest, r);
   }
   std::printf("sphere of %zu particles: %zu triangles, %zu vertices, radius %.5f to %.5f m "
-              "(R %.3f m), %zu blocks sampled, %zu interior, %zu bytes at most\n",
+              "(R %.3f m), %zu blocks sampled, %zu kept, %zu bytes at most\n",
     s.x.size(), mesh.triangles.size(), mesh.points.size(), nearest, farthest, kRadius,
-    mesh.sampledBlocks, mesh.interiorBlocks, mesh.peakBytes);
+    mesh.sampledBlocks, mesh.keptBlocks, mesh.peakBytes);
   EXPECT_GT(nearest, kRadius - 0.5 * kSpacing);
   EXPECT_LT(farthest, kRadius + 0.5 * kSpacing);
   // Closed: every edge in exactly two triangles, once in each direction (consistently oriented).
@@ -112,8 +112,8 @@ TEST(Surface, ASphereOfFluidGivesAClosedSurfaceWithinHalfASpacing)
   }
   const double sphereVolume = 4.0 / 3.0 * 3.14159265358979 * std::pow(kRadius, 3);
   EXPECT_NEAR(signedVolume / sphereVolume, 1.0, 0.05);
-  // Narrow band: the interior blocks are skipped, not sampled.
-  EXPECT_GT(mesh.interiorBlocks, 0u);
+  // Narrow band: only the blocks the level passes through are kept.
+  EXPECT_LT(mesh.keptBlocks, mesh.sampledBlocks);
   // The fields are the particles': all move at (1, 2, 3) m/s with rho_0 (rounding of the
   // Shepard average in float, 1e-6 relative).
   for (std::size_t i = 0; i < mesh.points.size(); i += 97)
