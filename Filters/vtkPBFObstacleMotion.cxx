@@ -28,12 +28,26 @@ bool FitRigidMotion(vtkDataSet* reference, vtkDataSet* now, pbf::SolidPose& pose
   {
     return false;
   }
+  // At rest (every request of a still obstacle): the identity, the solid's bits as sampled,
+  // found without copying a point.
+  pose = pbf::SolidPose{};
+  bool same = true;
+  for (vtkIdType i = 0; i < n && same; ++i)
+  {
+    double a[3], b[3];
+    reference->GetPoint(i, a);
+    now->GetPoint(i, b);
+    same = a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+  }
+  if (same)
+  {
+    return true;
+  }
   vtkNew<vtkPoints> from, to;
   from->SetDataTypeToDouble();
   to->SetDataTypeToDouble();
   from->SetNumberOfPoints(n);
   to->SetNumberOfPoints(n);
-  bool same = true;
   for (vtkIdType i = 0; i < n; ++i)
   {
     double a[3], b[3];
@@ -41,12 +55,6 @@ bool FitRigidMotion(vtkDataSet* reference, vtkDataSet* now, pbf::SolidPose& pose
     now->GetPoint(i, b);
     from->SetPoint(i, a);
     to->SetPoint(i, b);
-    same = same && a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
-  }
-  pose = pbf::SolidPose{};
-  if (same)
-  {
-    return true; // at rest: the identity, the solid's bits as sampled
   }
   vtkNew<vtkLandmarkTransform> fit;
   fit->SetModeToRigidBody();

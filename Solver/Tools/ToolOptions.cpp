@@ -109,6 +109,12 @@ std::map<std::string, std::pair<std::string, Setter>> parameterSetters()
 
 } // namespace
 
+Scene toolScene(const ToolOptions& options)
+{
+  return options.scene.find(".json") != std::string::npos ? loadSceneFile(options.scene)
+                                                          : presetScene(options.scene);
+}
+
 Backend parseBackend(const std::string& name)
 {
   if (name == "serial")

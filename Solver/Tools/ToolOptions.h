@@ -3,6 +3,7 @@
 #pragma once
 
 #include "Parameters.h"
+#include "Scene.h"
 #include "Stepper.h"
 
 #include <map>
@@ -44,6 +45,9 @@ inline double toolReal(const ToolOptions& options, const std::string& key, doubl
 {
   return toolReals(options, key, fallback).front();
 }
+
+// The scene --scene names: a preset, or a JSON file (a name with ".json").
+Scene toolScene(const ToolOptions& options);
 
 Backend parseBackend(const std::string& name);
 

@@ -319,9 +319,7 @@ int main(int argc, char** argv)
     if (options.extra.count("refined"))
     {
       const RefinedSettings settings = refinedSettings(options);
-      const Scene scene = options.scene.find(".json") != std::string::npos
-        ? loadSceneFile(options.scene)
-        : presetScene(options.scene);
+      const Scene scene = toolScene(options);
       std::vector<RefinedRun> runs;
       for (double spacing : settings.spacings)
       {

@@ -84,9 +84,7 @@ int main(int argc, char** argv)
   try
   {
     ToolOptions options = parseToolOptions(argc, argv, keys);
-    const Scene scene = options.scene.find(".json") != std::string::npos
-      ? loadSceneFile(options.scene)
-      : presetScene(options.scene);
+    const Scene scene = toolScene(options);
     const long steps = toolInteger(options, "steps", 200, 0);
     const long report = toolInteger(options, "report", 50, 1);
     Simulation simulation(scene, options.parameters, options.backend, options.precision);

@@ -94,8 +94,7 @@ int main(int argc, char** argv)
     const long check = toolInteger(options, "check", 500, 1);
     const Scene scene = options.extra.count("particles")
       ? scaledDamBreak(std::stod(options.extra["particles"]), options.parameters.particleSpacing)
-      : options.scene.find(".json") != std::string::npos ? loadSceneFile(options.scene)
-                                                           : presetScene(options.scene);
+      : toolScene(options);
     Simulation simulation(scene, options.parameters, options.backend, options.precision);
     std::printf("soak %s: %zu particles at start, %s, %s precision, %ld steps\n",
       scene.name.c_str(), simulation.stepper().size(), simulation.stepper().description().c_str(),

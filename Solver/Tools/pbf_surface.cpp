@@ -34,9 +34,7 @@ int main(int argc, char** argv)
     const long repeat = toolInteger(options, "repeat", 3, 1);
     SurfaceOptions surface;
     surface.resolution = toolReal(options, "resolution", surface.resolution);
-    const Scene scene = options.scene.find(".json") != std::string::npos
-      ? loadSceneFile(options.scene)
-      : presetScene(options.scene);
+    const Scene scene = toolScene(options);
     Simulation simulation(scene, options.parameters, options.backend, options.precision);
     const auto run0 = std::chrono::steady_clock::now();
     simulation.advanceTo(until);

@@ -69,15 +69,9 @@ inline DecomposedOutcome runDecomposed(int ranks, const PresetFluid& setup, int 
     }
     stepper->read(parts[r]);
   });
+  outcome.state = joined(parts);
   for (std::size_t r = 0; r < parts.size(); ++r)
   {
-    const Snapshot<double>& part = parts[r];
-    Snapshot<double>& all = outcome.state;
-    all.position.insert(all.position.end(), part.position.begin(), part.position.end());
-    all.velocity.insert(all.velocity.end(), part.velocity.begin(), part.velocity.end());
-    all.density.insert(all.density.end(), part.density.begin(), part.density.end());
-    all.lambda.insert(all.lambda.end(), part.lambda.begin(), part.lambda.end());
-    all.id.insert(all.id.end(), part.id.begin(), part.id.end());
     outcome.migrated += migrated[r];
     outcome.ghosts += ghosts[r];
   }

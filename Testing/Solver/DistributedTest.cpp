@@ -58,15 +58,7 @@ Outcome runRanks(int ranks, const PresetFluid& setup, int steps, bool history = 
     }
     stepper.read(parts[static_cast<std::size_t>(communicator.rank())]);
   });
-  for (const Snapshot<double>& part : parts)
-  {
-    Snapshot<double>& all = outcome.state;
-    all.position.insert(all.position.end(), part.position.begin(), part.position.end());
-    all.velocity.insert(all.velocity.end(), part.velocity.begin(), part.velocity.end());
-    all.density.insert(all.density.end(), part.density.begin(), part.density.end());
-    all.lambda.insert(all.lambda.end(), part.lambda.begin(), part.lambda.end());
-    all.id.insert(all.id.end(), part.id.begin(), part.id.end());
-  }
+  outcome.state = test::joined(parts);
   return outcome;
 }
 

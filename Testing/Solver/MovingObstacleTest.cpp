@@ -231,15 +231,7 @@ TEST(MovingObstacle, SerialOpenMPAndDecomposedRanksAgree)
       part.advanceTo(until);
       part.stepper().read(parts[static_cast<std::size_t>(communicator.rank())]);
     });
-    Snapshot<double> all;
-    for (const Snapshot<double>& p : parts)
-    {
-      all.position.insert(all.position.end(), p.position.begin(), p.position.end());
-      all.velocity.insert(all.velocity.end(), p.velocity.begin(), p.velocity.end());
-      all.density.insert(all.density.end(), p.density.begin(), p.density.end());
-      all.lambda.insert(all.lambda.end(), p.lambda.begin(), p.lambda.end());
-      all.id.insert(all.id.end(), p.id.begin(), p.id.end());
-    }
+    const Snapshot<double> all = test::joined(parts);
     if (ranks == 1)
     {
       test::expectBitIdentical(all, reference);

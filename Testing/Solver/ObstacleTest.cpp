@@ -215,16 +215,7 @@ Snapshot<double> decomposedWithSphere(int ranks, int steps, std::size_t* ghosts 
     }
     stepper.read(parts[static_cast<std::size_t>(communicator.rank())]);
   });
-  Snapshot<double> all;
-  for (const Snapshot<double>& part : parts)
-  {
-    all.position.insert(all.position.end(), part.position.begin(), part.position.end());
-    all.velocity.insert(all.velocity.end(), part.velocity.begin(), part.velocity.end());
-    all.density.insert(all.density.end(), part.density.begin(), part.density.end());
-    all.lambda.insert(all.lambda.end(), part.lambda.begin(), part.lambda.end());
-    all.id.insert(all.id.end(), part.id.begin(), part.id.end());
-  }
-  return all;
+  return test::joined(parts);
 }
 
 } // namespace

@@ -99,6 +99,20 @@ double maxRelativePositionError(const Snapshot<double>& a, const Snapshot<double
   return worst;
 }
 
+Snapshot<double> joined(const std::vector<Snapshot<double>>& parts)
+{
+  Snapshot<double> all;
+  for (const Snapshot<double>& part : parts)
+  {
+    all.position.insert(all.position.end(), part.position.begin(), part.position.end());
+    all.velocity.insert(all.velocity.end(), part.velocity.begin(), part.velocity.end());
+    all.density.insert(all.density.end(), part.density.begin(), part.density.end());
+    all.lambda.insert(all.lambda.end(), part.lambda.begin(), part.lambda.end());
+    all.id.insert(all.id.end(), part.id.begin(), part.id.end());
+  }
+  return all;
+}
+
 Scene damBreakWithSolids()
 {
   return parseScene(R"({

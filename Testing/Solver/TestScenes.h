@@ -9,6 +9,7 @@
 #include <cstring>
 #include <map>
 #include <string>
+#include <vector>
 
 namespace pbf::test
 {
@@ -42,6 +43,9 @@ std::map<std::int64_t, std::size_t> indexById(const Snapshot<double>& snapshot);
 // Largest |x_a - x_b| / |x_b| over particles matched by id (infinity for a NaN). Adds a gtest
 // failure for a count that differs, an id twice in a, or an id of a missing from b.
 double maxRelativePositionError(const Snapshot<double>& a, const Snapshot<double>& b);
+
+// The ranks' states one after the other, as one state (a decomposed run's particles).
+Snapshot<double> joined(const std::vector<Snapshot<double>>& parts);
 
 // Two states equal bit for bit, in the same order (two backends that sort alike).
 template <class Real>
