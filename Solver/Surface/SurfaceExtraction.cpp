@@ -3,6 +3,7 @@
 #include "CellSort.h"
 #include "Grid.h"
 #include "Kernels.h"
+#include "SurfaceCells.h"
 
 #include <algorithm>
 #include <cmath>
@@ -15,7 +16,7 @@ namespace pbf
 namespace
 {
 
-constexpr int kBlock = 8; // cells per block edge; a block samples (kBlock + 1)^3 nodes
+using surface::kBlock;
 
 std::string number(double v)
 {
@@ -24,26 +25,6 @@ std::string number(double v)
   return out.str();
 }
 
-// The sampling grid: node (i, j, k) at origin + (i, j, k) cell, computed by this one expression
-// wherever it is needed, so that a node shared by two blocks has the same bits in both.
-struct NodeGrid
-{
-  Vec3d origin;
-  double cell = 0;
-  std::int64_t n[3] = { 0, 0, 0 };   // nodes per axis
-  std::int64_t blocks[3] = { 0, 0, 0 };
-
-  Vec3d at(std::int64_t i, std::int64_t j, std::int64_t k) const
-  {
-    return origin + Vec3d{ static_cast<double>(i) * cell, static_cast<double>(j) * cell,
-                      static_cast<double>(k) * cell };
-  }
-  std::uint64_t id(std::int64_t i, std::int64_t j, std::int64_t k) const
-  {
-    return static_cast<std::uint64_t>((k * n[1] + j) * n[0] + i);
-  }
-};
-
 // The particles sorted into cells of h over the sampled region, in double.
 struct SortedParticles
 {
@@ -51,77 +32,41 @@ struct SortedParticles
   std::vector<std::uint32_t> offsets;
   std::vector<Vec3d> x;
   std::vector<std::uint32_t> order; // sorted index -> input index
+
+  surface::CellParticles view() const { return { geometry, offsets.data(), x.data() }; }
 };
 
-// Calls visit(j) for the sorted particles of the 27 cells around q's cell, in a fixed order.
-template <class Visit>
-void forEachParticleNear(const SortedParticles& p, const Vec3d& q, Visit&& visit)
+struct KeyedVertex
 {
-  const GridGeometry<double>& g = p.geometry;
-  const int cx = g.clampedCell(q.x, g.origin.x, g.nx);
-  const int cy = g.clampedCell(q.y, g.origin.y, g.ny);
-  const int cz = g.clampedCell(q.z, g.origin.z, g.nz);
-  const int x0 = std::max(cx - 1, 0), x1 = std::min(cx + 1, g.nx - 1);
-  for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, g.nz - 1); ++z)
-  {
-    for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, g.ny - 1); ++y)
-    {
-      const std::size_t row = (static_cast<std::size_t>(z) * g.ny + y) * g.nx;
-      for (std::uint32_t j = p.offsets[row + x0]; j < p.offsets[row + x1 + 1]; ++j)
-      {
-        visit(j);
-      }
-    }
-  }
-}
-
-struct EdgeVertex
-{
-  std::uint64_t key; // lower node's id x 8 + the edge's direction (bits x, y, z)
+  std::uint64_t key; // surface::vertexKey of its edge
   Vec3d position;
 };
 
 struct BlockResult
 {
-  std::vector<EdgeVertex> vertices;
+  std::vector<KeyedVertex> vertices;
   std::vector<std::array<std::uint64_t, 3>> triangles; // vertex keys
   bool sampled = false;
 };
 
-// Kuhn's six tetrahedra of a cell, as corner bits (x 1, y 2, z 4): 0, a, a | b, 7 for every
-// order of the axes. Along each tetrahedron's corners the bits only grow, so of two corners the
-// earlier is the edge's lower end.
-constexpr int kTetrahedra[6][4] = { { 0, 1, 3, 7 }, { 0, 1, 5, 7 }, { 0, 2, 3, 7 }, { 0, 2, 6, 7 },
-  { 0, 4, 5, 7 }, { 0, 4, 6, 7 } };
-
 class Extractor
 {
 public:
-  Extractor(const NodeGrid& grid, const SortedParticles& particles, const Kernels<double>& kernels,
-    double volume, double iso)
+  Extractor(const surface::NodeGrid& grid, const SortedParticles& particles,
+    const Kernels<double>& kernels, double volume, double iso)
     : grid_(grid)
-    , particles_(particles)
+    , particles_(particles.view())
     , kernels_(kernels)
     , volume_(volume)
     , iso_(iso)
   {
   }
 
-  double colour(const Vec3d& q) const
-  {
-    double phi = 0;
-    forEachParticleNear(particles_, q, [&](std::uint32_t j) {
-      const Vec3d r = q - particles_.x[j];
-      phi += kernels_.poly6(dot(r, r));
-    });
-    return phi * volume_;
-  }
-
   // Block (bx, by, bz): its nodes sampled and its cells triangulated.
   void run(std::int64_t bx, std::int64_t by, std::int64_t bz, BlockResult& out) const
   {
     constexpr int m = kBlock + 1;
-    std::vector<double> phi(static_cast<std::size_t>(m * m * m), 0.0);
+    std::vector<double> phi(static_cast<std::size_t>(surface::kBlockNodes), 0.0);
     const std::int64_t base[3] = { bx * kBlock, by * kBlock, bz * kBlock };
     bool any = false, all = true;
     for (int k = 0; k < m; ++k)
@@ -134,9 +79,9 @@ public:
           double value = 0; // beyond the grid: outside, as the padding is
           if (g[0] < grid_.n[0] && g[1] < grid_.n[1] && g[2] < grid_.n[2])
           {
-            value = colour(grid_.at(g[0], g[1], g[2]));
+            value = surface::colour(particles_, kernels_, volume_, grid_.at(g[0], g[1], g[2]));
           }
-          phi[static_cast<std::size_t>((k * m + j) * m + i)] = value;
+          phi[static_cast<std::size_t>(surface::nodeSlot(i, j, k))] = value;
           any = any || value > iso_;
           all = all && value > iso_;
         }
@@ -147,6 +92,10 @@ public:
     {
       return; // the level does not pass through this block
     }
+    auto keyed = [&](const surface::EdgeVertex& e) {
+      return KeyedVertex{ surface::vertexKey(grid_, e.node[0], e.node[1], e.node[2], e.dir),
+        e.position };
+    };
     for (int k = 0; k < kBlock; ++k)
     {
       for (int j = 0; j < kBlock; ++j)
@@ -163,105 +112,67 @@ public:
           for (int c = 0; c < 8; ++c)
           {
             corner[c] = phi[static_cast<std::size_t>(
-              ((k + (c >> 2)) * m + (j + ((c >> 1) & 1))) * m + (i + (c & 1)))];
+              surface::nodeSlot(i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2)))];
             inside += corner[c] > iso_ ? 1 : 0;
           }
           if (inside == 0 || inside == 8)
           {
             continue;
           }
-          cell(base[0] + i, base[1] + j, base[2] + k, corner, out);
+          surface::triangulateCell(grid_, base[0] + i, base[1] + j, base[2] + k, corner, iso_,
+            [&](const surface::EdgeVertex& a, const surface::EdgeVertex& b,
+              const surface::EdgeVertex& c) {
+              const KeyedVertex ka = keyed(a), kb = keyed(b), kc = keyed(c);
+              out.vertices.push_back(ka);
+              out.vertices.push_back(kb);
+              out.vertices.push_back(kc);
+              out.triangles.push_back({ ka.key, kb.key, kc.key });
+            });
         }
       }
     }
   }
 
 private:
-  // The vertex on the edge from corner u to corner v (u's bits a subset of v's) of cell (i, j, k).
-  EdgeVertex vertex(std::int64_t i, std::int64_t j, std::int64_t k, int u, int v,
-    const double* corner) const
-  {
-    const std::int64_t ui = i + (u & 1), uj = j + ((u >> 1) & 1), uk = k + (u >> 2);
-    const std::int64_t vi = i + (v & 1), vj = j + ((v >> 1) & 1), vk = k + (v >> 2);
-    const Vec3d a = grid_.at(ui, uj, uk), b = grid_.at(vi, vj, vk);
-    const double t = (iso_ - corner[u]) / (corner[v] - corner[u]);
-    return { grid_.id(ui, uj, uk) * 8 + static_cast<std::uint64_t>(v & ~u), a + (b - a) * t };
-  }
-
-  void triangle(EdgeVertex a, EdgeVertex b, EdgeVertex c, const Vec3d& outward, BlockResult& out) const
-  {
-    const Vec3d n = cross(b.position - a.position, c.position - a.position);
-    if (dot(n, outward) < 0)
-    {
-      std::swap(b, c);
-    }
-    out.vertices.push_back(a);
-    out.vertices.push_back(b);
-    out.vertices.push_back(c);
-    out.triangles.push_back({ a.key, b.key, c.key });
-  }
-
-  void cell(std::int64_t i, std::int64_t j, std::int64_t k, const double* corner, BlockResult& out) const
-  {
-    for (const auto& tet : kTetrahedra)
-    {
-      int in[4], outside[4], nin = 0, nout = 0;
-      for (int c = 0; c < 4; ++c)
-      {
-        if (corner[tet[c]] > iso_)
-        {
-          in[nin++] = c;
-        }
-        else
-        {
-          outside[nout++] = c;
-        }
-      }
-      if (nin == 0 || nout == 0)
-      {
-        continue;
-      }
-      // From the inside corners' centre to the outside ones': the way the normal must face.
-      auto centre = [&](const int* list, int count) {
-        Vec3d sum{ 0, 0, 0 };
-        for (int q = 0; q < count; ++q)
-        {
-          const int b = tet[list[q]];
-          sum += grid_.at(i + (b & 1), j + ((b >> 1) & 1), k + (b >> 2));
-        }
-        return sum * (1.0 / count);
-      };
-      const Vec3d outward = centre(outside, nout) - centre(in, nin);
-      // The edge between tetrahedron corners p and q, lower bits first.
-      auto edge = [&](int p, int q) {
-        const int a = std::min(p, q), b = std::max(p, q); // corner order is bit order here
-        return vertex(i, j, k, tet[a], tet[b], corner);
-      };
-      if (nin == 1 || nout == 1)
-      {
-        const int lone = nin == 1 ? in[0] : outside[0];
-        const int* others = nin == 1 ? outside : in;
-        triangle(edge(lone, others[0]), edge(lone, others[1]), edge(lone, others[2]), outward, out);
-      }
-      else
-      {
-        // Two in, two out: the quad through the four crossing edges, in cyclic order.
-        const EdgeVertex ac = edge(in[0], outside[0]), ad = edge(in[0], outside[1]);
-        const EdgeVertex bd = edge(in[1], outside[1]), bc = edge(in[1], outside[0]);
-        triangle(ac, ad, bd, outward, out);
-        triangle(ac, bd, bc, outward, out);
-      }
-    }
-  }
-
-  const NodeGrid& grid_;
-  const SortedParticles& particles_;
+  const surface::NodeGrid& grid_;
+  surface::CellParticles particles_;
   const Kernels<double>& kernels_;
   double volume_;
   double iso_;
 };
 
 } // namespace
+
+surface::NodeGrid surface::makeNodeGrid(const Parameters& p, const SurfaceOptions& options)
+{
+  // (A particle a rounding beyond a wall is still well inside the padding.)
+  NodeGrid grid;
+  grid.cell = options.resolution * p.particleSpacing;
+  const double pad = p.smoothingLength() + 2 * grid.cell;
+  grid.origin = p.domain.min - Vec3d{ pad, pad, pad };
+  const Vec3d size = p.domain.max - p.domain.min + Vec3d{ 2 * pad, 2 * pad, 2 * pad };
+  const double extent[3] = { size.x, size.y, size.z };
+  double total = 1;
+  for (int a = 0; a < 3; ++a)
+  {
+    grid.n[a] = static_cast<std::int64_t>(std::ceil(extent[a] / grid.cell)) + 1;
+    grid.blocks[a] = (grid.n[a] - 1 + kBlock - 1) / kBlock;
+    total *= static_cast<double>(grid.n[a]);
+  }
+  if (total > 1e15)
+  {
+    throw InvalidInput("SurfaceResolution = " + number(options.resolution) + ": " + number(total) +
+      " nodes over the particles' bounds; coarsen the surface");
+  }
+  return grid;
+}
+
+GridGeometry<double> surface::particleCells(const NodeGrid& grid, const Parameters& p)
+{
+  const double pad = p.smoothingLength() + 2 * grid.cell;
+  const Vec3d size = p.domain.max - p.domain.min + Vec3d{ 2 * pad, 2 * pad, 2 * pad };
+  return makeGridGeometry<double>(Box{ grid.origin, grid.origin + size }, p.smoothingLength());
+}
 
 void SurfaceOptions::validate() const
 {
@@ -304,11 +215,6 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
   const Kernels<double> kernels = Kernels<double>::make(h);
   const double volume = calibratedParticleMass(p) / p.restDensity;
 
-  // The sampled region: the domain (where the particles are) padded by h and two nodes, so that
-  // the colour is below any level at the grid's faces and the surface closes inside it. Anchored
-  // at the domain, it is the same grid on every rank of a decomposed run.
-  // (A particle a rounding beyond a wall is still well inside the padding.)
-  const Vec3d lo = p.domain.min, hi = p.domain.max;
   for (std::size_t i = 0; i < n; ++i)
   {
     const Vec3d q = Vec3d::from(x[i]);
@@ -317,28 +223,11 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
       throw InvalidInput("surface: particle " + std::to_string(i) + " has a non-finite position");
     }
   }
-  NodeGrid grid;
-  grid.cell = options.resolution * p.particleSpacing;
-  const double pad = h + 2 * grid.cell;
-  grid.origin = lo - Vec3d{ pad, pad, pad };
-  const Vec3d size = hi - lo + Vec3d{ 2 * pad, 2 * pad, 2 * pad };
-  const double extent[3] = { size.x, size.y, size.z };
-  double total = 1;
-  for (int a = 0; a < 3; ++a)
-  {
-    grid.n[a] = static_cast<std::int64_t>(std::ceil(extent[a] / grid.cell)) + 1;
-    grid.blocks[a] = (grid.n[a] - 1 + kBlock - 1) / kBlock;
-    total *= static_cast<double>(grid.n[a]);
-  }
-  if (total > 1e15)
-  {
-    throw InvalidInput("SurfaceResolution = " + number(options.resolution) + ": " + number(total) +
-      " nodes over the particles' bounds; coarsen the surface");
-  }
+  const surface::NodeGrid grid = surface::makeNodeGrid(p, options);
 
   // The particles in cells of h over the same region (Green 2008, as the solver's grid).
   SortedParticles sorted;
-  sorted.geometry = makeGridGeometry<double>(Box{ grid.origin, grid.origin + size }, h);
+  sorted.geometry = surface::particleCells(grid, p);
   std::vector<CellKey> keys(n);
   for (std::size_t i = 0; i < n; ++i)
   {
@@ -375,20 +264,10 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
   // The blocks within h of a particle: a node within h of one belongs to every block it is in.
   std::vector<std::uint64_t> blockKeys;
   blockKeys.reserve(n * 2);
-  const std::uint64_t bx = static_cast<std::uint64_t>(grid.blocks[0]);
-  const std::uint64_t by = static_cast<std::uint64_t>(grid.blocks[1]);
   for (std::size_t k = 0; k < n; ++k)
   {
-    const Vec3d q = sorted.x[k] - grid.origin;
-    const double c[3] = { q.x, q.y, q.z };
     std::int64_t first[3], last[3];
-    for (int a = 0; a < 3; ++a)
-    {
-      const auto i0 = static_cast<std::int64_t>(std::ceil((c[a] - h) / grid.cell));
-      const auto i1 = static_cast<std::int64_t>(std::floor((c[a] + h) / grid.cell));
-      first[a] = std::max<std::int64_t>(0, i0 > 0 ? (i0 - 1) / kBlock : 0);
-      last[a] = std::min<std::int64_t>(grid.blocks[a] - 1, std::max<std::int64_t>(i1, 0) / kBlock);
-    }
+    surface::blocksNear(grid, h, sorted.x[k], first, last);
     for (std::int64_t z = first[2]; z <= last[2]; ++z)
     {
       for (std::int64_t y = first[1]; y <= last[1]; ++y)
@@ -401,8 +280,7 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
           {
             continue;
           }
-          blockKeys.push_back((static_cast<std::uint64_t>(z) * by + static_cast<std::uint64_t>(y)) * bx +
-            static_cast<std::uint64_t>(b));
+          blockKeys.push_back(grid.blockKey(b, y, z));
         }
       }
     }
@@ -416,15 +294,13 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
 #pragma omp parallel for schedule(dynamic, 8) if (parallel)
   for (std::int64_t b = 0; b < count; ++b)
   {
-    const std::uint64_t key = blockKeys[static_cast<std::size_t>(b)];
-    const auto b0 = static_cast<std::int64_t>(key % bx);
-    const auto b1 = static_cast<std::int64_t>((key / bx) % by);
-    const auto b2 = static_cast<std::int64_t>(key / (bx * by));
-    extractor.run(b0, b1, b2, results[static_cast<std::size_t>(b)]);
+    std::int64_t at[3];
+    grid.blockOf(blockKeys[static_cast<std::size_t>(b)], at);
+    extractor.run(at[0], at[1], at[2], results[static_cast<std::size_t>(b)]);
   }
 
   // Vertices in key order, shared wherever their edge is.
-  std::vector<EdgeVertex> vertices;
+  std::vector<KeyedVertex> vertices;
   std::size_t triangleCount = 0;
   for (const BlockResult& r : results)
   {
@@ -433,21 +309,21 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
     mesh.sampledBlocks += r.sampled ? 1 : 0;
     mesh.keptBlocks += r.triangles.empty() ? 0 : 1;
   }
-  mesh.sampledNodes = mesh.sampledBlocks * (kBlock + 1) * (kBlock + 1) * (kBlock + 1);
+  mesh.sampledNodes = mesh.sampledBlocks * surface::kBlockNodes;
   // The working memory at its largest, here: the sorted particles, the block list, every block's
   // vertices (each edge's as often as cells share it) and triangles.
   mesh.peakBytes = n * (sizeof(Vec3d) + sizeof(CellKey) + 2 * sizeof(std::uint32_t)) +
     sorted.offsets.size() * sizeof(std::uint32_t) + blockKeys.size() * sizeof(std::uint64_t) +
-    results.size() * sizeof(BlockResult) + 2 * vertices.size() * sizeof(EdgeVertex) +
+    results.size() * sizeof(BlockResult) + 2 * vertices.size() * sizeof(KeyedVertex) +
     triangleCount * sizeof(std::array<std::uint64_t, 3>);
   std::stable_sort(vertices.begin(), vertices.end(),
-    [](const EdgeVertex& a, const EdgeVertex& b) { return a.key < b.key; });
+    [](const KeyedVertex& a, const KeyedVertex& b) { return a.key < b.key; });
   vertices.erase(std::unique(vertices.begin(), vertices.end(),
-                   [](const EdgeVertex& a, const EdgeVertex& b) { return a.key == b.key; }),
+                   [](const KeyedVertex& a, const KeyedVertex& b) { return a.key == b.key; }),
     vertices.end());
   auto indexOf = [&](std::uint64_t key) {
     const auto it = std::lower_bound(vertices.begin(), vertices.end(), key,
-      [](const EdgeVertex& a, std::uint64_t k) { return a.key < k; });
+      [](const KeyedVertex& a, std::uint64_t k) { return a.key < k; });
     return static_cast<std::uint32_t>(it - vertices.begin());
   };
   mesh.triangles.reserve(triangleCount);
@@ -482,21 +358,23 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
     }
     std::sort(edges.begin(), edges.end());
     edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    std::vector<std::size_t> first(position.size() + 1, 0);
+    for (const std::uint64_t e : edges)
+    {
+      ++first[(e >> 32) + 1];
+    }
+    for (std::size_t i = 0; i < position.size(); ++i)
+    {
+      first[i + 1] += first[i];
+    }
     std::vector<Vec3d> next(position.size());
     for (int pass = 0; pass < options.smoothing; ++pass)
     {
-      std::size_t e = 0;
       for (std::size_t i = 0; i < position.size(); ++i)
       {
-        Vec3d sum{ 0, 0, 0 };
-        int neighbours = 0;
-        for (; e < edges.size() && (edges[e] >> 32) == i; ++e)
-        {
-          sum += position[edges[e] & 0xffffffffu];
-          ++neighbours;
-        }
-        next[i] = neighbours ? position[i] + (sum * (1.0 / neighbours) - position[i]) * 0.5
-                             : position[i];
+        const std::uint64_t* around = edges.data() + first[i];
+        next[i] = surface::smoothedPosition(position[i], static_cast<int>(first[i + 1] - first[i]),
+          [&](int e) { return position[around[e] & 0xffffffffu]; });
       }
       position.swap(next);
     }
@@ -518,40 +396,20 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
 #pragma omp parallel for schedule(static) if (parallel)
   for (std::int64_t i = 0; i < vertexCount; ++i)
   {
-    const Vec3d q = position[static_cast<std::size_t>(i)];
-    double weight = 0, density = 0;
-    Vec3d gradient{ 0, 0, 0 }, velocity{ 0, 0, 0 };
-    forEachParticleNear(sorted, q, [&](std::uint32_t j) {
-      const Vec3d r = q - sorted.x[j];
-      const double r2 = dot(r, r);
-      if (r2 < kernels.h2)
-      {
-        const double w = kernels.poly6Within(r2);
-        const double d = kernels.h2 - r2;
-        gradient += r * (-6.0 * kernels.poly6Scale * d * d);
-        weight += w;
-        const std::uint32_t original = sorted.order[j];
-        if (v)
-        {
-          velocity += Vec3d::from(v[original]) * w;
-        }
-        if (rho)
-        {
-          density += static_cast<double>(rho[original]) * w;
-        }
-      }
-    });
-    const double g = length(gradient);
     const auto k = static_cast<std::size_t>(i);
-    mesh.points[k] = Vec3<float>::from(q);
-    mesh.normals[k] = g > 0 ? Vec3<float>::from(gradient * (-1.0 / g)) : Vec3<float>{ 0, 0, 0 };
+    const surface::VertexFields f = surface::vertexFields(sorted.view(), kernels, position[k],
+      v != nullptr, rho != nullptr,
+      [&](std::uint32_t j) { return Vec3d::from(v[sorted.order[j]]); },
+      [&](std::uint32_t j) { return static_cast<double>(rho[sorted.order[j]]); });
+    mesh.points[k] = Vec3<float>::from(position[k]);
+    mesh.normals[k] = f.normal;
     if (v)
     {
-      mesh.velocity[k] = Vec3<float>::from(weight > 0 ? velocity * (1.0 / weight) : velocity);
+      mesh.velocity[k] = f.velocity;
     }
     if (rho)
     {
-      mesh.density[k] = static_cast<float>(weight > 0 ? density / weight : 0.0);
+      mesh.density[k] = f.density;
     }
   }
   return mesh;
