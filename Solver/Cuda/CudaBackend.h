@@ -90,6 +90,18 @@ public:
   virtual void synchronize() const = 0;
   // The cudaStream_t the stepper queues its work on, for timing with events.
   virtual void* stream() const = 0;
+
+  // The particles where they live on the device, in the stepper's order, as Vec3<Real> and Real
+  // of precision(): for work that stays on the GPU (the surface, CudaSurface.h), queued on
+  // stream() after the steps. Valid until the next step, append, load or setObstacles.
+  struct DeviceState
+  {
+    const void* x = nullptr;
+    const void* v = nullptr;
+    const void* density = nullptr;
+    std::size_t n = 0;
+  };
+  virtual DeviceState deviceState() const = 0;
 };
 
 // Throws InvalidInput for bad parameters or particles and when the particles do not fit in the

@@ -86,6 +86,10 @@ public:
   const Options& options() const override { return options_; }
   void synchronize() const override;
   void* stream() const override { return device_->stream(); }
+  DeviceState deviceState() const override
+  {
+    return { buffers_.vec[roles_.x], buffers_.vec[roles_.v], buffers_.density, n_ };
+  }
 
   // Bytes per particle of capacity that the per-particle arrays take.
   static std::size_t particleBytes(bool masks);

@@ -6,7 +6,10 @@
 #   3. compute-sanitizer memcheck and racecheck on small scenes (must report 0 errors)
 #   4. pbf_bench: the CUDA sweep 16k-16M in single precision, 10M and 100M, double precision,
 #      the cell walk, skins, graphs off, and the serial and OpenMP references on this CPU
-#   5. ncu: per-kernel times of one step at 1M, and the neighbour passes' sections
+#   5. the surface: GPU against this machine's CPU cores on the 1.15M and 9.2M dam breaks
+#   6. ncu: per-kernel times of one step at 1M, and the neighbour passes' sections
+# PBF_GPU_SKIP_BENCH=1, PBF_GPU_SKIP_CTEST=1, PBF_GPU_SKIP_SURFACE=1, PBF_GPU_SKIP_SANITIZERS=1
+# leave phases out; PBF_GPU_CTEST_FILTER=REGEX runs only the matching tests.
 # Logs and JSON go under $OUT (else output/gpu-run); a short table is printed last. Every phase
 # has a time limit inside a budget of PBF_GPU_BUDGET seconds (default 540), so the table comes
 # within the device tool's 10 minutes whatever happens.
@@ -69,7 +72,9 @@ bench() {
 # PBF_GPU_QUICK=1: a verification run after a change (tests, sanitizers, soak, 1M and 10M
 # timings); the full sweeps and ncu are for when the speed itself is the question.
 quick=${PBF_GPU_QUICK:-0}
-if ((quick)); then
+if [[ ${PBF_GPU_SKIP_BENCH:-0} == 1 ]]; then
+  phase "bench: skipped (PBF_GPU_SKIP_BENCH=1)"
+elif ((quick)); then
   bench cuda_single 60 --backend cuda --sweep 64000,1000000 --warmup 20 --steps 100
   bench cuda_double 40 --backend cuda --precision double --particles 1000000 --warmup 20 --steps 100
   bench cuda_10M 40 --backend cuda --particles 10000000 --warmup 10 --steps 50
@@ -111,7 +116,10 @@ phase "ctest (gpu, solver)"
 # Here a GPU must be: a GPU test that finds none fails instead of reporting SKIPPED
 # (Testing/Cuda/RequireGpu.h). The two tests of the behaviour without a GPU still skip.
 export PBF_GPU_REQUIRED=1
-(cd "$build" && timeout "$(limit 240)" ctest -L 'gpu|solver' -j "$(nproc)" --timeout 300 \
+# PBF_GPU_CTEST_FILTER=REGEX: only the tests whose names match (ctest -R).
+filter=()
+[[ -n ${PBF_GPU_CTEST_FILTER:-} ]] && filter=(-R "$PBF_GPU_CTEST_FILTER")
+(cd "$build" && timeout "$(limit 240)" ctest -L 'gpu|solver' "${filter[@]}" -j "$(nproc)" --timeout 300 \
   --output-on-failure) >"$work/ctest.log" 2>&1
 ctest_status=$?
 grep -E "tests passed|Skipped|Failed|\*\*\*|Timeout|Exception|CMake Error" "$work/ctest.log" | head -60
@@ -125,6 +133,25 @@ if grep -q "CMake Error" "$work/ctest.log"; then
   done
 fi
 
+fi
+
+if [[ ${PBF_GPU_SKIP_SURFACE:-0} == 1 ]]; then
+  phase "surface: skipped (PBF_GPU_SKIP_SURFACE=1)"
+else
+  # The GPU surface against the CPU's on this machine's cores, the same frame in one run
+  # (Documentation/Performance.md): the 1.15M dam break at t = 0.2 s and the 9.2M at 0.05 s.
+  surface_run() { # surface_run NAME SECONDS ARGS...
+    local name=$1 seconds=$2
+    shift 2
+    phase "surface $name: $*"
+    timeout "$(limit "$seconds")" "$build/Solver/Tools/pbf_surface" --backend cuda --scene dam_break "$@" \
+      >"$work/surface_$name.txt" 2>&1
+    local status=$?
+    cat "$work/surface_$name.txt"
+    record "surface $name: $(tail -n 1 "$work/surface_$name.txt") (exit $status)"
+  }
+  surface_run 1M 90 --spacing 0.005 --until 0.2 --cpu-repeat 3
+  surface_run 9M 120 --spacing 0.0025 --until 0.05 --cpu-repeat 1 --repeat 5
 fi
 
 if [[ ${PBF_GPU_SKIP_SANITIZERS:-0} == 1 ]]; then
