@@ -298,7 +298,8 @@ vtkSmartPointer<vtkTable> vtkPBFOutput::DiagnosticsTable(
 }
 
 //------------------------------------------------------------------------------
-vtkSmartPointer<vtkPolyData> vtkPBFOutput::Surface(const pbf::SurfaceMesh& mesh, double milliseconds)
+vtkSmartPointer<vtkPolyData> vtkPBFOutput::Surface(
+  const pbf::SurfaceMesh& mesh, double milliseconds, const std::string& device)
 {
   auto output = vtkSmartPointer<vtkPolyData>::New();
   const auto n = static_cast<vtkIdType>(mesh.points.size());
@@ -350,6 +351,7 @@ vtkSmartPointer<vtkPolyData> vtkPBFOutput::Surface(const pbf::SurfaceMesh& mesh,
   AddInteger(fd, "SurfaceTriangles", triangles);
   AddValue(fd, "SurfaceMilliseconds", milliseconds);
   AddInteger(fd, "SurfaceBytes", static_cast<vtkIdType>(mesh.peakBytes));
+  AddText(fd, "SurfaceDevice", device);
   return output;
 }
 

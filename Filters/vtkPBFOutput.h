@@ -58,8 +58,10 @@ public:
   static vtkSmartPointer<vtkPolyData> DomainOutline(const pbf::Box& box, const pbf::Scene& scene);
 
   // The fluid's surface (port 3): its triangles, Normals, velocity (the active vectors) and
-  // density (the active scalars), and field data SurfaceTriangles, SurfaceMilliseconds.
-  static vtkSmartPointer<vtkPolyData> Surface(const pbf::SurfaceMesh& mesh, double milliseconds);
+  // density (the active scalars), and field data SurfaceTriangles, SurfaceMilliseconds,
+  // SurfaceBytes and SurfaceDevice (where it was made: "CPU" or the GPU's name).
+  static vtkSmartPointer<vtkPolyData> Surface(
+    const pbf::SurfaceMesh& mesh, double milliseconds, const std::string& device);
 
   static void AddValue(vtkFieldData* fieldData, const char* name, double value);
   static void AddInteger(vtkFieldData* fieldData, const char* name, vtkIdType value);

@@ -23,6 +23,10 @@
 #include "Stepper.h"
 #include "SurfaceShare.h"
 #include "Distributed/SubdomainStepper.h"
+#ifdef PBF_WITH_CUDA
+#include "Cuda/CudaBackend.h"
+#include "Cuda/CudaSurface.h"
+#endif
 
 #include <algorithm>
 #include <chrono>
@@ -277,15 +281,23 @@ void vtkPBFSimulation::vtkInternals::DeliverSurface(
     vtkDataArray* rho = particles->GetPointData()->GetArray("density");
     const std::size_t n = x ? static_cast<std::size_t>(x->GetNumberOfTuples()) : 0;
     pbf::SurfaceMesh mesh;
+    std::string device;
     // The frame's own arrays, in the run's precision, read in place.
     auto extract = [&](auto real) {
       using Real = decltype(real);
       auto pointer = [](vtkDataArray* a) { return a ? static_cast<Real*>(a->GetVoidPointer(0)) : nullptr; };
       const auto* px = reinterpret_cast<const pbf::Vec3<Real>*>(pointer(x));
       const auto* pv = reinterpret_cast<const pbf::Vec3<Real>*>(pointer(v));
-      mesh = decomposed ? pbf::extractSurfaceShare<Real>(*this->Ranks, decomposed->slabs(), px,
-                            pv, pointer(rho), n, p, used, true)
-                        : pbf::extractSurface<Real>(px, pv, pointer(rho), n, p, used, true);
+      if (decomposed)
+      {
+        mesh = pbf::extractSurfaceShare<Real>(*this->Ranks, decomposed->slabs(), px, pv,
+          pointer(rho), n, p, used, true);
+      }
+      else if (!this->ExtractOnGpu(live->stepper(), px, pv, pointer(rho), n, p, used, mesh, device))
+      {
+        mesh = pbf::extractSurface<Real>(px, pv, pointer(rho), n, p, used, true);
+        device = "CPU";
+      }
     };
     const int type = x ? x->GetDataType() : VTK_FLOAT;
     const bool same = (!v || v->GetDataType() == type) && (!rho || rho->GetDataType() == type);
@@ -303,10 +315,65 @@ void vtkPBFSimulation::vtkInternals::DeliverSurface(
     }
     const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    this->LastSurface = vtkPBFOutput::Surface(mesh, ms);
+    this->LastSurface = vtkPBFOutput::Surface(mesh, ms, device);
     this->LastSurfaceOf = of.str();
   }
   surface->ShallowCopy(this->LastSurface);
+}
+
+//------------------------------------------------------------------------------
+template <class Real>
+bool vtkPBFSimulation::vtkInternals::ExtractOnGpu(const pbf::Stepper& stepper,
+  const pbf::Vec3<Real>* x, const pbf::Vec3<Real>* v, const Real* rho, std::size_t n,
+  const pbf::Parameters& p, const pbf::SurfaceOptions& options, pbf::SurfaceMesh& mesh,
+  std::string& device)
+{
+#ifdef PBF_WITH_CUDA
+  const auto* gpu = dynamic_cast<const pbf::cuda::CudaStepperInterface*>(&stepper);
+  if (!gpu)
+  {
+    return false;
+  }
+  try
+  {
+    if (!this->GpuSurface)
+    {
+      this->GpuSurface = std::make_shared<pbf::cuda::SurfaceExtractor>();
+    }
+    // The frame's arrays (the frame asked may be a cached one, not the stepper's present state).
+    auto* extractor = static_cast<pbf::cuda::SurfaceExtractor*>(this->GpuSurface.get());
+    mesh = extractor->extract<Real>(x, v, rho, n, p, options);
+    device = gpu->diagnostics().device;
+    return true;
+  }
+  catch (const pbf::InvalidInput&)
+  {
+    throw; // the input's fault, on any device: the filter reports it
+  }
+  catch (const std::exception& error)
+  {
+    // The GPU could not make it (a device fault, too little memory of another kind): the CPU can.
+    this->GpuSurface.reset();
+    if (!this->GpuSurfaceFailedSaid)
+    {
+      this->GpuSurfaceFailedSaid = true;
+      vtkOutputWindowDisplayWarningText(
+        (std::string("The surface is made on the CPU: the GPU failed (") + error.what() + ").\n").c_str());
+    }
+    return false;
+  }
+#else
+  (void)stepper;
+  (void)x;
+  (void)v;
+  (void)rho;
+  (void)n;
+  (void)p;
+  (void)options;
+  (void)mesh;
+  (void)device;
+  return false;
+#endif
 }
 
 //------------------------------------------------------------------------------

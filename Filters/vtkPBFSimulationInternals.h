@@ -72,6 +72,10 @@ public:
   vtkSmartPointer<vtkPolyData> LastSurface = vtkSmartPointer<vtkPolyData>::New();
   std::string LastSurfaceOf;
   bool SmoothingDecomposedSaid = false;
+  // A CUDA run's surface is made on its GPU (the CPU's mesh, bit for bit); the extractor keeps
+  // its device arrays from frame to frame. Null until a CUDA run asks for a surface.
+  std::shared_ptr<void> GpuSurface;
+  bool GpuSurfaceFailedSaid = false;
 
   // The cost of the last request.
   pbf::FrameReached Costs;
@@ -121,6 +125,12 @@ public:
   // for bad options.
   void DeliverSurface(
     const pbf::SurfaceOptions& options, vtkPolyData* particles, vtkPolyData* surface);
+  // A CUDA run's surface on its GPU (Cuda/CudaSurface.h) into mesh, with the device's name; false
+  // when the run is not on CUDA or the GPU failed (said once): the CPU makes it then.
+  template <class Real>
+  bool ExtractOnGpu(const pbf::Stepper& stepper, const pbf::Vec3<Real>* x, const pbf::Vec3<Real>* v,
+    const Real* rho, std::size_t n, const pbf::Parameters& p, const pbf::SurfaceOptions& options,
+    pbf::SurfaceMesh& mesh, std::string& device);
   void DeliverAgain(const FrameRequest& r, vtkPolyData* output, vtkTable* table);
   void DeliverPrevious(vtkPolyData* output, vtkTable* table);
   vtkTable* DiagnosticsTable();

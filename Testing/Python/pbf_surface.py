@@ -75,6 +75,11 @@ for f in (0, 6, 12):
         expect(points.shape != previous.shape or not numpy.array_equal(points, previous),
                "frame %d: the same surface as the frame before" % f)
     previous = numpy.array(points)
+    # Made where the run is: a CUDA run's on its GPU, any other on the CPU; and it says so.
+    on_gpu = T.field_value(particles, "Backend").startswith("CUDA")
+    where = T.field_value(surface, "SurfaceDevice")
+    expect((where != "CPU") == on_gpu, "frame %d: SurfaceDevice %r for the backend %r"
+           % (f, where, T.field_value(particles, "Backend")))
     print("frame %d: %d particles, surface of %d triangles, no boundary edge, encloses %.2f %%, "
           "%.0f ms" % (f, n, triangles, 100 * fraction,
                        T.field_value(surface, "SurfaceMilliseconds")))
