@@ -282,6 +282,11 @@ void vtkPBFSimulation::vtkInternals::DeliverSurface(
     const std::size_t n = x ? static_cast<std::size_t>(x->GetNumberOfTuples()) : 0;
     pbf::SurfaceMesh mesh;
     std::string device;
+    // The obstacles where they stand at the frame's time clip the surface.
+    vtkInformation* info = particles->GetInformation();
+    const double time =
+      info->Has(vtkDataObject::DATA_TIME_STEP()) ? info->Get(vtkDataObject::DATA_TIME_STEP()) : 0.0;
+    const pbf::SurfaceSolids solids = live->surfaceSolids(time);
     // The frame's own arrays, in the run's precision, read in place.
     auto extract = [&](auto real) {
       using Real = decltype(real);
@@ -291,11 +296,12 @@ void vtkPBFSimulation::vtkInternals::DeliverSurface(
       if (decomposed)
       {
         mesh = pbf::extractSurfaceShare<Real>(*this->Ranks, decomposed->slabs(), px, pv,
-          pointer(rho), n, p, used, true);
+          pointer(rho), n, p, used, true, solids);
       }
-      else if (!this->ExtractOnGpu(live->stepper(), px, pv, pointer(rho), n, p, used, mesh, device))
+      else if (!this->ExtractOnGpu(
+                 live->stepper(), px, pv, pointer(rho), n, p, used, solids, mesh, device))
       {
-        mesh = pbf::extractSurface<Real>(px, pv, pointer(rho), n, p, used, true);
+        mesh = pbf::extractSurface<Real>(px, pv, pointer(rho), n, p, used, true, {}, solids);
         device = "CPU";
       }
     };
@@ -325,8 +331,8 @@ void vtkPBFSimulation::vtkInternals::DeliverSurface(
 template <class Real>
 bool vtkPBFSimulation::vtkInternals::ExtractOnGpu(const pbf::Stepper& stepper,
   const pbf::Vec3<Real>* x, const pbf::Vec3<Real>* v, const Real* rho, std::size_t n,
-  const pbf::Parameters& p, const pbf::SurfaceOptions& options, pbf::SurfaceMesh& mesh,
-  std::string& device)
+  const pbf::Parameters& p, const pbf::SurfaceOptions& options, const pbf::SurfaceSolids& solids,
+  pbf::SurfaceMesh& mesh, std::string& device)
 {
 #ifdef PBF_WITH_CUDA
   const auto* gpu = dynamic_cast<const pbf::cuda::CudaStepperInterface*>(&stepper);
@@ -342,7 +348,7 @@ bool vtkPBFSimulation::vtkInternals::ExtractOnGpu(const pbf::Stepper& stepper,
     }
     // The frame's arrays (the frame asked may be a cached one, not the stepper's present state).
     auto* extractor = static_cast<pbf::cuda::SurfaceExtractor*>(this->GpuSurface.get());
-    mesh = extractor->extract<Real>(x, v, rho, n, p, options);
+    mesh = extractor->extract<Real>(x, v, rho, n, p, options, solids);
     device = gpu->diagnostics().device;
     return true;
   }
@@ -370,6 +376,7 @@ bool vtkPBFSimulation::vtkInternals::ExtractOnGpu(const pbf::Stepper& stepper,
   (void)n;
   (void)p;
   (void)options;
+  (void)solids;
   (void)mesh;
   (void)device;
   return false;

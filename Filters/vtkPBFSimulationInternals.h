@@ -130,7 +130,7 @@ public:
   template <class Real>
   bool ExtractOnGpu(const pbf::Stepper& stepper, const pbf::Vec3<Real>* x, const pbf::Vec3<Real>* v,
     const Real* rho, std::size_t n, const pbf::Parameters& p, const pbf::SurfaceOptions& options,
-    pbf::SurfaceMesh& mesh, std::string& device);
+    const pbf::SurfaceSolids& solids, pbf::SurfaceMesh& mesh, std::string& device);
   void DeliverAgain(const FrameRequest& r, vtkPolyData* output, vtkTable* table);
   void DeliverPrevious(vtkPolyData* output, vtkTable* table);
   vtkTable* DiagnosticsTable();

@@ -76,6 +76,8 @@ struct Field
   Kernels<double> kernels;
   double volume;
   double iso;
+  const DistanceGridView<double>* solids; // device copies (SurfaceSolids)
+  int solidCount;
 };
 
 // ---- the particles sorted into cells of h, by position within a cell -------------------------
@@ -204,7 +206,9 @@ __global__ void __launch_bounds__(kSampleThreads) sampleBlocksKernel(
     double value = 0; // beyond the grid: outside, as the padding is
     if (g0 < f.grid.n[0] && g1 < f.grid.n[1] && g2 < f.grid.n[2])
     {
-      value = surface::colour(f.particles, f.kernels, f.volume, f.grid.at(g0, g1, g2));
+      const Vec3d q = f.grid.at(g0, g1, g2);
+      value = surface::clipped(surface::colour(f.particles, f.kernels, f.volume, q), f.solids,
+        f.solidCount, q, f.iso, 1.0 / f.grid.cell);
     }
     if (Store)
     {
@@ -421,7 +425,8 @@ __global__ void vertexFieldsKernel(Field f, const Vec3d* position, std::uint32_t
   const surface::VertexFields fields = surface::vertexFields(f.particles, f.kernels, position[i],
     v != nullptr, rho != nullptr,
     [&](std::uint32_t j) { return Vec3d::from(v[order[j]]); },
-    [&](std::uint32_t j) { return static_cast<double>(rho[order[j]]); });
+    [&](std::uint32_t j) { return static_cast<double>(rho[order[j]]); }, f.volume, f.solids,
+    f.solidCount, f.iso, 1.0 / f.grid.cell);
   points[i] = Vec3<float>::from(position[i]);
   normals[i] = fields.normal;
   if (v)
@@ -505,6 +510,7 @@ struct SurfaceExtractor::Impl
   Scratch triangleCount, triangleFirst, vertexCount, vertexFirst, crossings;
   Scratch position, positionAlt, triangles, edges, edgesAlt, edgeFirst;
   Scratch points, normals, velocity, density;
+  Scratch solidNodes, solidViews;
 
   std::size_t bytes() const
   {
@@ -512,7 +518,7 @@ struct SurfaceExtractor::Impl
     for (const Scratch* s : { &inX, &inV, &inRho, &keys, &keysAlt, &index, &indexAlt, &axisKeys,
            &axisKeysAlt, &bad, &counter, &temp, &sortedX, &offsets, &bits, &sampled, &keptFlags,
            &kept, &keptBlockKeys, &phi, &triangleCount, &triangleFirst, &vertexCount, &vertexFirst, &crossings,
-           &position, &positionAlt, &triangles, &edges, &edgesAlt, &edgeFirst, &points, &normals, &velocity, &density })
+           &position, &positionAlt, &triangles, &edges, &edgesAlt, &edgeFirst, &points, &normals, &velocity, &density, &solidNodes, &solidViews })
     {
       sum += s->bytes();
     }
@@ -560,12 +566,44 @@ struct SurfaceExtractor::Impl
 
   template <class Real>
   SurfaceMesh run(const DeviceParticles<Real>& in, const Parameters& p,
-    const SurfaceOptions& options, cudaStream_t stream);
+    const SurfaceOptions& options, const SurfaceSolids& solids, cudaStream_t stream);
+
+  // The solids' views with their node values copied to the device.
+  const DistanceGridView<double>* uploadSolids(const SurfaceSolids& solids, cudaStream_t stream)
+  {
+    if (solids.views.empty())
+    {
+      return nullptr;
+    }
+    std::size_t total = 0;
+    for (const DistanceGridView<double>& v : solids.views)
+    {
+      total += static_cast<std::size_t>(v.nx) * v.ny * v.nz;
+    }
+    float* nodes = solidNodes.as<float>(total, "obstacles' distance fields");
+    std::vector<DistanceGridView<double>> device(solids.views);
+    std::size_t at = 0;
+    for (DistanceGridView<double>& v : device)
+    {
+      const std::size_t count = static_cast<std::size_t>(v.nx) * v.ny * v.nz;
+      check(cudaMemcpyAsync(nodes + at, v.phi, count * sizeof(float), cudaMemcpyHostToDevice, stream),
+        "cudaMemcpyAsync (obstacles)");
+      v.phi = nodes + at;
+      at += count;
+    }
+    auto* views = solidViews.as<DistanceGridView<double>>(device.size(), "obstacles");
+    check(cudaMemcpyAsync(views, device.data(), device.size() * sizeof(device[0]),
+            cudaMemcpyHostToDevice, stream),
+      "cudaMemcpyAsync (obstacles)");
+    // The host vector dies here: wait for the copies that read it.
+    check(cudaStreamSynchronize(stream), "cudaStreamSynchronize");
+    return views;
+  }
 };
 
 template <class Real>
 SurfaceMesh SurfaceExtractor::Impl::run(const DeviceParticles<Real>& in, const Parameters& p,
-  const SurfaceOptions& options, cudaStream_t stream)
+  const SurfaceOptions& options, const SurfaceSolids& solids, cudaStream_t stream)
 {
   options.validate();
   SurfaceMesh mesh;
@@ -586,6 +624,8 @@ SurfaceMesh SurfaceExtractor::Impl::run(const DeviceParticles<Real>& in, const P
   f.kernels = Kernels<double>::make(h);
   f.volume = calibratedParticleMass(p) / p.restDensity;
   f.iso = options.isoValue;
+  f.solids = uploadSolids(solids, stream);
+  f.solidCount = static_cast<int>(solids.views.size());
   const GridGeometry<double> cells = surface::particleCells(f.grid, p);
   const std::uint64_t blockCount = f.grid.blockCount();
   if (blockCount >= (std::uint64_t(1) << 31))
@@ -872,7 +912,8 @@ SurfaceExtractor::~SurfaceExtractor()
 
 template <class Real>
 SurfaceMesh SurfaceExtractor::extract(const Vec3<Real>* x, const Vec3<Real>* v, const Real* rho,
-  std::size_t n, const Parameters& parameters, const SurfaceOptions& options)
+  std::size_t n, const Parameters& parameters, const SurfaceOptions& options,
+  const SurfaceSolids& solids)
 {
   options.validate();
   check(cudaSetDevice(impl_->device), "cudaSetDevice");
@@ -891,12 +932,13 @@ SurfaceMesh SurfaceExtractor::extract(const Vec3<Real>* x, const Vec3<Real>* v, 
     in.v = v ? up(impl_->inV, v, n * sizeof(Vec3<Real>), "particles' velocities") : nullptr;
     in.rho = rho ? up(impl_->inRho, rho, n * sizeof(Real), "particles' densities") : nullptr;
   }
-  return impl_->run(in, parameters, options, s);
+  return impl_->run(in, parameters, options, solids, s);
 }
 
 template <class Real>
 SurfaceMesh SurfaceExtractor::extract(const DeviceParticles<Real>& particles,
-  const Parameters& parameters, const SurfaceOptions& options, void* stream)
+  const Parameters& parameters, const SurfaceOptions& options, void* stream,
+  const SurfaceSolids& solids)
 {
   check(cudaSetDevice(impl_->device), "cudaSetDevice");
   cudaStream_t s = static_cast<cudaStream_t>(stream);
@@ -905,7 +947,7 @@ SurfaceMesh SurfaceExtractor::extract(const DeviceParticles<Real>& particles,
     check(cudaDeviceSynchronize(), "cudaDeviceSynchronize");
     s = impl_->own;
   }
-  return impl_->run(particles, parameters, options, s);
+  return impl_->run(particles, parameters, options, solids, s);
 }
 
 const SurfaceTimes& SurfaceExtractor::lastTimes() const
@@ -919,13 +961,13 @@ std::size_t SurfaceExtractor::deviceBytes() const
 }
 
 template SurfaceMesh SurfaceExtractor::extract<float>(const Vec3<float>*, const Vec3<float>*,
-  const float*, std::size_t, const Parameters&, const SurfaceOptions&);
+  const float*, std::size_t, const Parameters&, const SurfaceOptions&, const SurfaceSolids&);
 template SurfaceMesh SurfaceExtractor::extract<double>(const Vec3<double>*, const Vec3<double>*,
-  const double*, std::size_t, const Parameters&, const SurfaceOptions&);
-template SurfaceMesh SurfaceExtractor::extract<float>(
-  const DeviceParticles<float>&, const Parameters&, const SurfaceOptions&, void*);
-template SurfaceMesh SurfaceExtractor::extract<double>(
-  const DeviceParticles<double>&, const Parameters&, const SurfaceOptions&, void*);
+  const double*, std::size_t, const Parameters&, const SurfaceOptions&, const SurfaceSolids&);
+template SurfaceMesh SurfaceExtractor::extract<float>(const DeviceParticles<float>&,
+  const Parameters&, const SurfaceOptions&, void*, const SurfaceSolids&);
+template SurfaceMesh SurfaceExtractor::extract<double>(const DeviceParticles<double>&,
+  const Parameters&, const SurfaceOptions&, void*, const SurfaceSolids&);
 
 } // namespace cuda
 } // namespace pbf

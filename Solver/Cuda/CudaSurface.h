@@ -54,17 +54,18 @@ public:
   SurfaceExtractor(const SurfaceExtractor&) = delete;
   SurfaceExtractor& operator=(const SurfaceExtractor&) = delete;
 
+  // The solids (host views) clip the surface as on the CPU; their fields are copied up each call.
   // Host arrays: uploaded, extracted, downloaded. Throws as extractSurface does (bad options,
   // non-finite positions), and InvalidInput when the device's memory is too small.
   template <class Real>
   SurfaceMesh extract(const Vec3<Real>* x, const Vec3<Real>* v, const Real* rho, std::size_t n,
-    const Parameters& parameters, const SurfaceOptions& options);
+    const Parameters& parameters, const SurfaceOptions& options, const SurfaceSolids& solids = {});
 
   // Device arrays, read in order after the work already queued on `stream` (a cudaStream_t; null:
   // the extractor's own stream, after a device-wide wait).
   template <class Real>
   SurfaceMesh extract(const DeviceParticles<Real>& particles, const Parameters& parameters,
-    const SurfaceOptions& options, void* stream = nullptr);
+    const SurfaceOptions& options, void* stream = nullptr, const SurfaceSolids& solids = {});
 
   const SurfaceTimes& lastTimes() const;
   // The device memory the extractor holds now [bytes].

@@ -99,6 +99,7 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   {
     stepper_->setObstacles(solids, poses);
   }
+  solidFields_ = solids;
   nextId_ = static_cast<std::int64_t>(initial.position.size());
 
   // The divergence limits, from the initial state and the scene.
@@ -613,6 +614,24 @@ void Simulation::emit()
     // run resumed from a checkpoint taken now scans them too, so the straight run does the same.
     healthValid_ = false;
   }
+}
+
+} // namespace pbf
+
+namespace pbf
+{
+
+SurfaceSolids Simulation::surfaceSolids(double time) const
+{
+  SurfaceSolids solids;
+  const std::vector<SolidPose> poses = posesAt(motions_, time);
+  for (std::size_t k = 0; k < solidFields_.size(); ++k)
+  {
+    // posesAt gives none when no solid moves: each then stands where its field was made.
+    const DistanceGridView<double> view = solidFields_[k].view<double>(solidFields_[k].phi.data());
+    solids.views.push_back(k < poses.size() ? placed(view, poses[k]) : view);
+  }
+  return solids;
 }
 
 } // namespace pbf

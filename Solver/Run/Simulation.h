@@ -5,7 +5,9 @@
 
 #include "Parameters.h"
 #include "Scene.h"
+#include "SignedDistance.h"
 #include "Stepper.h"
+#include "SurfaceExtraction.h"
 
 #include <cstdint>
 #include <memory>
@@ -159,6 +161,9 @@ public:
   // Throws InvalidInput for a bad motion or index.
   void setSolidMotion(std::size_t solid, SolidMotion motion);
   const std::vector<SolidMotion>& solidMotions() const { return motions_; }
+  // The solids where they stand at `time`, to clip the fluid's surface with (views of this
+  // simulation's fields: valid while it lives).
+  SurfaceSolids surfaceSolids(double time) const;
 
   // Initial particles that lay inside a solid obstacle of the scene and were removed.
   std::size_t seededInsideSolids() const { return seededInsideSolids_; }
@@ -196,6 +201,7 @@ private:
   std::size_t seededInsideSolids_ = 0;
   double fastestSolidPoint() const; // [m/s], a floor of the automatic step's speed
   std::vector<SolidMotion> motions_; // per solid of the scene, pivots given
+  std::vector<DistanceGrid> solidFields_; // per solid, as the stepper was given them
   std::vector<double> solidReach_;   // per solid: its farthest point from its pivot [m]
   std::uint64_t lastGoodStep_ = 0;
   double lastGoodSpeed_ = 0; // max speed at lastGoodStep_; NaN when not known (after restore)

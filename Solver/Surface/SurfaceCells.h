@@ -155,6 +155,18 @@ PBF_HD PBF_INLINE double colour(
   return phi * volume;
 }
 
+// The colour clipped by the solids (SurfaceSolids): min(phi, iso + d / cell) over the solids.
+PBF_HD PBF_INLINE double clipped(double phi, const DistanceGridView<double>* solids, int count,
+  const Vec3d& q, double iso, double inverseCell)
+{
+  for (int s = 0; s < count; ++s)
+  {
+    const double wall = iso + solids[s].at(q, nullptr) * inverseCell;
+    phi = wall < phi ? wall : phi;
+  }
+  return phi;
+}
+
 // Kuhn's six tetrahedra of a cell, as corner bits (x 1, y 2, z 4): 0, a, a | b, 7 for every
 // order of the axes. Along each tetrahedron's corners the bits only grow, so of two corners the
 // earlier is the edge's lower end; every edge from corner 0 to a corner d is in one of them.
@@ -299,9 +311,12 @@ struct VertexFields
   float density;
 };
 
+// On a cap (where a solid's term is the clipped colour's least), the normal is the solid's inward
+// one: the fluid's outward normal there.
 template <class VelocityOf, class DensityOf>
 PBF_HD PBF_INLINE VertexFields vertexFields(const CellParticles& p, const Kernels<double>& kernels,
-  const Vec3d& q, bool hasVelocity, bool hasDensity, VelocityOf&& velocityOf, DensityOf&& densityOf)
+  const Vec3d& q, bool hasVelocity, bool hasDensity, VelocityOf&& velocityOf, DensityOf&& densityOf,
+  double volume, const DistanceGridView<double>* solids, int solidCount, double iso, double inverseCell)
 {
   double weight = 0, density = 0;
   Vec3d gradient{ 0, 0, 0 }, velocity{ 0, 0, 0 };
@@ -324,6 +339,17 @@ PBF_HD PBF_INLINE VertexFields vertexFields(const CellParticles& p, const Kernel
       }
     }
   });
+  double least = volume * weight;
+  for (int s = 0; s < solidCount; ++s)
+  {
+    Vec3d wallGradient;
+    const double wall = iso + solids[s].at(q, &wallGradient) * inverseCell;
+    if (wall < least)
+    {
+      least = wall;
+      gradient = wallGradient; // d grows out of the solid, into the fluid, as the colour does
+    }
+  }
   const double g = length(gradient);
   VertexFields out;
   out.normal = g > 0 ? Vec3<float>::from(gradient * (-1.0 / g)) : Vec3<float>{ 0, 0, 0 };

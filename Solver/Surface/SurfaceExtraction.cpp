@@ -53,12 +53,13 @@ class Extractor
 {
 public:
   Extractor(const surface::NodeGrid& grid, const SortedParticles& particles,
-    const Kernels<double>& kernels, double volume, double iso)
+    const Kernels<double>& kernels, double volume, double iso, const SurfaceSolids& solids)
     : grid_(grid)
     , particles_(particles.view())
     , kernels_(kernels)
     , volume_(volume)
     , iso_(iso)
+    , solids_(solids)
   {
   }
 
@@ -79,7 +80,9 @@ public:
           double value = 0; // beyond the grid: outside, as the padding is
           if (g[0] < grid_.n[0] && g[1] < grid_.n[1] && g[2] < grid_.n[2])
           {
-            value = surface::colour(particles_, kernels_, volume_, grid_.at(g[0], g[1], g[2]));
+            const Vec3d q = grid_.at(g[0], g[1], g[2]);
+            value = surface::clipped(surface::colour(particles_, kernels_, volume_, q),
+              solids_.views.data(), static_cast<int>(solids_.views.size()), q, iso_, 1.0 / grid_.cell);
           }
           phi[static_cast<std::size_t>(surface::nodeSlot(i, j, k))] = value;
           any = any || value > iso_;
@@ -139,6 +142,7 @@ private:
   const Kernels<double>& kernels_;
   double volume_;
   double iso_;
+  const SurfaceSolids& solids_;
 };
 
 } // namespace
@@ -203,7 +207,7 @@ double surfaceGhostReach(const Parameters& p, const SurfaceOptions& options)
 template <class Real>
 SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real* rho,
   std::size_t n, const Parameters& p, const SurfaceOptions& options, bool parallel,
-  const SurfaceShare& share)
+  const SurfaceShare& share, const SurfaceSolids& solids)
 {
   options.validate();
   SurfaceMesh mesh;
@@ -288,7 +292,7 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
   std::sort(blockKeys.begin(), blockKeys.end());
   blockKeys.erase(std::unique(blockKeys.begin(), blockKeys.end()), blockKeys.end());
 
-  const Extractor extractor(grid, sorted, kernels, volume, options.isoValue);
+  const Extractor extractor(grid, sorted, kernels, volume, options.isoValue, solids);
   std::vector<BlockResult> results(blockKeys.size());
   const auto count = static_cast<std::int64_t>(blockKeys.size());
 #pragma omp parallel for schedule(dynamic, 8) if (parallel)
@@ -400,7 +404,8 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
     const surface::VertexFields f = surface::vertexFields(sorted.view(), kernels, position[k],
       v != nullptr, rho != nullptr,
       [&](std::uint32_t j) { return Vec3d::from(v[sorted.order[j]]); },
-      [&](std::uint32_t j) { return static_cast<double>(rho[sorted.order[j]]); });
+      [&](std::uint32_t j) { return static_cast<double>(rho[sorted.order[j]]); }, volume,
+      solids.views.data(), static_cast<int>(solids.views.size()), options.isoValue, 1.0 / grid.cell);
     mesh.points[k] = Vec3<float>::from(position[k]);
     mesh.normals[k] = f.normal;
     if (v)
@@ -416,8 +421,10 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
 }
 
 template SurfaceMesh extractSurface<float>(const Vec3<float>*, const Vec3<float>*, const float*,
-  std::size_t, const Parameters&, const SurfaceOptions&, bool, const SurfaceShare&);
+  std::size_t, const Parameters&, const SurfaceOptions&, bool, const SurfaceShare&,
+  const SurfaceSolids&);
 template SurfaceMesh extractSurface<double>(const Vec3<double>*, const Vec3<double>*,
-  const double*, std::size_t, const Parameters&, const SurfaceOptions&, bool, const SurfaceShare&);
+  const double*, std::size_t, const Parameters&, const SurfaceOptions&, bool, const SurfaceShare&,
+  const SurfaceSolids&);
 
 } // namespace pbf

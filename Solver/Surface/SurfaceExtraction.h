@@ -18,6 +18,7 @@
 // key order.
 #pragma once
 
+#include "Boundary.h"
 #include "Parameters.h"
 #include "Vec3.h"
 
@@ -66,6 +67,15 @@ struct SurfaceShare
   double xMin = -HUGE_VAL;
   double xMax = HUGE_VAL;
 };
+// The solid obstacles where they stand at the frame's time (DistanceGrid::view, placed with the
+// frame's poses; host memory): they clip the surface. The fluid ends at a solid's face, so the
+// surface there is a cap lying on the face (closed, as everywhere), not a bulge into the solid:
+// the colour is taken as min(phi, iso + d / cell) with d the signed distance to the solid.
+struct SurfaceSolids
+{
+  std::vector<DistanceGridView<double>> views;
+};
+
 // How far beyond a share's x-range the particles it needs reach [m].
 double surfaceGhostReach(const Parameters& parameters, const SurfaceOptions& options);
 
@@ -76,6 +86,6 @@ double surfaceGhostReach(const Parameters& parameters, const SurfaceOptions& opt
 template <class Real>
 SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real* rho,
   std::size_t n, const Parameters& parameters, const SurfaceOptions& options, bool parallel,
-  const SurfaceShare& share = {});
+  const SurfaceShare& share = {}, const SurfaceSolids& solids = {});
 
 } // namespace pbf

@@ -24,7 +24,7 @@ SurfaceShare slabShare(const distributed::Slabs& slabs, int rank, const Paramete
 template <class Real>
 SurfaceMesh extractSurfaceShare(distributed::Communicator& communicator, const distributed::Slabs& slabs,
   const Vec3<Real>* x, const Vec3<Real>* v, const Real* rho, std::size_t n,
-  const Parameters& p, const SurfaceOptions& options, bool parallel)
+  const Parameters& p, const SurfaceOptions& options, bool parallel, const SurfaceSolids& solids)
 {
   options.validate();
   const int ranks = communicator.size();
@@ -85,14 +85,15 @@ SurfaceMesh extractSurfaceShare(distributed::Communicator& communicator, const d
     }
   }
   return extractSurface<Real>(allX.data(), v ? allV.data() : nullptr,
-    rho ? densities.data() : nullptr, allX.size(), p, options, parallel, slabShare(slabs, me, p));
+    rho ? densities.data() : nullptr, allX.size(), p, options, parallel, slabShare(slabs, me, p),
+    solids);
 }
 
 template SurfaceMesh extractSurfaceShare<float>(distributed::Communicator&, const distributed::Slabs&,
   const Vec3<float>*, const Vec3<float>*, const float*, std::size_t, const Parameters&,
-  const SurfaceOptions&, bool);
+  const SurfaceOptions&, bool, const SurfaceSolids&);
 template SurfaceMesh extractSurfaceShare<double>(distributed::Communicator&, const distributed::Slabs&,
   const Vec3<double>*, const Vec3<double>*, const double*, std::size_t, const Parameters&,
-  const SurfaceOptions&, bool);
+  const SurfaceOptions&, bool, const SurfaceSolids&);
 
 } // namespace pbf

@@ -20,6 +20,7 @@ SurfaceShare slabShare(const distributed::Slabs& slabs, int rank, const Paramete
 template <class Real>
 SurfaceMesh extractSurfaceShare(distributed::Communicator& communicator, const distributed::Slabs& slabs,
   const Vec3<Real>* x, const Vec3<Real>* v, const Real* rho, std::size_t n,
-  const Parameters& parameters, const SurfaceOptions& options, bool parallel);
+  const Parameters& parameters, const SurfaceOptions& options, bool parallel,
+  const SurfaceSolids& solids = {});
 
 } // namespace pbf

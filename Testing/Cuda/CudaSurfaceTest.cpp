@@ -9,7 +9,9 @@
 #include "Cuda/CudaSurface.h"
 #include "RequireGpu.h"
 #include "Scene.h"
+#include "SignedDistance.h"
 #include "Simulation.h"
+#include "Solids.h"
 #include "SurfaceExtraction.h"
 
 #include <gtest/gtest.h>
@@ -93,18 +95,18 @@ void expectSameMesh(const SurfaceMesh& gpu, const SurfaceMesh& cpu)
 }
 
 template <class Real>
-void expectCpuMesh(const SurfaceOptions& options)
+void expectCpuMesh(const SurfaceOptions& options, const SurfaceSolids& solids = {})
 {
   const Particles<Real> s = sphere<Real>();
   cuda::SurfaceExtractor extractor;
   const SurfaceMesh gpu = extractor.extract<Real>(s.x.data(), s.v.data(), s.rho.data(), s.x.size(),
-    s.parameters, options);
+    s.parameters, options, solids);
   const SurfaceMesh cpu = extractSurface<Real>(s.x.data(), s.v.data(), s.rho.data(), s.x.size(),
-    s.parameters, options, true);
+    s.parameters, options, true, {}, solids);
   expectSameMesh(gpu, cpu);
   // Again on the same extractor (its arrays reused): the same bits.
   expectSameMesh(extractor.extract<Real>(s.x.data(), s.v.data(), s.rho.data(), s.x.size(),
-                   s.parameters, options),
+                   s.parameters, options, solids),
     cpu);
 }
 
@@ -125,6 +127,34 @@ TEST(CudaSurface, TheGpuGivesTheCpuMeshBitForBit)
   SurfaceOptions coarse;
   coarse.resolution = 0.2;
   expectCpuMesh<double>(coarse);
+}
+
+TEST(CudaSurface, ObstaclesClipAsOnTheCpu)
+{
+  PBF_REQUIRE_GPU();
+  // A slab through the sphere's lower part, standing, and a ball turned and moved by a pose (the
+  // rotated lookup of a moving solid).
+  const Particles<float> s = sphere<float>();
+  SolidRegion slab, ball;
+  slab.box = { { 0.1, 0.1, 0.1 }, { 0.9, 0.9, 0.4 } };
+  ball.kind = SolidRegion::Kind::Sphere;
+  ball.center = { 0.6, 0.5, 0.7 };
+  ball.radius = 0.1;
+  const std::vector<DistanceGrid> fields = solidFields({ slab, ball }, s.parameters);
+  SolidMotion motion;
+  motion.pivot = ball.center;
+  Keyframe start, end;
+  end.time = 1;
+  end.translation = { -0.05, 0.02, 0 };
+  end.rotation = Rotation::fromDegrees({ 10, 20, 30 });
+  motion.keyframes = { start, end };
+  SurfaceSolids solids;
+  solids.views.push_back(fields[0].view<double>(fields[0].phi.data()));
+  solids.views.push_back(placed(fields[1].view<double>(fields[1].phi.data()), motion.at(0.5)));
+  SurfaceOptions smoothed;
+  smoothed.smoothing = 2;
+  expectCpuMesh<float>(SurfaceOptions{}, solids);
+  expectCpuMesh<float>(smoothed, solids);
 }
 
 TEST(CudaSurface, AStepperFrameOnTheDeviceGivesTheCpuMesh)

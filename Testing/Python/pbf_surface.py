@@ -4,7 +4,8 @@ density, computed only when GenerateSurface is on, from the same frame as the pa
 The dam break at 4 cm: without GenerateSurface port 3 is empty; with it, a filter on port 3 gives a
 surface that has no boundary edge, encloses at least 98 % of the particles
 (vtkSelectEnclosedPoints) in every frame asked, carries the frame's time, and changes with the
-frame. A bad SurfaceResolution is an error naming it, and the particles stay."""
+frame. A bad SurfaceResolution is an error naming it, and the particles stay. An obstacle (a
+Sphere source in the dam break's path) clips the surface: no vertex inside it, still closed."""
 import os
 import sys
 
@@ -90,4 +91,30 @@ _, text = T.capture_messages(lambda: downstream.UpdatePipeline(6 * INTERVAL))
 expect("SurfaceResolution = 0" in text, "no error naming SurfaceResolution: %r" % text)
 expect(algorithm.GetOutputDataObject(0).GetNumberOfPoints() > 0, "the particles were lost")
 fluid.SurfaceResolution = 0.5
+
+# An obstacle clips the surface: the water meets the ball at its face and no surface vertex lies
+# inside it (a tenth of a spacing: the ball's field is trilinear on nodes s/2 apart, against
+# the Sphere source's polygons), and the surface stays closed.
+CENTRE, RADIUS = (0.9, 0.0, 0.3), 0.2
+ball = simple.Sphere(Center=list(CENTRE), Radius=RADIUS, ThetaResolution=32, PhiResolution=32)
+around = PositionBasedFluids(Obstacles=[ball], ParticleSpacing=0.04, NumberOfFrames=12,  # noqa: F821
+                             FrameInterval=INTERVAL, GenerateSurface=1)
+around.UpdatePipeline(12 * INTERVAL)
+surface = around.GetClientSideObject().GetOutputDataObject(3)
+points = dsa.WrapDataObject(surface).Points
+inside = numpy.linalg.norm(points - numpy.array(CENTRE), axis=1) - RADIUS
+edges = vtkFeatureEdges()
+edges.SetInputData(surface)
+edges.BoundaryEdgesOn()
+edges.FeatureEdgesOff()
+edges.NonManifoldEdgesOff()
+edges.ManifoldEdgesOff()
+edges.Update()
+near = numpy.count_nonzero(numpy.abs(inside) < 0.1 * 0.04)
+print("obstacle: %d triangles, deepest vertex %.4f m into the ball, %d vertices on its face, "
+      "%d open edges" % (surface.GetNumberOfCells(), -inside.min(), near,
+                         edges.GetOutput().GetNumberOfCells()))
+expect(inside.min() > -0.1 * 0.04, "a surface vertex %.4f m inside the ball" % -inside.min())
+expect(near > 20, "the surface does not meet the ball (%d vertices on its face)" % near)
+expect(edges.GetOutput().GetNumberOfCells() == 0, "the clipped surface is open")
 T.passed("pbf_surface")

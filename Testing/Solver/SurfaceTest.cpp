@@ -2,6 +2,7 @@
 // surface within half a spacing of the sphere, facing out; the mesh is the same with and without
 // threads; the interpolated fields are the particles'; bad options name the property.
 #include "Scene.h"
+#include "Solids.h"
 #include "Distributed/ThreadCluster.h"
 #include "SurfaceExtraction.h"
 #include "SurfaceShare.h"
@@ -55,6 +56,27 @@ SurfaceMesh surfaceOf(const Sphere& s, bool parallel, SurfaceOptions options = {
     options, parallel);
 }
 
+// Edges not shared by exactly two triangles once in each direction: 0 for a closed,
+// consistently oriented surface.
+std::size_t openEdges(const SurfaceMesh& mesh)
+{
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+  for (const auto& t : mesh.triangles)
+  {
+    for (int e = 0; e < 3; ++e)
+    {
+      ++edges[{ t[e], t[(e + 1) % 3] }];
+    }
+  }
+  std::size_t open = 0;
+  for (const auto& [edge, count] : edges)
+  {
+    const auto back = edges.find({ edge.second, edge.first });
+    open += (count != 1 || back == edges.end() || back->second != 1) ? 1 : 0;
+  }
+  return open;
+}
+
 } // namespace
 
 TEST(Surface, ASphereOfFluidGivesAClosedSurfaceWithinHalfASpacing)
@@ -79,22 +101,7 @@ TEST(Surface, ASphereOfFluidGivesAClosedSurfaceWithinHalfASpacing)
     mesh.sampledBlocks, mesh.keptBlocks, mesh.peakBytes);
   EXPECT_GT(nearest, kRadius - 0.5 * kSpacing);
   EXPECT_LT(farthest, kRadius + 0.5 * kSpacing);
-  // Closed: every edge in exactly two triangles, once in each direction (consistently oriented).
-  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
-  for (const auto& t : mesh.triangles)
-  {
-    for (int e = 0; e < 3; ++e)
-    {
-      ++edges[{ t[e], t[(e + 1) % 3] }];
-    }
-  }
-  std::size_t open = 0;
-  for (const auto& [edge, count] : edges)
-  {
-    const auto back = edges.find({ edge.second, edge.first });
-    open += (count != 1 || back == edges.end() || back->second != 1) ? 1 : 0;
-  }
-  EXPECT_EQ(open, 0u);
+  EXPECT_EQ(openEdges(mesh), 0u);
   // Facing out: the normals and the triangles' winding point away from the centre.
   std::size_t inward = 0;
   for (std::size_t i = 0; i < mesh.points.size(); ++i)
@@ -269,4 +276,50 @@ TEST(Surface, ThreeRanksExchangeTheirBordersAndMakeTheWholeSurface)
   {
     EXPECT_EQ(seen.count({ p.x, p.y, p.z }), 1u);
   }
+}
+
+TEST(Surface, AnObstacleClipsTheSurfaceAtItsFace)
+{
+  // A solid slab through the sphere's lower part (z < 0.45): the fluid ends at the slab's face,
+  // so the surface has no vertex inside the solid, and a cap on the face, still closed.
+  const Sphere s = fluidSphere();
+  SolidRegion slab;
+  slab.box = { { 0.1, 0.1, 0.1 }, { 0.9, 0.9, 0.45 } };
+  const std::vector<DistanceGrid> fields = solidFields({ slab }, s.parameters);
+  SurfaceSolids solids;
+  solids.views.push_back(fields[0].view<double>(fields[0].phi.data()));
+  const SurfaceMesh clipped = extractSurface<double>(s.x.data(), s.v.data(), s.rho.data(),
+    s.x.size(), s.parameters, {}, true, {}, solids);
+  const SurfaceMesh whole = surfaceOf(s, true);
+  auto depth = [&](const Vec3<float>& p) { return fields[0].at(Vec3d::from(p)); };
+  double deepestWhole = HUGE_VAL, deepest = HUGE_VAL;
+  for (const Vec3<float>& p : whole.points)
+  {
+    deepestWhole = std::min(deepestWhole, depth(p));
+  }
+  std::size_t cap = 0, capFacingIn = 0;
+  for (std::size_t i = 0; i < clipped.points.size(); ++i)
+  {
+    const double d = depth(clipped.points[i]);
+    deepest = std::min(deepest, d);
+    if (d < 0.01 * kSpacing)
+    {
+      ++cap;
+      capFacingIn += clipped.normals[i].z < -0.99f ? 1 : 0;
+    }
+  }
+  std::printf("clipped: %zu triangles (whole %zu), deepest vertex %.3g m into the solid (whole "
+              "%.3g m), %zu cap vertices, %zu facing into the solid\n",
+    clipped.triangles.size(), whole.triangles.size(), -deepest, -deepestWhole, cap, capFacingIn);
+  // Without clipping the sphere's lower part lies 15 spacings inside the slab.
+  EXPECT_LT(deepestWhole, -14 * kSpacing);
+  // With it, no vertex inside: at a crossing the clipped colour is at most iso + d / cell, so d
+  // >= 0 there, up to the solid field's float nodes (1e-7 m here); a hundredth of a spacing.
+  EXPECT_GT(deepest, -0.01 * kSpacing);
+  EXPECT_EQ(openEdges(clipped), 0u);
+  // The cap: a disk of radius sqrt(0.2^2 - 0.05^2) = 0.19 m on the face, its normals the solid's
+  // inward one (-z: out of the fluid), but for its rim, where the sphere's own surface meets the
+  // face and the colour's gradient gives the normal (30 of 18,511 vertices when written).
+  EXPECT_GT(cap, 1000u);
+  EXPECT_GT(capFacingIn, cap * 99 / 100);
 }

@@ -173,6 +173,10 @@ sanitize "memcheck --leak-check full" "$bench" "${small[@]}"
 sanitize memcheck "$bench" "${small[@]}" --precision double --neighbors walk --graphs 0
 sanitize memcheck "$run" --backend cuda --scene stream --spacing 0.01 --steps 20 --report 10
 sanitize racecheck "$bench" "${small[@]}"
+# The GPU surface's tests (host and device arrays, obstacles, smoothing).
+for tool in memcheck initcheck; do
+  sanitize "$tool" "$build/Testing/Cuda/pbf_cuda_tests" --gtest_filter='CudaSurface.*'
+done
 # Every shipped scene at small size under memcheck, racecheck and initcheck.
 for scene in dam_break double_dam_break blob stream; do
   for tool in memcheck racecheck initcheck; do
