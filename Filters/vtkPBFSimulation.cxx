@@ -60,6 +60,7 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->SurfaceResolution = surface.resolution;
   this->SurfaceIsoValue = surface.isoValue;
   this->SurfaceSmoothing = surface.smoothing;
+  this->SurfaceAnisotropic = surface.anisotropic;
   this->GenerateSurface = false;
   this->ObstacleThickness = 0.0;
   this->Gravity[0] = defaults.gravity.x;
@@ -389,6 +390,7 @@ int vtkPBFSimulation::RequestSurface(vtkInformationVector* outputVector)
   options.resolution = this->SurfaceResolution;
   options.isoValue = this->SurfaceIsoValue;
   options.smoothing = this->SurfaceSmoothing;
+  options.anisotropic = this->SurfaceAnisotropic;
   try
   {
     this->Internals->DeliverSurface(options, particles, surface);
@@ -437,6 +439,7 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "SurfaceResolution: " << this->SurfaceResolution << "\n";
   os << indent << "SurfaceIsoValue: " << this->SurfaceIsoValue << "\n";
   os << indent << "SurfaceSmoothing: " << this->SurfaceSmoothing << "\n";
+  os << indent << "SurfaceAnisotropic: " << this->SurfaceAnisotropic << "\n";
   os << indent << "ObstacleThickness: " << this->ObstacleThickness << "\n";
   os << indent << "Gravity: (" << this->Gravity[0] << ", " << this->Gravity[1] << ", "
      << this->Gravity[2] << ")\n";

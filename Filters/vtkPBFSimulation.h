@@ -210,7 +210,9 @@ public:
    * Surface (output port 3): the fluid's surface as triangles with Normals, velocity and density
    * (pbf::extractSurface: the level SurfaceIsoValue, default 0.5, of the SPH colour function,
    * sampled every SurfaceResolution spacings, default 0.5, on a narrow band around the particles,
-   * then SurfaceSmoothing Laplacian passes, default 0), from the same frame as the particles.
+   * then SurfaceSmoothing Laplacian passes, default 0; SurfaceAnisotropic: Yu & Turk's
+   * anisotropic kernels, flatter water, default off), from the same frame as the particles. A
+   * CUDA run makes it on its GPU (the same mesh).
    * Computed only when GenerateSurface is on (default off; port 3 is then empty): ParaView
    * updates every output port of a source together (Apply, UpdatePipeline), so port 3 cannot
    * tell whether a view shows it. Changing a surface property recomputes only the surface.
@@ -224,6 +226,9 @@ public:
   vtkGetMacro(SurfaceIsoValue, double);
   vtkSetMacro(SurfaceSmoothing, int);
   vtkGetMacro(SurfaceSmoothing, int);
+  vtkSetMacro(SurfaceAnisotropic, bool);
+  vtkGetMacro(SurfaceAnisotropic, bool);
+  vtkBooleanMacro(SurfaceAnisotropic, bool);
   ///@}
 
   ///@{
@@ -381,6 +386,7 @@ protected:
   double SurfaceResolution;
   double SurfaceIsoValue;
   int SurfaceSmoothing;
+  bool SurfaceAnisotropic;
   double Gravity[3];
   bool AdaptiveIterations;
   double DensityErrorTolerance;

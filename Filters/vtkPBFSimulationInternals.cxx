@@ -271,7 +271,7 @@ void vtkPBFSimulation::vtkInternals::DeliverSurface(
   std::ostringstream of;
   of.precision(17);
   of << particles->GetMTime() << " " << options.resolution << " " << options.isoValue << " "
-     << options.smoothing << " " << p.particleSpacing << " " << p.smoothingRatio << " "
+     << options.smoothing << " " << options.anisotropic << " " << p.particleSpacing << " " << p.smoothingRatio << " "
      << p.restDensity;
   if (decomposed || of.str() != this->LastSurfaceOf)
   {

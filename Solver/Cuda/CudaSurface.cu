@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <chrono>
 #include <cstdint>
 #include <cstring>
@@ -83,21 +84,64 @@ struct Field
 // ---- the particles sorted into cells of h, by position within a cell -------------------------
 
 template <class Real>
-__global__ void cellKeysKernel(const Vec3<Real>* x, std::uint32_t n, GridGeometry<double> cells,
-  CellKey* keys, std::uint32_t* index, unsigned long long* firstBad)
+__global__ void firstNonFiniteKernel(const Vec3<Real>* x, std::uint32_t n, unsigned long long* firstBad)
 {
   const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n)
+  if (i < n)
   {
-    return;
+    const Vec3d q = Vec3d::from(x[i]);
+    if (!isfinite(q.x + q.y + q.z))
+    {
+      atomicMin(firstBad, static_cast<unsigned long long>(i)); // integers: the least, in any order
+    }
   }
-  const Vec3d q = Vec3d::from(x[i]);
-  if (!isfinite(q.x + q.y + q.z))
+}
+
+template <class Real>
+__global__ void cellKeysKernel(const Vec3<Real>* x, std::uint32_t n, GridGeometry<double> cells,
+  CellKey* keys, std::uint32_t* index)
+{
+  const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i < n)
   {
-    atomicMin(firstBad, static_cast<unsigned long long>(i));
+    keys[i] = cells.keyOf(Vec3d::from(x[i]));
+    index[i] = i;
   }
-  keys[i] = cells.keyOf(q);
-  index[i] = i;
+}
+
+// Anisotropic kernels: each sorted particle's centre and metric (SurfaceCells.h).
+__global__ void anisotropyKernel(surface::CellParticles particles, std::uint32_t n, double h,
+  double fullCount, Vec3d* centres, double* metrics)
+{
+  const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+  if (k < n)
+  {
+    const surface::Anisotropy a = surface::anisotropyOf(particles, k, h, fullCount);
+    centres[k] = a.centre;
+    for (int i = 0; i < 6; ++i)
+    {
+      metrics[6 * static_cast<std::size_t>(k) + i] = a.m[i];
+    }
+  }
+}
+
+// The second sort's gathers: the centres and metrics in the new order, and the order composed
+// with the first (to the input's index).
+__global__ void gatherShapesKernel(const Vec3d* centres, const double* metrics,
+  const std::uint32_t* second, const std::uint32_t* first, std::uint32_t n, Vec3d* sortedCentres,
+  double* sortedMetrics, std::uint32_t* order)
+{
+  const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+  if (k < n)
+  {
+    const std::uint32_t was = second[k];
+    sortedCentres[k] = centres[was];
+    for (int i = 0; i < 6; ++i)
+    {
+      sortedMetrics[6 * static_cast<std::size_t>(k) + i] = metrics[6 * static_cast<std::size_t>(was) + i];
+    }
+    order[k] = first[was];
+  }
 }
 
 template <class Real>
@@ -506,6 +550,7 @@ struct SurfaceExtractor::Impl
   Scratch inX, inV, inRho;
   Scratch keys, keysAlt, index, indexAlt, axisKeys, axisKeysAlt, bad, counter, temp;
   Scratch sortedX, offsets;
+  Scratch shapeCentres, shapeMetrics, inputOrder, sortedX2, shapeMetrics2, composedOrder, offsets2;
   Scratch bits, sampled, keptFlags, kept, keptBlockKeys, phi;
   Scratch triangleCount, triangleFirst, vertexCount, vertexFirst, crossings;
   Scratch position, positionAlt, triangles, edges, edgesAlt, edgeFirst;
@@ -516,7 +561,8 @@ struct SurfaceExtractor::Impl
   {
     std::size_t sum = 0;
     for (const Scratch* s : { &inX, &inV, &inRho, &keys, &keysAlt, &index, &indexAlt, &axisKeys,
-           &axisKeysAlt, &bad, &counter, &temp, &sortedX, &offsets, &bits, &sampled, &keptFlags,
+           &axisKeysAlt, &bad, &counter, &temp, &sortedX, &offsets, &shapeCentres,
+           &shapeMetrics, &inputOrder, &sortedX2, &shapeMetrics2, &composedOrder, &offsets2, &bits, &sampled, &keptFlags,
            &kept, &keptBlockKeys, &phi, &triangleCount, &triangleFirst, &vertexCount, &vertexFirst, &crossings,
            &position, &positionAlt, &triangles, &edges, &edgesAlt, &edgeFirst, &points, &normals, &velocity, &density, &solidNodes, &solidViews })
     {
@@ -562,6 +608,63 @@ struct SurfaceExtractor::Impl
     check(cudaMemcpyAsync(&value, from, sizeof(T), cudaMemcpyDeviceToHost, stream), "cudaMemcpyAsync");
     check(cudaStreamSynchronize(stream), "cudaStreamSynchronize");
     return value;
+  }
+
+  struct Sorted
+  {
+    const std::uint32_t* order; // sorted index -> index in the points given
+    const CellKey* keys;        // the sorted cells
+  };
+  // Points by cell, by position within a cell (z, then y, then x, then the cell: stable radix
+  // sorts, last key first), ties by index: the CPU's order (sortedIntoCells). The result lives in
+  // the sort's arrays until the next call.
+  template <class P>
+  Sorted sortIntoCells(const Vec3<P>* points, std::uint32_t n, const GridGeometry<double>& cells,
+    cudaStream_t stream)
+  {
+    using Bits = typename OrderBits<P>::type;
+    CellKey* key = keys.as<CellKey>(n, "particles' cells");
+    CellKey* keyAlt = keysAlt.as<CellKey>(n, "particles' cells");
+    std::uint32_t* idx = index.as<std::uint32_t>(n, "particles' order");
+    std::uint32_t* idxAlt = indexAlt.as<std::uint32_t>(n, "particles' order");
+    Bits* ak = axisKeys.as<Bits>(n, "particles' positions");
+    Bits* akAlt = axisKeysAlt.as<Bits>(n, "particles' positions");
+    cellKeysKernel<P><<<gridFor(n, kThreads), kThreads, 0, stream>>>(points, n, cells, key, idx);
+    check(cudaGetLastError(), "cellKeysKernel");
+    for (int axis = 2; axis >= 0; --axis)
+    {
+      axisKeysKernel<P><<<gridFor(n, kThreads), kThreads, 0, stream>>>(points, idx, n, axis, ak);
+      check(cudaGetLastError(), "axisKeysKernel");
+      cub("cub::DeviceRadixSort::SortPairs (positions)", [&](void* t, std::size_t& b) {
+        return cub::DeviceRadixSort::SortPairs(t, b, ak, akAlt, idx, idxAlt, static_cast<int>(n), 0,
+          static_cast<int>(8 * sizeof(Bits)), stream);
+      }, stream);
+      std::swap(idx, idxAlt);
+    }
+    gatherKeysKernel<<<gridFor(n, kThreads), kThreads, 0, stream>>>(key, idx, n, keyAlt);
+    check(cudaGetLastError(), "gatherKeysKernel");
+    int cellBits = 1;
+    while ((std::uint64_t(1) << cellBits) < cells.cellCount())
+    {
+      ++cellBits;
+    }
+    cub("cub::DeviceRadixSort::SortPairs (cells)", [&](void* t, std::size_t& b) {
+      return cub::DeviceRadixSort::SortPairs(t, b, keyAlt, key, idx, idxAlt, static_cast<int>(n), 0,
+        cellBits, stream);
+    }, stream);
+    return { idxAlt, key };
+  }
+
+  // offsets[c]: the first sorted point of cell c or beyond (c = 0..cells).
+  std::uint32_t* cellOffsets(const CellKey* sortedKeys, std::uint32_t n,
+    const GridGeometry<double>& cells, Scratch& into, cudaStream_t stream)
+  {
+    const std::uint32_t count = cells.cellCount();
+    std::uint32_t* first = into.as<std::uint32_t>(std::size_t(count) + 1, "cell offsets");
+    cellOffsetsKernel<<<gridFor(std::size_t(count) + 1, kThreads), kThreads, 0, stream>>>(
+      sortedKeys, n, count, first);
+    check(cudaGetLastError(), "cellOffsetsKernel");
+    return first;
   }
 
   template <class Real>
@@ -626,7 +729,7 @@ SurfaceMesh SurfaceExtractor::Impl::run(const DeviceParticles<Real>& in, const P
   f.iso = options.isoValue;
   f.solids = uploadSolids(solids, stream);
   f.solidCount = static_cast<int>(solids.views.size());
-  const GridGeometry<double> cells = surface::particleCells(f.grid, p);
+  const GridGeometry<double> cells = surface::particleCells(f.grid, p, h);
   const std::uint64_t blockCount = f.grid.blockCount();
   if (blockCount >= (std::uint64_t(1) << 31))
   {
@@ -636,61 +739,55 @@ SurfaceMesh SurfaceExtractor::Impl::run(const DeviceParticles<Real>& in, const P
   }
   check(cudaEventRecord(marks[0], stream), "cudaEventRecord");
 
-  // The particles by cell, by position within a cell (z, then y, then x, then the cell: stable
-  // radix sorts, last key first), ties by index: the CPU's order.
-  using Bits = typename OrderBits<Real>::type;
-  CellKey* key = keys.as<CellKey>(n, "particles' cells");
-  CellKey* keyAlt = keysAlt.as<CellKey>(n, "particles' cells");
-  std::uint32_t* idx = index.as<std::uint32_t>(n, "particles' order");
-  std::uint32_t* idxAlt = indexAlt.as<std::uint32_t>(n, "particles' order");
-  Bits* ak = axisKeys.as<Bits>(n, "particles' positions");
-  Bits* akAlt = axisKeysAlt.as<Bits>(n, "particles' positions");
   auto* firstBad = bad.as<unsigned long long>(1, "checks");
   check(cudaMemsetAsync(firstBad, 0xff, sizeof(unsigned long long), stream), "cudaMemsetAsync");
-  cellKeysKernel<Real><<<gridFor(n, kThreads), kThreads, 0, stream>>>(in.x, n, cells, key, idx, firstBad);
-  check(cudaGetLastError(), "cellKeysKernel");
+  firstNonFiniteKernel<Real><<<gridFor(n, kThreads), kThreads, 0, stream>>>(in.x, n, firstBad);
+  check(cudaGetLastError(), "firstNonFiniteKernel");
   const unsigned long long badIndex = read(firstBad, stream);
   if (badIndex != ~0ull)
   {
     throw InvalidInput("surface: particle " + std::to_string(badIndex) + " has a non-finite position");
   }
-  for (int axis = 2; axis >= 0; --axis)
-  {
-    axisKeysKernel<Real><<<gridFor(n, kThreads), kThreads, 0, stream>>>(in.x, idx, n, axis, ak);
-    check(cudaGetLastError(), "axisKeysKernel");
-    cub("cub::DeviceRadixSort::SortPairs (positions)", [&](void* t, std::size_t& b) {
-      return cub::DeviceRadixSort::SortPairs(t, b, ak, akAlt, idx, idxAlt, static_cast<int>(n), 0,
-        static_cast<int>(8 * sizeof(Bits)), stream);
-    }, stream);
-    std::swap(idx, idxAlt);
-  }
-  gatherKeysKernel<<<gridFor(n, kThreads), kThreads, 0, stream>>>(key, idx, n, keyAlt);
-  check(cudaGetLastError(), "gatherKeysKernel");
-  int cellBits = 1;
-  while ((std::uint64_t(1) << cellBits) < cells.cellCount())
-  {
-    ++cellBits;
-  }
-  cub("cub::DeviceRadixSort::SortPairs (cells)", [&](void* t, std::size_t& b) {
-    return cub::DeviceRadixSort::SortPairs(t, b, keyAlt, key, idx, idxAlt, static_cast<int>(n), 0,
-      cellBits, stream);
-  }, stream);
-  const std::uint32_t* order = idxAlt; // sorted index -> input index; key: the sorted cells
+  const Sorted first = sortIntoCells(in.x, n, cells, stream);
+  const std::uint32_t* order = first.order; // sorted index -> input index
   Vec3d* sx = sortedX.as<Vec3d>(n, "sorted particles");
   gatherPositionsKernel<Real><<<gridFor(n, kThreads), kThreads, 0, stream>>>(in.x, order, n, sx);
   check(cudaGetLastError(), "gatherPositionsKernel");
-  const std::uint32_t cellCount = cells.cellCount();
-  std::uint32_t* cellFirst = offsets.as<std::uint32_t>(std::size_t(cellCount) + 1, "cell offsets");
-  cellOffsetsKernel<<<gridFor(std::size_t(cellCount) + 1, kThreads), kThreads, 0, stream>>>(
-    key, n, cellCount, cellFirst);
-  check(cudaGetLastError(), "cellOffsetsKernel");
-  f.particles = surface::CellParticles{ cells, cellFirst, sx };
+  f.particles = surface::CellParticles{ cells, cellOffsets(first.keys, n, cells, offsets, stream), sx, nullptr };
+
+  // Anisotropic kernels: shapes from the neighbours within h, then the particles sorted again by
+  // their centres into cells as wide as the kernels reach.
+  const double reach = surface::reachFactor(options) * h;
+  if (options.anisotropic)
+  {
+    const double fullCount = 4.0 / 3.0 * 3.14159265358979323846 * std::pow(p.smoothingRatio, 3);
+    Vec3d* centres = shapeCentres.as<Vec3d>(n, "anisotropic kernels");
+    double* metrics = shapeMetrics.as<double>(6 * std::size_t(n), "anisotropic kernels");
+    anisotropyKernel<<<gridFor(n, kThreads), kThreads, 0, stream>>>(f.particles, n, h, fullCount, centres, metrics);
+    check(cudaGetLastError(), "anisotropyKernel");
+    // The first order, kept aside: the second sort reuses its arrays.
+    std::uint32_t* firstOrder = inputOrder.as<std::uint32_t>(n, "particles' order");
+    check(cudaMemcpyAsync(firstOrder, order, n * sizeof(std::uint32_t), cudaMemcpyDeviceToDevice, stream),
+      "cudaMemcpyAsync");
+    const GridGeometry<double> wide = surface::particleCells(f.grid, p, reach);
+    const Sorted second = sortIntoCells(centres, n, wide, stream);
+    Vec3d* sortedCentres = sortedX2.as<Vec3d>(n, "anisotropic kernels");
+    double* sortedMetrics = shapeMetrics2.as<double>(6 * std::size_t(n), "anisotropic kernels");
+    std::uint32_t* composed = composedOrder.as<std::uint32_t>(n, "particles' order");
+    gatherShapesKernel<<<gridFor(n, kThreads), kThreads, 0, stream>>>(
+      centres, metrics, second.order, firstOrder, n, sortedCentres, sortedMetrics, composed);
+    check(cudaGetLastError(), "gatherShapesKernel");
+    f.particles = surface::CellParticles{ wide, cellOffsets(second.keys, n, wide, offsets2, stream),
+      sortedCentres, sortedMetrics };
+    order = composed;
+    sx = sortedCentres;
+  }
 
   // The narrow band: the blocks within h of a particle, listed in key order.
   const std::size_t words = static_cast<std::size_t>((blockCount + 31) / 32);
   auto* marked = bits.as<std::uint32_t>(words, "block bitmap");
   check(cudaMemsetAsync(marked, 0, words * sizeof(std::uint32_t), stream), "cudaMemsetAsync");
-  markBlocksKernel<<<gridFor(n, kThreads), kThreads, 0, stream>>>(sx, n, f.grid, h, marked);
+  markBlocksKernel<<<gridFor(n, kThreads), kThreads, 0, stream>>>(sx, n, f.grid, reach, marked);
   check(cudaGetLastError(), "markBlocksKernel");
   auto* selected = counter.as<std::int64_t>(1, "counts");
   // Four bytes per block of the domain's 8^3 grid cells (a block per 512 nodes; the band's own

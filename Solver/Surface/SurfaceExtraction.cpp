@@ -33,8 +33,50 @@ struct SortedParticles
   std::vector<Vec3d> x;
   std::vector<std::uint32_t> order; // sorted index -> input index
 
-  surface::CellParticles view() const { return { geometry, offsets.data(), x.data() }; }
+  const double* m = nullptr; // anisotropic kernels' metrics, per sorted particle
+
+  surface::CellParticles view() const { return { geometry, offsets.data(), x.data(), m }; }
 };
+
+// Points sorted into the cells of `geometry`, within a cell by position, ties by index: the sums
+// over a cell's particles then have one order whatever order the particles came in (a rank's own
+// and its ghosts).
+SortedParticles sortedIntoCells(const std::vector<Vec3d>& points, const GridGeometry<double>& geometry)
+{
+  SortedParticles sorted;
+  sorted.geometry = geometry;
+  std::vector<CellKey> keys(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+  {
+    keys[i] = geometry.keyOf(points[i]);
+  }
+  std::vector<std::uint32_t> cursor;
+  sorted.offsets.resize(static_cast<std::size_t>(geometry.cellCount()) + 1);
+  countingSortByCell(keys, sorted.offsets, sorted.order, cursor);
+  for (std::size_t c = 0; c + 1 < sorted.offsets.size(); ++c)
+  {
+    std::sort(sorted.order.begin() + sorted.offsets[c], sorted.order.begin() + sorted.offsets[c + 1],
+      [&](std::uint32_t a, std::uint32_t b) {
+        const Vec3d& pa = points[a];
+        const Vec3d& pb = points[b];
+        if (pa.x != pb.x)
+        {
+          return pa.x < pb.x;
+        }
+        if (pa.y != pb.y)
+        {
+          return pa.y < pb.y;
+        }
+        return pa.z != pb.z ? pa.z < pb.z : a < b;
+      });
+  }
+  sorted.x.resize(points.size());
+  for (std::size_t k = 0; k < points.size(); ++k)
+  {
+    sorted.x[k] = points[sorted.order[k]];
+  }
+  return sorted;
+}
 
 struct KeyedVertex
 {
@@ -152,7 +194,8 @@ surface::NodeGrid surface::makeNodeGrid(const Parameters& p, const SurfaceOption
   // (A particle a rounding beyond a wall is still well inside the padding.)
   NodeGrid grid;
   grid.cell = options.resolution * p.particleSpacing;
-  const double pad = p.smoothingLength() + 2 * grid.cell;
+  const double pad = surface::reachFactor(options) * p.smoothingLength() + 2 * grid.cell;
+  grid.pad = pad;
   grid.origin = p.domain.min - Vec3d{ pad, pad, pad };
   const Vec3d size = p.domain.max - p.domain.min + Vec3d{ 2 * pad, 2 * pad, 2 * pad };
   const double extent[3] = { size.x, size.y, size.z };
@@ -171,11 +214,10 @@ surface::NodeGrid surface::makeNodeGrid(const Parameters& p, const SurfaceOption
   return grid;
 }
 
-GridGeometry<double> surface::particleCells(const NodeGrid& grid, const Parameters& p)
+GridGeometry<double> surface::particleCells(const NodeGrid& grid, const Parameters& p, double cell)
 {
-  const double pad = p.smoothingLength() + 2 * grid.cell;
-  const Vec3d size = p.domain.max - p.domain.min + Vec3d{ 2 * pad, 2 * pad, 2 * pad };
-  return makeGridGeometry<double>(Box{ grid.origin, grid.origin + size }, p.smoothingLength());
+  const Vec3d size = p.domain.max - p.domain.min + Vec3d{ 2 * grid.pad, 2 * grid.pad, 2 * grid.pad };
+  return makeGridGeometry<double>(Box{ grid.origin, grid.origin + size }, cell);
 }
 
 void SurfaceOptions::validate() const
@@ -200,8 +242,12 @@ double surfaceGhostReach(const Parameters& p, const SurfaceOptions& options)
 {
   // A share's blocks reach one block beyond its slab, and a node there sums particles within h
   // (the cells of h around it: one more h).
+  // Anisotropic kernels reach farther (their cells with them), their centres move by up to h, and
+  // each one's shape needs its own neighbours within h.
   const double cell = options.resolution * p.particleSpacing;
-  return kBlock * cell + 2 * p.smoothingLength();
+  const double h = p.smoothingLength();
+  return options.anisotropic ? kBlock * cell + 2 * surface::kAnisotropicReach * h + 2 * h
+                             : kBlock * cell + 2 * h;
 }
 
 template <class Real>
@@ -230,39 +276,43 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
   const surface::NodeGrid grid = surface::makeNodeGrid(p, options);
 
   // The particles in cells of h over the same region (Green 2008, as the solver's grid).
-  SortedParticles sorted;
-  sorted.geometry = surface::particleCells(grid, p);
-  std::vector<CellKey> keys(n);
+  std::vector<Vec3d> positions(n);
   for (std::size_t i = 0; i < n; ++i)
   {
-    keys[i] = sorted.geometry.keyOf(Vec3d::from(x[i]));
+    positions[i] = Vec3d::from(x[i]);
   }
-  std::vector<std::uint32_t> cursor;
-  sorted.offsets.resize(static_cast<std::size_t>(sorted.geometry.cellCount()) + 1);
-  countingSortByCell(keys, sorted.offsets, sorted.order, cursor);
-  // Within a cell, by position: the sums over a cell's particles then have one order whatever
-  // order the particles came in (a rank's own and its ghosts).
-  for (std::size_t c = 0; c + 1 < sorted.offsets.size(); ++c)
+  SortedParticles sorted = sortedIntoCells(positions, surface::particleCells(grid, p, h));
+  // Anisotropic kernels: each particle's centre and metric from its neighbours within h, then the
+  // particles sorted again, by their centres, into cells as wide as the kernels reach.
+  const double reach = surface::reachFactor(options) * h;
+  std::vector<double> metric;
+  if (options.anisotropic)
   {
-    std::sort(sorted.order.begin() + sorted.offsets[c], sorted.order.begin() + sorted.offsets[c + 1],
-      [&](std::uint32_t a, std::uint32_t b) {
-        const Vec3<Real>& pa = x[a];
-        const Vec3<Real>& pb = x[b];
-        if (pa.x != pb.x)
-        {
-          return pa.x < pb.x;
-        }
-        if (pa.y != pb.y)
-        {
-          return pa.y < pb.y;
-        }
-        return pa.z != pb.z ? pa.z < pb.z : a < b;
-      });
-  }
-  sorted.x.resize(n);
-  for (std::size_t k = 0; k < n; ++k)
-  {
-    sorted.x[k] = Vec3d::from(x[sorted.order[k]]);
+    const double fullCount = 4.0 / 3.0 * 3.14159265358979323846 * std::pow(p.smoothingRatio, 3);
+    std::vector<surface::Anisotropy> shape(n);
+    const auto count = static_cast<std::int64_t>(n);
+    const surface::CellParticles around = sorted.view();
+#pragma omp parallel for schedule(static) if (parallel)
+    for (std::int64_t k = 0; k < count; ++k)
+    {
+      shape[static_cast<std::size_t>(k)] =
+        surface::anisotropyOf(around, static_cast<std::uint32_t>(k), h, fullCount);
+    }
+    std::vector<Vec3d> centres(n);
+    for (std::size_t k = 0; k < n; ++k)
+    {
+      centres[k] = shape[k].centre;
+    }
+    SortedParticles bySorted = sortedIntoCells(centres, surface::particleCells(grid, p, reach));
+    metric.resize(6 * n);
+    for (std::size_t k = 0; k < n; ++k)
+    {
+      const std::uint32_t was = bySorted.order[k];
+      std::copy(shape[was].m, shape[was].m + 6, metric.begin() + 6 * static_cast<std::ptrdiff_t>(k));
+      bySorted.order[k] = sorted.order[was]; // to the input's index
+    }
+    sorted = std::move(bySorted);
+    sorted.m = metric.data();
   }
 
   // The blocks within h of a particle: a node within h of one belongs to every block it is in.
@@ -271,7 +321,7 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
   for (std::size_t k = 0; k < n; ++k)
   {
     std::int64_t first[3], last[3];
-    surface::blocksNear(grid, h, sorted.x[k], first, last);
+    surface::blocksNear(grid, reach, sorted.x[k], first, last);
     for (std::int64_t z = first[2]; z <= last[2]; ++z)
     {
       for (std::int64_t y = first[1]; y <= last[1]; ++y)

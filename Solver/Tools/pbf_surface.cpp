@@ -36,6 +36,7 @@ int main(int argc, char** argv)
     { "repeat", "GPU extractions timed (default 20, after one untimed)" },
     { "cpu-repeat", "CPU extractions timed (default 3)" },
     { "resolution", "SurfaceResolution: node spacing in particle spacings (default 0.5)" },
+    { "anisotropic", "1: anisotropic kernels (SurfaceAnisotropic; default 0)" },
   };
   try
   {
@@ -45,6 +46,7 @@ int main(int argc, char** argv)
     const long cpuRepeat = toolInteger(options, "cpu-repeat", 3, 1);
     SurfaceOptions surface;
     surface.resolution = toolReal(options, "resolution", surface.resolution);
+    surface.anisotropic = toolInteger(options, "anisotropic", 0, 0) != 0;
     const Scene scene = toolScene(options);
     Simulation simulation(scene, options.parameters, options.backend, options.precision);
     const auto run0 = std::chrono::steady_clock::now();

@@ -127,6 +127,12 @@ TEST(CudaSurface, TheGpuGivesTheCpuMeshBitForBit)
   SurfaceOptions coarse;
   coarse.resolution = 0.2;
   expectCpuMesh<double>(coarse);
+  // Anisotropic kernels: the shapes (Jacobi rotations, cube roots), the second sort by centre.
+  SurfaceOptions anisotropic;
+  anisotropic.anisotropic = true;
+  expectCpuMesh<float>(anisotropic);
+  anisotropic.smoothing = 1;
+  expectCpuMesh<double>(anisotropic);
 }
 
 TEST(CudaSurface, ObstaclesClipAsOnTheCpu)

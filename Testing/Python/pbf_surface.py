@@ -22,6 +22,20 @@ T.load_plugin(globals())
 expect = T.expect
 
 INTERVAL = 1.0 / 30.0
+
+
+def count_open_edges(surface):
+    """Edges used by one triangle only: 0 for a closed surface."""
+    edges = vtkFeatureEdges()
+    edges.SetInputData(surface)
+    edges.BoundaryEdgesOn()
+    edges.FeatureEdgesOff()
+    edges.NonManifoldEdgesOff()
+    edges.ManifoldEdgesOff()
+    edges.Update()
+    return edges.GetOutput().GetNumberOfCells()
+
+
 fluid = PositionBasedFluids(ParticleSpacing=0.04, NumberOfFrames=12,  # noqa: F821
                             FrameInterval=INTERVAL)
 algorithm = fluid.GetClientSideObject()
@@ -49,14 +63,7 @@ for f in (0, 6, 12):
     expect(abs(info.Get(surface.DATA_TIME_STEP()) - t) < 1e-12,
            "frame %d: the surface is of time %r" % (f, info.Get(surface.DATA_TIME_STEP())))
     # Closed: no edge used by one triangle only.
-    edges = vtkFeatureEdges()
-    edges.SetInputData(surface)
-    edges.BoundaryEdgesOn()
-    edges.FeatureEdgesOff()
-    edges.NonManifoldEdgesOff()
-    edges.ManifoldEdgesOff()
-    edges.Update()
-    open_edges = edges.GetOutput().GetNumberOfCells()
+    open_edges = count_open_edges(surface)
     expect(open_edges == 0, "frame %d: %d boundary edges" % (f, open_edges))
     # The particles inside it.
     enclosed = vtkSelectEnclosedPoints()
@@ -92,6 +99,21 @@ expect("SurfaceResolution = 0" in text, "no error naming SurfaceResolution: %r" 
 expect(algorithm.GetOutputDataObject(0).GetNumberOfPoints() > 0, "the particles were lost")
 fluid.SurfaceResolution = 0.5
 
+# Anisotropic kernels: another surface of the same frame, still closed and around the particles.
+downstream.UpdatePipeline(12 * INTERVAL)
+round_points = numpy.array(dsa.WrapDataObject(algorithm.GetOutputDataObject(3)).Points)
+fluid.SurfaceAnisotropic = 1
+downstream.UpdatePipeline(12 * INTERVAL)
+surface = algorithm.GetOutputDataObject(3)
+points = numpy.array(dsa.WrapDataObject(surface).Points)
+print("anisotropic: %d triangles (round kernels: %d vertices, anisotropic %d), %d open edges"
+      % (surface.GetNumberOfCells(), len(round_points), len(points), count_open_edges(surface)))
+expect(surface.GetNumberOfCells() > 100 and count_open_edges(surface) == 0,
+       "the anisotropic surface is empty or open")
+expect(points.shape != round_points.shape or not numpy.array_equal(points, round_points),
+       "SurfaceAnisotropic changed nothing")
+fluid.SurfaceAnisotropic = 0
+
 # An obstacle clips the surface: the water meets the ball at its face and no surface vertex lies
 # inside it (a tenth of a spacing: the ball's field is trilinear on nodes s/2 apart, against
 # the Sphere source's polygons), and the surface stays closed.
@@ -103,18 +125,12 @@ around.UpdatePipeline(12 * INTERVAL)
 surface = around.GetClientSideObject().GetOutputDataObject(3)
 points = dsa.WrapDataObject(surface).Points
 inside = numpy.linalg.norm(points - numpy.array(CENTRE), axis=1) - RADIUS
-edges = vtkFeatureEdges()
-edges.SetInputData(surface)
-edges.BoundaryEdgesOn()
-edges.FeatureEdgesOff()
-edges.NonManifoldEdgesOff()
-edges.ManifoldEdgesOff()
-edges.Update()
+open_edges = count_open_edges(surface)
 near = numpy.count_nonzero(numpy.abs(inside) < 0.1 * 0.04)
 print("obstacle: %d triangles, deepest vertex %.4f m into the ball, %d vertices on its face, "
       "%d open edges" % (surface.GetNumberOfCells(), -inside.min(), near,
-                         edges.GetOutput().GetNumberOfCells()))
+                         open_edges))
 expect(inside.min() > -0.1 * 0.04, "a surface vertex %.4f m inside the ball" % -inside.min())
 expect(near > 20, "the surface does not meet the ball (%d vertices on its face)" % near)
-expect(edges.GetOutput().GetNumberOfCells() == 0, "the clipped surface is open")
+expect(open_edges == 0, "the clipped surface is open")
 T.passed("pbf_surface")

@@ -4,6 +4,7 @@
 #include "Scene.h"
 #include "Solids.h"
 #include "Distributed/ThreadCluster.h"
+#include "SurfaceCells.h"
 #include "SurfaceExtraction.h"
 #include "SurfaceShare.h"
 
@@ -179,13 +180,15 @@ TEST(Surface, BadOptionsNameTheProperty)
                 .triangles.empty());
 }
 
-TEST(Surface, TwoSharesOfADecomposedRunMeetWithoutACrack)
+namespace
 {
-  // The sphere split at x = 0.5 m (its centre) into two ranks' shares, each given its own
-  // particles and the other's within the ghost reach: together they are the whole surface,
-  // vertex for vertex (the same float bits where they meet) and triangle for triangle.
+
+// The sphere split at x = 0.5 m (its centre) into two ranks' shares, each given its own
+// particles and the other's within the ghost reach: together they are the whole surface,
+// vertex for vertex (the same float bits where they meet) and triangle for triangle.
+void expectTwoSharesMakeTheWhole(const SurfaceOptions& options)
+{
   const Sphere s = fluidSphere();
-  const SurfaceOptions options;
   const SurfaceMesh whole = surfaceOf(s, true, options);
   const double cut = 0.5, reach = surfaceGhostReach(s.parameters, options);
   std::map<std::array<float, 3>, std::size_t> seen; // vertex -> how many shares made it
@@ -229,6 +232,16 @@ TEST(Surface, TwoSharesOfADecomposedRunMeetWithoutACrack)
     EXPECT_EQ(seen.count({ p.x, p.y, p.z }), 1u);
   }
   EXPECT_GT(shared, 100u); // the ring where the shares meet
+}
+
+} // namespace
+
+TEST(Surface, TwoSharesOfADecomposedRunMeetWithoutACrack)
+{
+  expectTwoSharesMakeTheWhole(SurfaceOptions{});
+  SurfaceOptions anisotropic;
+  anisotropic.anisotropic = true;
+  expectTwoSharesMakeTheWhole(anisotropic);
 }
 
 TEST(Surface, ThreeRanksExchangeTheirBordersAndMakeTheWholeSurface)
@@ -322,4 +335,103 @@ TEST(Surface, AnObstacleClipsTheSurfaceAtItsFace)
   // face and the colour's gradient gives the normal (30 of 18,511 vertices when written).
   EXPECT_GT(cap, 1000u);
   EXPECT_GT(capFacingIn, cap * 99 / 100);
+}
+
+TEST(Surface, SymmetricEigenReconstructsTheMatrix)
+{
+  // Matrices of several shapes (a diagonal, a degenerate pair, a full one, a flat one): V D V^T
+  // gives the matrix back and V is orthonormal, to 1e-12 of the largest entry (double rounding
+  // over a few Jacobi sweeps).
+  const double cases[][6] = { { 3, 0, 0, 1, 0, 2 }, { 2, 1, 0, 2, 0, 5 }, { 4, 1.5, -0.7, 3, 0.2, 1 },
+    { 1e-6, 2e-7, 0, 1e-6, 0, 1e-9 }, { 1, 1, 1, 1, 1, 1 } };
+  for (const auto& a : cases)
+  {
+    double values[3], v[9];
+    surface::symmetricEigen(a, values, v);
+    double scale = 0;
+    for (double e : a)
+    {
+      scale = std::max(scale, std::abs(e));
+    }
+    const int at[3][3] = { { 0, 1, 2 }, { 1, 3, 4 }, { 2, 4, 5 } };
+    for (int r = 0; r < 3; ++r)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        double back = 0, orthonormal = 0;
+        for (int k = 0; k < 3; ++k)
+        {
+          back += v[3 * r + k] * values[k] * v[3 * c + k];
+          orthonormal += v[3 * k + r] * v[3 * k + c];
+        }
+        EXPECT_NEAR(back, a[at[r][c]], 1e-12 * scale);
+        EXPECT_NEAR(orthonormal, r == c ? 1.0 : 0.0, 1e-12);
+      }
+    }
+  }
+}
+
+TEST(Surface, AnisotropicKernelsFlattenTheWaterAndKeepTheSphere)
+{
+  // A block of fluid at rest: its top face, a flat free surface, is flatter with anisotropic
+  // kernels (the kernels of its last layer are squeezed along the normal); the sphere stays
+  // within half a spacing of the true one and closed; threads change no bit.
+  Parameters p;
+  p.particleSpacing = kSpacing;
+  Scene scene;
+  scene.domain = { { 0, 0, 0 }, { 1, 1, 1 } };
+  scene.boxes.push_back({ { 0.3, 0.3, 0.3 }, { 0.7, 0.7, 0.5 }, { 0, 0, 0 } });
+  p.domain = scene.domain;
+  const ParticleBatch block = fillScene(scene, p);
+  const std::vector<double> rho(block.position.size(), p.restDensity);
+  SurfaceOptions round, stretched;
+  stretched.anisotropic = true;
+  // The top face's height, over the vertices above the block's middle: its spread, the surface's
+  // bumps at the lattice's scale.
+  auto topBumps = [&](const SurfaceOptions& options, double& mean) {
+    const SurfaceMesh mesh = extractSurface<double>(block.position.data(), block.velocity.data(),
+      rho.data(), block.position.size(), p, options, true);
+    EXPECT_EQ(openEdges(mesh), 0u);
+    double low = HUGE_VAL, high = -HUGE_VAL, sum = 0;
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < mesh.points.size(); ++i)
+    {
+      const Vec3<float>& q = mesh.points[i];
+      if (q.z > 0.45 && q.x > 0.4 && q.x < 0.6 && q.y > 0.4 && q.y < 0.6)
+      {
+        low = std::min(low, static_cast<double>(q.z));
+        high = std::max(high, static_cast<double>(q.z));
+        sum += q.z;
+        ++count;
+      }
+    }
+    mean = sum / static_cast<double>(count);
+    return high - low;
+  };
+  double roundMean = 0, stretchedMean = 0;
+  const double roundBumps = topBumps(round, roundMean);
+  const double stretchedBumps = topBumps(stretched, stretchedMean);
+  std::printf("top face: round kernels %.3g m of bumps at %.4f m, anisotropic %.3g m at %.4f m\n",
+    roundBumps, roundMean, stretchedBumps, stretchedMean);
+  EXPECT_LT(stretchedBumps, 0.5 * roundBumps);
+  // Still where the water ends: within a tenth of a spacing of the last layer's s/2 beyond.
+  EXPECT_NEAR(stretchedMean, 0.5, 0.1 * kSpacing);
+
+  const Sphere s = fluidSphere();
+  const SurfaceMesh a = surfaceOf(s, true, stretched), b = surfaceOf(s, false, stretched);
+  EXPECT_EQ(openEdges(a), 0u);
+  double nearest = HUGE_VAL, farthest = 0;
+  for (const Vec3<float>& q : a.points)
+  {
+    const double r = length(Vec3d::from(q) - kCentre);
+    nearest = std::min(nearest, r);
+    farthest = std::max(farthest, r);
+  }
+  std::printf("anisotropic sphere: %zu triangles, radius %.5f to %.5f m\n", a.triangles.size(),
+    nearest, farthest);
+  EXPECT_GT(nearest, kRadius - 0.5 * kSpacing);
+  EXPECT_LT(farthest, kRadius + 0.5 * kSpacing);
+  ASSERT_EQ(a.points.size(), b.points.size());
+  EXPECT_EQ(std::memcmp(a.points.data(), b.points.data(), a.points.size() * sizeof(a.points[0])), 0);
+  EXPECT_EQ(a.triangles, b.triangles);
 }

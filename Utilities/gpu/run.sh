@@ -152,6 +152,7 @@ else
   }
   surface_run 1M 90 --spacing 0.005 --until 0.2 --cpu-repeat 3
   surface_run 9M 120 --spacing 0.0025 --until 0.05 --cpu-repeat 1 --repeat 5
+  surface_run 1M_anisotropic 90 --spacing 0.005 --until 0.2 --cpu-repeat 1 --anisotropic 1
 fi
 
 if [[ ${PBF_GPU_SKIP_SANITIZERS:-0} == 1 ]]; then
