@@ -267,6 +267,23 @@ PBF_HD PBF_INLINE void symmetricEigen(const double* a, double* values, double* v
   values[2] = m[2][2];
 }
 
+// The cube root of x > 0 from IEEE operations alone (the libraries' cbrt differ in the last bit
+// between the host and CUDA): x = m 2^(3e) with m in [1/8, 1) exactly, then Newton's iteration
+// for m^(1/3) from 1 (six steps: it converges quadratically from within a factor of 2).
+PBF_HD PBF_INLINE double cubeRoot(double x)
+{
+  int exponent = 0;
+  double m = frexp(x, &exponent); // x = m 2^exponent, m in [1/2, 1)
+  int e = exponent >= 0 ? exponent / 3 : -((-exponent + 2) / 3);
+  m = ldexp(m, exponent - 3 * e); // in [1/2, 4)
+  double y = 1.0;
+  for (int i = 0; i < 8; ++i)
+  {
+    y = y - (y * y * y - m) / (3.0 * y * y);
+  }
+  return ldexp(y, e);
+}
+
 struct Anisotropy
 {
   Vec3d centre;
@@ -333,7 +350,7 @@ PBF_HD PBF_INLINE Anisotropy anisotropyOf(
   {
     length[i] = length[i] * kStretchRatio < longest ? longest / kStretchRatio : length[i];
   }
-  const double scale = cbrt(length[0] * length[1] * length[2]);
+  const double scale = cubeRoot(length[0] * length[1] * length[2]);
   // M = R diag(1 / s^2) R^T with s = length / scale: |A r| for A = R diag(1 / s) R^T.
   double inverse[3];
   for (int i = 0; i < 3; ++i)
