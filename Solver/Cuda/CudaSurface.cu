@@ -81,6 +81,26 @@ struct Field
   int solidCount;
 };
 
+// The first of the n sorted values that is not less than key (n if none).
+template <class T, class Key>
+__device__ std::uint32_t lowerBound(const T* sorted, std::uint32_t n, Key key)
+{
+  std::uint32_t lo = 0, hi = n;
+  while (lo < hi)
+  {
+    const std::uint32_t mid = lo + (hi - lo) / 2;
+    if (sorted[mid] < key)
+    {
+      lo = mid + 1;
+    }
+    else
+    {
+      hi = mid;
+    }
+  }
+  return lo;
+}
+
 // ---- the particles sorted into cells of h, by position within a cell -------------------------
 
 template <class Real>
@@ -186,20 +206,7 @@ __global__ void cellOffsetsKernel(
   {
     return;
   }
-  std::uint32_t lo = 0, hi = n;
-  while (lo < hi)
-  {
-    const std::uint32_t mid = lo + (hi - lo) / 2;
-    if (sorted[mid] < c)
-    {
-      lo = mid + 1;
-    }
-    else
-    {
-      hi = mid;
-    }
-  }
-  offsets[c] = lo;
+  offsets[c] = lowerBound(sorted, n, c);
 }
 
 // ---- the narrow band: blocks within h of a particle -------------------------------------------
@@ -354,20 +361,7 @@ struct VertexNumbering
   __device__ std::uint32_t operator()(const surface::NodeGrid& g, const surface::EdgeVertex& e) const
   {
     const std::uint64_t key = g.blockKey(e.node[0] / kBlock, e.node[1] / kBlock, e.node[2] / kBlock);
-    std::uint32_t lo = 0, hi = keptCount;
-    while (lo < hi)
-    {
-      const std::uint32_t mid = lo + (hi - lo) / 2;
-      if (kept[mid] < key)
-      {
-        lo = mid + 1;
-      }
-      else
-      {
-        hi = mid;
-      }
-    }
-    const std::uint32_t slot = lo * kBlockCells +
+    const std::uint32_t slot = lowerBound(kept, keptCount, key) * kBlockCells +
       static_cast<std::uint32_t>(surface::cellSlot(static_cast<int>(e.node[0] % kBlock),
         static_cast<int>(e.node[1] % kBlock), static_cast<int>(e.node[2] % kBlock)));
     return first[slot] + static_cast<std::uint32_t>(__popc(crossings[slot] & ((1u << e.dir) - 1u)));
@@ -424,21 +418,7 @@ __global__ void edgeOffsetsKernel(
   {
     return;
   }
-  const std::uint64_t key = static_cast<std::uint64_t>(v) << 32;
-  std::uint32_t lo = 0, hi = count;
-  while (lo < hi)
-  {
-    const std::uint32_t mid = lo + (hi - lo) / 2;
-    if (edges[mid] < key)
-    {
-      lo = mid + 1;
-    }
-    else
-    {
-      hi = mid;
-    }
-  }
-  first[v] = lo;
+  first[v] = lowerBound(edges, count, static_cast<std::uint64_t>(v) << 32);
 }
 
 __global__ void smoothKernel(const Vec3d* position, std::uint32_t vertices,
