@@ -240,7 +240,8 @@ PBF_HD PBF_INLINE void symmetricEigen(const double* a, double* values, double* v
       }
       // The rotation that zeroes m[p][q] (Numerical Recipes' form, the smaller angle).
       const double theta = (m[q][q] - m[p][p]) / (2.0 * m[p][q]);
-      const double t = (theta >= 0 ? 1.0 : -1.0) / ((theta >= 0 ? theta : -theta) + sqrt(theta * theta + 1.0));
+      const double t =
+        (theta >= 0 ? 1.0 : -1.0) / ((theta >= 0 ? theta : -theta) + sqrt(theta * theta + 1.0));
       const double c = 1.0 / sqrt(t * t + 1.0), s = t * c;
       for (int k = 0; k < 3; ++k)
       {

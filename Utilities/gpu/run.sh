@@ -153,6 +153,33 @@ else
   surface_run 1M 90 --spacing 0.005 --until 0.2 --cpu-repeat 3
   surface_run 9M 120 --spacing 0.0025 --until 0.05 --cpu-repeat 1 --repeat 5
   surface_run 1M_anisotropic 90 --spacing 0.005 --until 0.2 --cpu-repeat 1 --anisotropic 1
+  if [[ ${PBF_GPU_SURFACE_PROFILE:-0} == 1 ]]; then
+    # Per-kernel device times of the surface's own kernels at 1.15M (ncu, over the three
+    # extractions pbf_surface makes with --repeat 1; CUB's sorts, scans and selections are the
+    # rest of the extraction's time: the stepper runs CUB's kernels too, so they are left out).
+    phase "ncu: the surface's kernels"
+    timeout "$(limit 150)" ncu --clock-control none --metrics gpu__time_duration.sum --csv --page raw \
+      --kernel-name-base function \
+      -k 'regex:(sampleBlocks|countCells|placeVertices|cutCells|vertexFields|markBlocks|cellOffsets|axisKeys|cellKeys|gatherKeys|gatherPositions|gatherShapes|firstNonFinite|anisotropy|smooth|directedEdges|edgeOffsets)Kernel' \
+      "$build/Solver/Tools/pbf_surface" --backend cuda --scene dam_break --spacing 0.005 --until 0.2 \
+      --cpu-repeat 1 --repeat 1 >"$out/ncu_surface.csv" 2>&1 || record "ncu surface: FAILED or cut"
+    python3 - "$out/ncu_surface.csv" <<'PY' || true
+import csv, collections, sys
+rows = [r for r in csv.reader(open(sys.argv[1])) if len(r) > 10]
+rows = rows[[i for i, r in enumerate(rows) if "Kernel Name" in r][0]:]  # pbf_surface's own lines first
+head = rows[0]
+name, value = head.index("Kernel Name"), head.index("gpu__time_duration.sum")
+total = collections.Counter()
+for r in rows[2:]:
+    try:
+        total[r[name].split("<")[0].split("(")[0]] += float(r[value]) / 3e3  # ns -> us per extraction
+    except ValueError:
+        pass
+for kernel, us in total.most_common(20):
+    print("%-40s %9.1f us per extraction" % (kernel, us))
+print("%-40s %9.1f us" % ("sum", sum(total.values())))
+PY
+  fi
 fi
 
 if [[ ${PBF_GPU_SKIP_SANITIZERS:-0} == 1 ]]; then
