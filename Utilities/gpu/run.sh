@@ -172,7 +172,7 @@ name, value = head.index("Kernel Name"), head.index("gpu__time_duration.sum")
 total = collections.Counter()
 for r in rows[2:]:
     try:
-        total[r[name].split("<")[0].split("(")[0]] += float(r[value]) / 3e3  # ns -> us per extraction
+        total[r[name].split("(")[0]] += float(r[value].replace(",", "")) / 3e3  # ns -> us per extraction
     except ValueError:
         pass
 for kernel, us in total.most_common(20):
