@@ -551,7 +551,7 @@ struct SurfaceExtractor::Impl
   Scratch keys, keysAlt, index, indexAlt, axisKeys, axisKeysAlt, bad, counter, temp;
   Scratch sortedX, offsets;
   Scratch shapeCentres, shapeMetrics, inputOrder, sortedX2, shapeMetrics2, composedOrder, offsets2;
-  Scratch bits, sampled, keptFlags, kept, keptBlockKeys, phi;
+  Scratch bits, sampled, keptFlags, keptBlockKeys, phi;
   Scratch triangleCount, triangleFirst, vertexCount, vertexFirst, crossings, cuttingCells;
   Scratch position, positionAlt, triangles, edges, edgesAlt, edgeFirst;
   Scratch points, normals, velocity, density;
@@ -564,7 +564,7 @@ struct SurfaceExtractor::Impl
            &axisKeysAlt, &bad, &counter, &temp, &sortedX, &offsets, &shapeCentres,
            &shapeMetrics, &inputOrder, &sortedX2, &shapeMetrics2, &composedOrder, &offsets2, &bits,
            &sampled, &keptFlags,
-           &kept, &keptBlockKeys, &phi, &triangleCount, &triangleFirst, &vertexCount,
+           &keptBlockKeys, &phi, &triangleCount, &triangleFirst, &vertexCount,
            &vertexFirst, &crossings, &cuttingCells,
            &position, &positionAlt, &triangles, &edges, &edgesAlt, &edgeFirst, &points, &normals,
            &velocity, &density, &solidNodes, &solidViews })
@@ -576,12 +576,11 @@ struct SurfaceExtractor::Impl
 
   // CUB's scratch, sized by a query first.
   template <class Call>
-  void cub(const char* what, Call&& call, cudaStream_t stream)
+  void cub(const char* what, Call&& call)
   {
     std::size_t need = 0;
     check(call(static_cast<void*>(nullptr), need), what);
     void* t = temp.as<unsigned char>(need, "sort and scan scratch");
-    (void)stream;
     check(call(t, need), what);
   }
 
@@ -641,7 +640,7 @@ struct SurfaceExtractor::Impl
       cub("cub::DeviceRadixSort::SortPairs (positions)", [&](void* t, std::size_t& b) {
         return cub::DeviceRadixSort::SortPairs(t, b, ak, akAlt, idx, idxAlt, static_cast<int>(n), 0,
           static_cast<int>(8 * sizeof(Bits)), stream);
-      }, stream);
+      });
       std::swap(idx, idxAlt);
     }
     gatherKeysKernel<<<gridFor(n, kThreads), kThreads, 0, stream>>>(key, idx, n, keyAlt);
@@ -654,7 +653,7 @@ struct SurfaceExtractor::Impl
     cub("cub::DeviceRadixSort::SortPairs (cells)", [&](void* t, std::size_t& b) {
       return cub::DeviceRadixSort::SortPairs(t, b, keyAlt, key, idx, idxAlt, static_cast<int>(n), 0,
         cellBits, stream);
-    }, stream);
+    });
     return { idxAlt, key };
   }
 
@@ -801,7 +800,7 @@ SurfaceMesh SurfaceExtractor::Impl::run(const DeviceParticles<Real>& in, const P
   cub("cub::DeviceSelect::If (blocks)", [&](void* t, std::size_t& b) {
     return cub::DeviceSelect::If(t, b, thrust::counting_iterator<std::uint32_t>(0), sampledList,
       selected, static_cast<int>(blockCount), MarkedBlock{ marked }, stream);
-  }, stream);
+  });
   const auto sampledCount = static_cast<std::uint32_t>(read(selected, stream));
 
   // Each listed block sampled; those the level passes through kept, sampled again into memory.
@@ -811,11 +810,12 @@ SurfaceMesh SurfaceExtractor::Impl::run(const DeviceParticles<Real>& in, const P
     sampleBlocksKernel<false><<<sampledCount, kSampleThreads, 0, stream>>>(f, sampledList, keep, nullptr);
     check(cudaGetLastError(), "sampleBlocksKernel");
   }
-  std::uint32_t* keptIndex = kept.as<std::uint32_t>(sampledCount, "kept blocks");
-  cub("cub::DeviceSelect::If (kept blocks)", [&](void* t, std::size_t& b) {
-    return cub::DeviceSelect::Flagged(t, b, thrust::counting_iterator<std::uint32_t>(0), keep,
-      keptIndex, selected, static_cast<int>(sampledCount), stream);
-  }, stream);
+  // The kept blocks' keys, selected from the sampled list: sorted, as the list is.
+  std::uint32_t* keptKeys = keptBlockKeys.as<std::uint32_t>(sampledCount, "kept blocks");
+  cub("cub::DeviceSelect::Flagged (kept blocks)", [&](void* t, std::size_t& b) {
+    return cub::DeviceSelect::Flagged(t, b, sampledList, keep, keptKeys, selected,
+      static_cast<int>(sampledCount), stream);
+  });
   const auto keptCount = static_cast<std::uint32_t>(read(selected, stream));
   mesh.sampledBlocks = sampledCount;
   mesh.keptBlocks = keptCount;
@@ -824,14 +824,6 @@ SurfaceMesh SurfaceExtractor::Impl::run(const DeviceParticles<Real>& in, const P
   {
     throw InvalidInput("SurfaceResolution = " + number(options.resolution) + ": " +
       std::to_string(keptCount) + " blocks hold the surface; the GPU surface takes fewer than 2^24");
-  }
-  // The kept blocks' keys (their places in the sampled list, gathered): sorted, as the list is.
-  std::uint32_t* keptKeys = keptBlockKeys.as<std::uint32_t>(keptCount, "kept blocks");
-  if (keptCount > 0)
-  {
-    gatherKeysKernel<<<gridFor(keptCount, kThreads), kThreads, 0, stream>>>(
-      sampledList, keptIndex, keptCount, keptKeys);
-    check(cudaGetLastError(), "gatherKeysKernel (kept)");
   }
   const std::uint32_t slots = keptCount * kBlockCells;
   double* values = phi.as<double>(std::size_t(keptCount) * kBlockNodes, "kept blocks' samples");
@@ -850,13 +842,22 @@ SurfaceMesh SurfaceExtractor::Impl::run(const DeviceParticles<Real>& in, const P
     check(cudaGetLastError(), "countCellsKernel");
     cub("cub::DeviceScan::ExclusiveSum (triangles)", [&](void* t, std::size_t& b) {
       return cub::DeviceScan::ExclusiveSum(t, b, tCount, tFirst, static_cast<int>(slots), stream);
-    }, stream);
+    });
     cub("cub::DeviceScan::ExclusiveSum (vertices)", [&](void* t, std::size_t& b) {
       return cub::DeviceScan::ExclusiveSum(t, b, vCount, vFirst, static_cast<int>(slots), stream);
-    }, stream);
-    // The totals: the last offset plus the last count.
-    triangleTotal = read(tFirst + slots - 1, stream) + read(tCount + slots - 1, stream);
-    vertexTotal = read(vFirst + slots - 1, stream) + read(vCount + slots - 1, stream);
+    });
+    // The totals: the last offset plus the last count, in one wait.
+    const std::uint32_t* ends[4] = { tFirst + slots - 1, tCount + slots - 1, vFirst + slots - 1,
+      vCount + slots - 1 };
+    std::uint32_t tail[4];
+    for (int k = 0; k < 4; ++k)
+    {
+      check(cudaMemcpyAsync(tail + k, ends[k], sizeof(std::uint32_t), cudaMemcpyDeviceToHost, stream),
+        "cudaMemcpyAsync");
+    }
+    check(cudaStreamSynchronize(stream), "cudaStreamSynchronize");
+    triangleTotal = tail[0] + tail[1];
+    vertexTotal = tail[2] + tail[3];
   }
 
   Vec3d* pos = position.as<Vec3d>(vertexTotal, "vertices");
@@ -871,7 +872,7 @@ SurfaceMesh SurfaceExtractor::Impl::run(const DeviceParticles<Real>& in, const P
     cub("cub::DeviceSelect::If (cells)", [&](void* t, std::size_t& b) {
       return cub::DeviceSelect::If(t, b, thrust::counting_iterator<std::uint32_t>(0), cutting,
         selected, static_cast<int>(slots), HasTriangles{ tCount }, stream);
-    }, stream);
+    });
     const auto cuttingCount = static_cast<std::uint32_t>(read(selected, stream));
     cutCellsKernel<<<gridFor(cuttingCount, kThreads), kThreads, 0, stream>>>(f, keptKeys, values,
       cutting, cuttingCount, tFirst, VertexNumbering{ keptKeys, keptCount, owned, vFirst }, tri);
@@ -888,10 +889,10 @@ SurfaceMesh SurfaceExtractor::Impl::run(const DeviceParticles<Real>& in, const P
     check(cudaGetLastError(), "directedEdgesKernel");
     cub("cub::DeviceRadixSort::SortKeys (edges)", [&](void* t, std::size_t& b) {
       return cub::DeviceRadixSort::SortKeys(t, b, e, eAlt, static_cast<int>(directed), 0, 64, stream);
-    }, stream);
+    });
     cub("cub::DeviceSelect::Unique (edges)", [&](void* t, std::size_t& b) {
       return cub::DeviceSelect::Unique(t, b, eAlt, e, selected, static_cast<int>(directed), stream);
-    }, stream);
+    });
     const auto unique = static_cast<std::uint32_t>(read(selected, stream));
     auto* around = edgeFirst.as<std::uint32_t>(std::size_t(vertexTotal) + 1, "surface edges");
     edgeOffsetsKernel<<<gridFor(std::size_t(vertexTotal) + 1, kThreads), kThreads, 0, stream>>>(
