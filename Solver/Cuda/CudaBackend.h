@@ -35,12 +35,12 @@ struct Options
 {
   NeighborSearch search = NeighborSearch::RowMasks;
   // How far beyond h the masks reach, as a fraction of h: larger means more candidates per pass
-  // but fewer rebuilds within a step. Results do not depend on it. On the H200's dam break the
-  // largest correction of a million particles outgrows any skin up to 0.1 h in nearly every
-  // iteration, so the masks are rebuilt at nearly every pass anyway and a thin skin is fastest
-  // (Documentation/Performance.md: 1M particles, 2.861 ms a step at 0.002 h, 2.947 at 0.02 h).
-  // 0.002 h still lets a calm fluid, whose corrections are far smaller, reuse its masks.
-  double skin = 0.002;
+  // but fewer particles that must rebuild their masks within a step (MovedSinceSort,
+  // NeighborMasks.h: each particle keeps the masks of the step's first pass while it and its
+  // candidates moved less than the skin). Results do not depend on it. On the H200's benchmark
+  // dam break, 0.075 h was the fastest of 0.002-0.1 h (Documentation/Performance.md): 2.3 builds
+  // a step of 4 projections instead of 5; thicker skins visit more candidates than they save.
+  double skin = 0.075;
   // Replay each step as one CUDA graph (no launch gaps); off: launch the kernels one by one.
   bool graphs = true;
   // Threads per block of the neighbour passes: a multiple of 32 up to 128.
@@ -77,7 +77,9 @@ struct Diagnostics
   std::size_t capacity = 0;       // particles that fit before the next reallocation
   double bytesPerParticle = 0;    // per-particle arrays only, per particle of capacity
   std::uint64_t steps = 0;
-  std::uint64_t maskBuilds = 0;   // mask builds since construction (one per step at least)
+  // Particles' mask builds since construction: every particle builds once a step at least (the
+  // first pass after the sort); the rest are rebuilds where particles moved more than the skin.
+  std::uint64_t maskBuilds = 0;
 };
 
 // The CUDA stepper beyond the Stepper interface.

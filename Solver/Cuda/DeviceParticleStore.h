@@ -28,6 +28,7 @@ struct ParticleArrays
   bool masks = true;      // kNeighborRows words per particle (NeighborMasks.h)
   bool volumes = false;   // volume and |omega| stored by the passes that compute them
   bool alternates = false; // density, lambda and id again: the sub-domain's gathers
+  bool moved = false;     // a float per particle: per-particle mask rebuilds (MovedSinceSort)
   int lists = 0;          // index lists (uint32 per particle): the sub-domain's selections
 };
 
@@ -53,7 +54,7 @@ public:
     const std::size_t scalars = 2 + (a.volumes ? 2 : 0) + (a.alternates ? 2 : 0);
     return 4 * sizeof(Vec3<Real>) + scalars * sizeof(Real) +
       (a.alternates ? 2 : 1) * sizeof(std::int64_t) + 2 * sizeof(CellKey) +
-      (a.masks ? kNeighborRows * sizeof(std::uint32_t) : 0) +
+      (a.masks ? kNeighborRows * sizeof(std::uint32_t) : 0) + (a.moved ? sizeof(float) : 0) +
       static_cast<std::size_t>(a.lists) * sizeof(std::uint32_t);
   }
 
@@ -148,6 +149,7 @@ public:
     b.keys[0] = p.keys[0];
     b.keys[1] = p.keys[1];
     b.masks = p.masks;
+    b.moved = p.moved;
     b.stride = static_cast<std::uint32_t>(capacity_);
     b.blockSums = p.blockSums;
     return b;
@@ -161,6 +163,7 @@ public:
     std::int64_t *id = nullptr, *idAlt = nullptr;
     CellKey* keys[2] = {};
     std::uint32_t* masks = nullptr;
+    float* moved = nullptr;
     std::uint32_t* list[kMaxParticleLists] = {};
     double* blockSums = nullptr; // two per block of kCompressionBlock: sums, then maxima
   };
@@ -197,6 +200,7 @@ private:
     const std::size_t keysAt[2] = { place(capacity * sizeof(CellKey)),
       place(capacity * sizeof(CellKey)) };
     const std::size_t masksAt = a.masks ? place(kNeighborRows * capacity * sizeof(std::uint32_t)) : 0;
+    const std::size_t movedAt = a.moved ? place(capacity * sizeof(float)) : 0;
     std::size_t listAt[kMaxParticleLists] = {};
     for (int k = 0; k < a.lists; ++k)
     {
@@ -257,6 +261,7 @@ private:
     q.keys[0] = static_cast<CellKey*>(at(keysAt[0]));
     q.keys[1] = static_cast<CellKey*>(at(keysAt[1]));
     q.masks = a.masks ? static_cast<std::uint32_t*>(at(masksAt)) : nullptr;
+    q.moved = a.moved ? static_cast<float*>(at(movedAt)) : nullptr;
     for (int k = 0; k < a.lists; ++k)
     {
       q.list[k] = static_cast<std::uint32_t*>(at(listAt[k]));

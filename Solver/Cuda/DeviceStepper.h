@@ -157,6 +157,7 @@ std::size_t DeviceStepper<Real, Device>::particleBytes(bool masks)
 {
   ParticleArrays a;
   a.masks = masks;
+  a.moved = masks;
   a.volumes = true;
   return DeviceParticleStore<Real, Device>::bytesPerParticle(a);
 }
@@ -177,6 +178,7 @@ DeviceStepper<Real, Device>::DeviceStepper(const Parameters& parameters,
   device_->activate();
   ParticleArrays arrays;
   arrays.masks = constants_.schedule.enabled != 0;
+  arrays.moved = arrays.masks;
   arrays.volumes = true;
   store_ = std::make_unique<DeviceParticleStore<Real, Device>>(
     *device_, arrays, std::size_t(constants_.cellCount) + 1, constants_.keyBits);

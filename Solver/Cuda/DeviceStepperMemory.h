@@ -35,6 +35,9 @@ void DeviceStepper<Real, Device>::allocateFixed()
   const std::size_t timeAt = place(sizeof(StepTime<Real>));
   const std::size_t healthAt = place(3 * sizeof(unsigned long long));
   const std::size_t offsetsAt = place((static_cast<std::size_t>(k.cellCount) + 1) * sizeof(std::uint32_t));
+  const bool masks = k.schedule.enabled != 0;
+  const std::size_t cellMovedAt =
+    masks ? place(static_cast<std::size_t>(k.cellCount) * sizeof(std::uint32_t)) : 0;
   const std::size_t movedAt = place(static_cast<std::size_t>(std::max(k.iterations, 1)) * 8);
   const std::size_t buildsAt = place(8);
   const std::size_t adaptiveAt = place(sizeof(AdaptiveState));
@@ -50,6 +53,7 @@ void DeviceStepper<Real, Device>::allocateFixed()
   statisticsResult_ = reinterpret_cast<double*>(base + resultAt);
   StepBuffers<Real>& b = fixedBuffers_;
   b.cellOffsets = reinterpret_cast<std::uint32_t*>(base + offsetsAt);
+  b.cellMoved = masks ? reinterpret_cast<std::uint32_t*>(base + cellMovedAt) : nullptr;
   b.maxMoved = reinterpret_cast<unsigned long long*>(base + movedAt);
   b.maskBuilds = reinterpret_cast<unsigned long long*>(base + buildsAt);
   b.adaptive = reinterpret_cast<AdaptiveState*>(base + adaptiveAt);
@@ -67,6 +71,7 @@ void DeviceStepper<Real, Device>::allocate(std::size_t capacity, std::size_t par
   store_->allocate(capacity, particles);
   StepBuffers<Real> b = store_->buffers();
   b.cellOffsets = fixedBuffers_.cellOffsets;
+  b.cellMoved = fixedBuffers_.cellMoved;
   b.maxMoved = fixedBuffers_.maxMoved;
   b.maskBuilds = fixedBuffers_.maskBuilds;
   b.adaptive = fixedBuffers_.adaptive;

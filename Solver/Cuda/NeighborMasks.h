@@ -307,6 +307,17 @@ struct MaskSchedule
     return false;
   }
 
+  // The same bound for one particle's masks, built when this step's cells were sorted and kept
+  // since (MovedSinceSort below): `pair` is how far the particle moved since then plus the most
+  // any candidate in its 27 cells moved, an upper bound of how much closer a skipped candidate
+  // can have come; `corrections` is how many corrections there have been since the sort. Rounding
+  // is counted for both particles.
+  PBF_HD PBF_INLINE bool stillValidAround(double pair, int corrections) const
+  {
+    const double drift = pair * (1.0 + 1e-3) + 2.0 * corrections * roundingPerStep;
+    return drift < skin - 1e-3 * h;
+  }
+
   PBF_HD PBF_INLINE static double bitsToDouble(unsigned long long bits)
   {
 #if defined(__CUDA_ARCH__)
@@ -337,6 +348,103 @@ struct MaskSchedule
   {
     return 2.0 * 1.7320508075688772 * static_cast<double>(std::numeric_limits<Real>::epsilon()) *
       maxAbsCoordinate;
+  }
+};
+
+// Per-particle rebuilds (the single-GPU step). A global bound (MaskSchedule::rebuildAt) makes
+// every particle rebuild as soon as one particle anywhere moves more than the skin allows, which
+// in a dam break is every pass: 5 builds a step of 4 projections, a third of each density pass.
+// Instead each particle keeps the masks of the step's first pass for as long as its own
+// neighbourhood allows: moved[i] sums |delta p_i| over the step's corrections (an upper bound of
+// how far i moved since the sort), cellMoved[c] is the largest of those in sorted cell c (the
+// bits of a non-negative float: they order like the floats, so an integer max is exact and
+// independent of the order), and a pass keeps i's masks while
+// moved[i] + max over i's 27 cells of cellMoved stays within the skin. A particle whose bound
+// fails rebuilds in that pass and in every later pass of the step (its masks are no longer those
+// of the sort, which the bound is about): it is marked by the sign of moved[i].
+struct MovedSinceSort
+{
+  float* moved;             // per particle; negative (or -0): rebuilt since the sort
+  std::uint32_t* cellMoved; // per cell: float bits of the largest |moved| of its particles
+
+  PBF_HD PBF_INLINE static std::uint32_t bitsOf(float f)
+  {
+#if defined(__CUDA_ARCH__)
+    return static_cast<std::uint32_t>(__float_as_uint(f));
+#else
+    std::uint32_t b;
+    std::memcpy(&b, &f, sizeof b);
+    return b;
+#endif
+  }
+  PBF_HD PBF_INLINE static float floatOf(std::uint32_t b)
+  {
+#if defined(__CUDA_ARCH__)
+    return __uint_as_float(b);
+#else
+    float f;
+    std::memcpy(&f, &b, sizeof f);
+    return f;
+#endif
+  }
+  PBF_HD PBF_INLINE static bool marked(float m) { return (bitsOf(m) >> 31) != 0; }
+
+  // After a correction moved particle i (sorted cell `key`) by `distance`.
+  PBF_HD PBF_INLINE void add(std::uint32_t i, CellKey key, double distance) const
+  {
+    const float before = moved[i];
+    const float total = (marked(before) ? -before : before) + static_cast<float>(distance);
+    moved[i] = marked(before) ? -total : total;
+    const std::uint32_t bits = bitsOf(total);
+    std::uint32_t* cell = cellMoved + key;
+#if defined(__CUDA_ARCH__)
+    atomicMax(cell, bits);
+#else
+    // Host executors run a stage's particles one after another.
+    *cell = *cell > bits ? *cell : bits;
+#endif
+  }
+
+  // Whether particle i (frame: its rows) may keep its masks after `corrections` corrections.
+  template <class Real>
+  PBF_HD PBF_INLINE bool keeps(const GridView<Real>& grid, std::uint32_t i,
+    const MaskSchedule& schedule, int corrections) const
+  {
+    const float own = moved[i];
+    if (marked(own))
+    {
+      return false;
+    }
+    const detail::RowFrame frame = detail::rowFrame(grid, i);
+    const GridGeometry<Real>& g = grid.geometry;
+    std::uint32_t around = 0;
+    for (int z = frame.cz - 1; z <= frame.cz + 1; ++z)
+    {
+      for (int y = frame.cy - 1; y <= frame.cy + 1; ++y)
+      {
+        if (z < 0 || z >= g.nz || y < 0 || y >= g.ny)
+        {
+          continue;
+        }
+        const CellKey row = (static_cast<CellKey>(z) * g.ny + y) * g.nx;
+        for (int x = frame.x0; x <= frame.x1; ++x)
+        {
+          const std::uint32_t b = cellMoved[row + x];
+          around = around > b ? around : b;
+        }
+      }
+    }
+    return schedule.stillValidAround(double(own) + double(floatOf(around)), corrections);
+  }
+
+  // Particle i rebuilt its masks: it rebuilds in every later pass of this step.
+  PBF_HD PBF_INLINE void mark(std::uint32_t i) const
+  {
+    const float m = moved[i];
+    if (!marked(m))
+    {
+      moved[i] = -m; // -0 for 0: marked too
+    }
   }
 };
 

@@ -86,7 +86,11 @@ struct StepBuffers
   std::uint32_t stride;    // capacity of every per-particle array
   std::uint32_t* cellOffsets; // cellCount + 1 entries
   unsigned long long* maxMoved;   // per solver iteration: max |delta p_i|, as double bits
-  unsigned long long* maskBuilds; // count of mask builds, for diagnostics only
+  unsigned long long* maskBuilds; // particles' mask builds, for diagnostics only
+  // Per-particle rebuilds (MovedSinceSort, NeighborMasks.h); null: the global bound of
+  // MaskSchedule::rebuildAt decides for every particle at once.
+  float* moved;                   // per particle
+  std::uint32_t* cellMoved;       // cellCount entries
   AdaptiveState* adaptive;        // adaptive mode only
   double* blockSums;              // adaptive mode: the reduction's partial sums
 };
@@ -272,6 +276,20 @@ struct ListedParticles
   PBF_HD PBF_INLINE std::uint32_t operator()(std::uint32_t k) const { return list[k]; }
 };
 
+// One more particle's mask build in the diagnostics' count (a warp adds its builds at once).
+PBF_HD PBF_INLINE void countBuild(unsigned long long* builds, bool rebuild)
+{
+#if defined(__CUDA_ARCH__)
+  const unsigned ballot = __ballot_sync(__activemask(), rebuild);
+  if (rebuild && (threadIdx.x & 31u) == static_cast<unsigned>(__ffs(static_cast<int>(ballot)) - 1))
+  {
+    atomicAdd(builds, static_cast<unsigned long long>(__popc(ballot)));
+  }
+#else
+  *builds += rebuild ? 1u : 0u;
+#endif
+}
+
 template <class Real, class Exec, class Stage, class Pass, class Visit = AllParticles>
 void firstPassOnPositions(Exec& exec, Stage stage, const StepBuffers<Real>& b,
   const StepConstants<Real>& k, std::uint32_t n, const FluidView<Real, MaskedNeighbors<Real>>& f,
@@ -283,18 +301,34 @@ void firstPassOnPositions(Exec& exec, Stage stage, const StepBuffers<Real>& b,
   std::uint32_t* masks = b.masks;
   const Real reach2 = k.reach2;
   const AdaptiveState* adaptive = skipWhenDone ? b.adaptive : nullptr;
+  const MovedSinceSort local{ b.moved, b.cellMoved };
   exec.forEach(stage, n, [=] PBF_HD(std::uint32_t k) {
     const std::uint32_t i = visit(k);
     if (adaptive && adaptive->done)
     {
       return;
     }
-    if (schedule.enabled && schedule.rebuildAt(corrections, maxMoved))
+    if (!schedule.enabled)
     {
-      if (k == 0)
+      pass(i, f);
+      return;
+    }
+    bool rebuild;
+    if (local.moved)
+    {
+      rebuild = corrections == 0 || !local.keeps(f.grid.cells, i, schedule, corrections);
+      if (rebuild && corrections > 0)
       {
-        ++*builds;
+        local.mark(i);
       }
+    }
+    else
+    {
+      rebuild = schedule.rebuildAt(corrections, maxMoved);
+    }
+    countBuild(builds, rebuild);
+    if (rebuild)
+    {
       buildNeighborMasks(i, f.grid.cells, f.p, reach2, masks, f.grid.stride);
     }
     pass(i, f);
@@ -344,6 +378,7 @@ void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
   const AdaptiveState* state, Visit visit = Visit{})
 {
+  const MovedSinceSort local{ b.moved, b.cellMoved };
   exec.forEachMax(CorrectionStage{}, n, b.maxMoved + iteration,
     [=] PBF_HD(std::uint32_t k) -> double {
       const std::uint32_t i = visit(k);
@@ -372,7 +407,12 @@ void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
       }
       // What the masks must allow for: delta p_i, or more where a solid moved the particle on.
       const Real moved = f.obstacleCount > 0 ? length(f.scratch[i] - f.p[i]) : Real(0);
-      return static_cast<double>(length(delta) > moved ? length(delta) : moved);
+      const double distance = static_cast<double>(length(delta) > moved ? length(delta) : moved);
+      if (local.moved)
+      {
+        local.add(i, f.grid.cells.particleKeys[i], distance);
+      }
+      return distance;
     });
 }
 
@@ -409,6 +449,11 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
   // Now D = x, A = x*, C = v; the solver's positions alternate between A and B.
   Vec3<Real>* const positions[2] = { A, B };
   exec.fillZero(b.maxMoved, static_cast<std::size_t>(k.iterations) * sizeof(unsigned long long));
+  if (b.moved)
+  {
+    exec.fillZero(b.moved, static_cast<std::size_t>(n) * sizeof(float));
+    exec.fillZero(b.cellMoved, static_cast<std::size_t>(k.cellCount) * sizeof(std::uint32_t));
+  }
 
   // Lines 8-20, Jacobi iterations.
   const bool adaptive = k.tolerance > 0;

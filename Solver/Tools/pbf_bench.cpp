@@ -178,7 +178,10 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
     const cuda::Diagnostics d = gpu->diagnostics();
     r.bytesPerParticle = d.bytesPerParticle;
     r.deviceBytes = d.deviceBytes;
-    r.maskBuildsPerStep = steps > 0 ? double(d.maskBuilds - builds0) / steps : 0.0;
+    // In builds of every particle's masks: 1 is the least a step does.
+    r.maskBuildsPerStep = steps > 0 && r.particles > 0
+      ? double(d.maskBuilds - builds0) / steps / double(r.particles)
+      : 0.0;
   }
   else
 #endif
@@ -299,7 +302,7 @@ int main(int argc, char** argv)
     { "steps", "timed steps per run (default 100)" },
     { "warmup", "untimed steps before timing (default 20)" },
     { "neighbors", "CUDA neighbour search: masks | walk (default masks)" },
-    { "skin", "CUDA mask reach beyond h, fraction of h (default 0.002)" },
+    { "skin", "CUDA mask reach beyond h, fraction of h (default cuda::Options: 0.075)" },
     { "graphs", "CUDA: 1 replays a step as one graph, 0 launches kernels (default 1)" },
     { "block", "CUDA: threads per block of the neighbour passes (default 128)" },
     { "json", "write the results to this JSON file" },
@@ -344,7 +347,7 @@ int main(int argc, char** argv)
     {
       throw InvalidInput("--neighbors = \"" + neighbors + "\": must be masks or walk");
     }
-    const double skin = std::stod(extra("skin", "0.002"));
+    const double skin = std::stod(extra("skin", "0.075"));
     const bool graphs = extra("graphs", "1") != "0";
     const int block = std::stoi(extra("block", "128"));
     const std::string solid = extra("solid", "0");

@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -80,7 +81,7 @@ Snapshot<Real> stateOf(const Stepper& stepper)
 }
 
 template <class Real>
-void compareWithSerial(const Case& c, int steps, unsigned long long* builds = nullptr)
+void compareWithSerial(const Case& c, int steps, double* builds = nullptr)
 {
   const Scene scene = presetScene(c.scene);
   const Parameters p = fixedParameters(c, scene);
@@ -109,7 +110,9 @@ void compareWithSerial(const Case& c, int steps, unsigned long long* builds = nu
   test::expectBitIdentical(stateOf<Real>(*serial), stateOf<Real>(*device));
   if (builds)
   {
-    *builds = device->diagnostics().maskBuilds;
+    // Per particle: 1 a step when every particle keeps its masks, 5 when all rebuild in every
+    // pass of 4 projections.
+    *builds = double(device->diagnostics().maskBuilds) / double(initial.position.size());
   }
 }
 
@@ -130,15 +133,28 @@ TEST(StepSchedule, NeighborMasksReproduceTheSerialBackendBitForBit)
   }
 }
 
+TEST(StepSchedule, ParticlesRebuildTheirMasksOnlyWhereTheyMovedAndStayExact)
+{
+  // The dam break at a skin of 0.005 h: where the fluid falls fast the particles rebuild, where it
+  // rests they keep the masks of the sort. Both must happen, and the bits must not change.
+  double builds = 0;
+  const int steps = 60;
+  compareWithSerial<float>({ "dam_break", 4, true, 0.005, false }, steps, &builds);
+  const double perStep = (builds - 1.0) / steps; // less the build at rest
+  EXPECT_GT(perStep, 1.05);
+  EXPECT_LT(perStep, 4.5);
+  std::printf("dam break, skin 0.005 h: %.3f mask builds per particle and step\n", perStep);
+}
+
 TEST(StepSchedule, MasksStayExactWhenEveryPassMustRebuildThem)
 {
   // A skin this thin is exceeded by the first corrections, so most passes rebuild: the
   // rebuild path must give the same bits as the walk. The blob falls fast onto the pool.
-  unsigned long long thin = 0, thick = 0;
+  double thin = 0, thick = 0;
   compareWithSerial<float>({ "blob", 4, true, 1e-4, false }, 60, &thin);
   compareWithSerial<float>({ "blob", 4, true, 0.5, false }, 60, &thick);
   // One build at rest plus at least one per step; the thin skin must rebuild far more often.
-  EXPECT_GE(thick, 61u);
+  EXPECT_GE(thick, 61.0);
   EXPECT_GT(thin, 2 * thick);
 }
 
@@ -406,4 +422,47 @@ TEST(MaskSchedule, RebuildsExactlyWhenTheBoundCouldBeExceeded)
   EXPECT_TRUE(schedule.rebuildAt(1, nan)); // a NaN displacement never passes for small
   EXPECT_GT(bits(std::numeric_limits<double>::quiet_NaN()),
     bits(std::numeric_limits<double>::infinity())); // and wins an integer max over the bits
+}
+
+TEST(MovedSinceSort, AParticleKeepsItsMasksUntilItOrAnyCandidateMovedPastTheSkin)
+{
+  // A 5 x 5 x 5 grid of cells of h = 1; particle 0 sits in the middle cell (2, 2, 2).
+  const double h = 1.0;
+  const MaskSchedule schedule{ 0.1 * h, h, 0.0, 1 };
+  const GridGeometry<float> g = makeGridGeometry<float>({ { 0, 0, 0 }, { 5, 5, 5 } }, h);
+  ASSERT_EQ(g.nx, 5);
+  auto key = [&](int x, int y, int z) { return CellKey((z * g.ny + y) * g.nx + x); };
+  const CellKey keys[1] = { key(2, 2, 2) };
+  const GridView<float> grid{ g, nullptr, keys };
+  std::vector<std::uint32_t> cellMoved(std::size_t(g.cellCount()), 0);
+  float moved[1] = { 0.0f };
+  const MovedSinceSort local{ moved, cellMoved.data() };
+  EXPECT_TRUE(local.keeps(grid, 0, schedule, 1));
+  // Its own move and a candidate's, 0.06 h together, are within the skin (0.1 h - 1e-3 h).
+  local.add(0, keys[0], 0.03);
+  cellMoved[key(3, 3, 1)] = MovedSinceSort::bitsOf(0.03f);
+  EXPECT_TRUE(local.keeps(grid, 0, schedule, 2));
+  // A candidate two cells away cannot reach it: no effect.
+  cellMoved[key(4, 2, 2)] = MovedSinceSort::bitsOf(0.5f);
+  EXPECT_TRUE(local.keeps(grid, 0, schedule, 2));
+  // A corner cell of its 27 whose particle moved 0.07 h: 0.1 h in all, over the bound.
+  cellMoved[key(1, 1, 1)] = MovedSinceSort::bitsOf(0.07f);
+  EXPECT_FALSE(local.keeps(grid, 0, schedule, 2));
+  cellMoved[key(1, 1, 1)] = 0;
+  // Its own moves accumulate: 0.03 + 0.05 + the candidate's 0.03 is over too.
+  local.add(0, keys[0], 0.05);
+  EXPECT_FLOAT_EQ(moved[0], 0.08f);
+  EXPECT_EQ(cellMoved[std::size_t(keys[0])], MovedSinceSort::bitsOf(moved[0]));
+  EXPECT_FALSE(local.keeps(grid, 0, schedule, 3));
+  // Once rebuilt it rebuilds in every later pass of the step, even after a quiet one, and its
+  // distance still counts for its neighbours.
+  local.mark(0);
+  cellMoved[key(3, 3, 1)] = 0;
+  EXPECT_FALSE(local.keeps(grid, 0, schedule, 4));
+  local.add(0, keys[0], 0.01);
+  EXPECT_FLOAT_EQ(moved[0], -0.09f);
+  EXPECT_EQ(cellMoved[std::size_t(keys[0])], MovedSinceSort::bitsOf(-moved[0]));
+  // A NaN displacement never passes.
+  float nan[1] = { std::numeric_limits<float>::quiet_NaN() };
+  EXPECT_FALSE((MovedSinceSort{ nan, cellMoved.data() }.keeps(grid, 0, schedule, 1)));
 }

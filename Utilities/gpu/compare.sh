@@ -7,6 +7,8 @@
 # then runs 1M single, 1M double and 10M single twice each, alternating baseline and this tree so
 # that a drift of the clocks hits both alike, and prints the median ms/step of each and the
 # change. JSON under $OUT (else output/gpu-compare). .baseline/ is git-ignored.
+# PBF_COMPARE_SKINS="0.01 0.02": also this tree at those mask skins (--skin), each config once
+# per round, as rows "this, skin S".
 set -uo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 baseline=$(cd "${1:?usage: gpu/compare.sh BASELINE_TREE}" && pwd)
@@ -41,7 +43,20 @@ for round in 1 2; do
   done
 done
 
-python3 - "$out" <<'PY'
+skins=(${PBF_COMPARE_SKINS:-})
+for round in 1 2; do
+  for config in "${configs[@]}"; do
+    name=${config%%:*}
+    for skin in "${skins[@]}"; do
+      # shellcheck disable=SC2086
+      timeout 60 "$this_build/Solver/Tools/pbf_bench" --backend cuda ${config#*:} --skin "$skin" \
+        --json "$out/$name-skin$skin-$round.json" --label "$name-skin$skin" >/dev/null 2>&1 ||
+        echo "$name skin $skin round $round: FAILED"
+    done
+  done
+done
+
+python3 - "$out" "${skins[@]}" <<'PY'
 import glob, json, os, statistics, sys
 out = sys.argv[1]
 print("| run | baseline ms/step | this tree ms/step | change |")
@@ -53,4 +68,12 @@ for name in ("1M_f32", "1M_f64", "10M_f32"):
         return statistics.median(values) if values else float("nan")
     a, b = median("baseline"), median("this")
     print(f"| {name} | {a:.3f} | {b:.3f} | {100 * (b / a - 1):+.1f} % |")
+    def builds(tree):
+        values = [json.load(open(p))["runs"][0].get("mask_builds_per_step", float("nan"))
+                  for p in sorted(glob.glob(os.path.join(out, f"{name}-{tree}-*.json")))]
+        return statistics.median(values) if values else float("nan")
+    print(f"|   mask builds per particle-step: baseline {builds('baseline'):.2f}, this {builds('this'):.2f} | | | |")
+    for skin in sys.argv[2:]:
+        c = median(f"skin{skin}")
+        print(f"| {name}, this tree at skin {skin} ({builds('skin' + skin):.2f} builds) | {a:.3f} | {c:.3f} | {100 * (c / a - 1):+.1f} % |")
 PY
