@@ -9,6 +9,9 @@
 # change. JSON under $OUT (else output/gpu-compare). .baseline/ is git-ignored.
 # PBF_COMPARE_SKINS="0.01 0.02": also this tree at those mask skins (--skin), each config once
 # per round, as rows "this, skin S".
+# PBF_COMPARE_REFINED="0.005:0.5 0.0025:0.2": also the refined dam break at spacing S to time T
+# with the defaults (pbf_bench --refined S --until T --modes defaults), both trees, two rounds:
+# ms per step, per frame and per simulated second. PBF_COMPARE_ONLY_REFINED=1: nothing else.
 set -uo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 baseline=$(cd "${1:?usage: gpu/compare.sh BASELINE_TREE}" && pwd)
@@ -30,6 +33,7 @@ build "$baseline" /tmp/pbf-gpu-baseline || { tail -20 "$out"/build-pbf-gpu-basel
 configs=("1M_f32:--particles 1000000 --warmup 20 --steps 100"
   "1M_f64:--precision double --particles 1000000 --warmup 20 --steps 100"
   "10M_f32:--particles 10000000 --warmup 10 --steps 50")
+[[ ${PBF_COMPARE_ONLY_REFINED:-0} == 1 ]] && configs=()
 for round in 1 2; do
   for config in "${configs[@]}"; do
     name=${config%%:*}
@@ -56,6 +60,26 @@ for round in 1 2; do
   done
 done
 
+refined=(${PBF_COMPARE_REFINED:-})
+for round in 1 2; do
+  for run in "${refined[@]}"; do
+    for tree in baseline this; do
+      binary=/tmp/pbf-gpu-baseline/Solver/Tools/pbf_bench
+      [[ $tree == this ]] && binary=$this_build/Solver/Tools/pbf_bench
+      timeout 240 "$binary" --backend cuda --refined "${run%%:*}" --until "${run#*:}" \
+        --modes defaults >"$out/refined-${run%%:*}-$tree-$round.txt" 2>&1 ||
+        echo "refined $run $tree round $round: FAILED"
+    done
+  done
+done
+if ((${#refined[@]})); then
+  echo "refined dam break, defaults (pbf_bench --refined): spacing, mode, particles, frames, steps/frame,"
+  echo "iterations/step, ms/step, ms/frame, s per simulated s, worst mean %, worst max %, vmax, status"
+  for file in "$out"/refined-*.txt; do
+    echo "$(basename "$file" .txt): $(grep -E '^[0-9.]+ +defaults' "$file")"
+  done
+fi
+
 python3 - "$out" "${skins[@]}" <<'PY'
 import glob, json, os, statistics, sys
 out = sys.argv[1]
@@ -67,6 +91,8 @@ for name in ("1M_f32", "1M_f64", "10M_f32"):
                   for p in sorted(glob.glob(os.path.join(out, f"{name}-{tree}-*.json")))]
         return statistics.median(values) if values else float("nan")
     a, b = median("baseline"), median("this")
+    if a != a and b != b:
+        continue  # not run (PBF_COMPARE_ONLY_REFINED)
     print(f"| {name} | {a:.3f} | {b:.3f} | {100 * (b / a - 1):+.1f} % |")
     def builds(tree):
         values = [json.load(open(p))["runs"][0].get("mask_builds_per_step", float("nan"))
