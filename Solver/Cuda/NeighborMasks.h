@@ -84,19 +84,31 @@ PBF_HD PBF_INLINE RowFrame rowFrame(const GridView<Real>& grid, std::uint32_t i)
   return f;
 }
 
-// Row r (z-major, as forEachNeighbor loops) as a sorted index range; false outside the grid.
+// The key of the first cell (x = 0) of row r (z-major, as forEachNeighbor loops); false outside
+// the grid.
 template <class Real>
-PBF_HD PBF_INLINE bool rowRange(const GridView<Real>& grid, const RowFrame& f, int r,
-  std::uint32_t& begin, std::uint32_t& end)
+PBF_HD PBF_INLINE bool rowKey(const GridGeometry<Real>& g, const RowFrame& f, int r, CellKey& row)
 {
-  const GridGeometry<Real>& g = grid.geometry;
   const int z = f.cz - 1 + r / 3;
   const int y = f.cy - 1 + r % 3;
   if (z < 0 || z >= g.nz || y < 0 || y >= g.ny)
   {
     return false;
   }
-  const CellKey row = (static_cast<CellKey>(z) * g.ny + y) * g.nx;
+  row = (static_cast<CellKey>(z) * g.ny + y) * g.nx;
+  return true;
+}
+
+// Row r as a sorted index range; false outside the grid.
+template <class Real>
+PBF_HD PBF_INLINE bool rowRange(const GridView<Real>& grid, const RowFrame& f, int r,
+  std::uint32_t& begin, std::uint32_t& end)
+{
+  CellKey row = 0;
+  if (!rowKey(grid.geometry, f, r, row))
+  {
+    return false;
+  }
   begin = grid.cellOffsets[row + f.x0];
   end = grid.cellOffsets[row + f.x1 + 1];
   return true;
@@ -416,17 +428,12 @@ struct MovedSinceSort
       return false;
     }
     const detail::RowFrame frame = detail::rowFrame(grid, i);
-    const GridGeometry<Real>& g = grid.geometry;
     std::uint32_t around = 0;
-    for (int z = frame.cz - 1; z <= frame.cz + 1; ++z)
+    for (int r = 0; r < kNeighborRows; ++r)
     {
-      for (int y = frame.cy - 1; y <= frame.cy + 1; ++y)
+      CellKey row = 0;
+      if (detail::rowKey(grid.geometry, frame, r, row))
       {
-        if (z < 0 || z >= g.nz || y < 0 || y >= g.ny)
-        {
-          continue;
-        }
-        const CellKey row = (static_cast<CellKey>(z) * g.ny + y) * g.nx;
         for (int x = frame.x0; x <= frame.x1; ++x)
         {
           const std::uint32_t b = cellMoved[row + x];

@@ -302,7 +302,7 @@ int main(int argc, char** argv)
     { "steps", "timed steps per run (default 100)" },
     { "warmup", "untimed steps before timing (default 20)" },
     { "neighbors", "CUDA neighbour search: masks | walk (default masks)" },
-    { "skin", "CUDA mask reach beyond h, fraction of h (default cuda::Options: 0.075)" },
+    { "skin", "CUDA mask reach beyond h, fraction of h (default: cuda::Options::skin)" },
     { "graphs", "CUDA: 1 replays a step as one graph, 0 launches kernels (default 1)" },
     { "block", "CUDA: threads per block of the neighbour passes (default 128)" },
     { "json", "write the results to this JSON file" },
@@ -347,7 +347,12 @@ int main(int argc, char** argv)
     {
       throw InvalidInput("--neighbors = \"" + neighbors + "\": must be masks or walk");
     }
-    const double skin = std::stod(extra("skin", "0.075"));
+#ifdef PBF_WITH_CUDA
+    const double defaultSkin = cuda::Options{}.skin; // the stepper's own default, not a copy
+#else
+    const double defaultSkin = 0; // no CUDA stepper to use it
+#endif
+    const double skin = options.extra.count("skin") ? std::stod(options.extra["skin"]) : defaultSkin;
     const bool graphs = extra("graphs", "1") != "0";
     const int block = std::stoi(extra("block", "128"));
     const std::string solid = extra("solid", "0");

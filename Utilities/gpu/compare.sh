@@ -34,39 +34,33 @@ configs=("1M_f32:--particles 1000000 --warmup 20 --steps 100"
   "1M_f64:--precision double --particles 1000000 --warmup 20 --steps 100"
   "10M_f32:--particles 10000000 --warmup 10 --steps 50")
 [[ ${PBF_COMPARE_ONLY_REFINED:-0} == 1 ]] && configs=()
-for round in 1 2; do
-  for config in "${configs[@]}"; do
-    name=${config%%:*}
-    for tree in baseline this; do
-      binary=/tmp/pbf-gpu-baseline/Solver/Tools/pbf_bench
-      [[ $tree == this ]] && binary=$this_build/Solver/Tools/pbf_bench
-      # shellcheck disable=SC2086
-      timeout 60 "$binary" --backend cuda ${config#*:} --json "$out/$name-$tree-$round.json" \
-        --label "$name-$tree" >/dev/null 2>&1 || echo "$name $tree round $round: FAILED"
-    done
-  done
-done
-
 skins=(${PBF_COMPARE_SKINS:-})
+refined=(${PBF_COMPARE_REFINED:-})
+binary_of() { # binary_of baseline|this: that tree's pbf_bench
+  [[ $1 == this ]] && echo "$this_build/Solver/Tools/pbf_bench" || echo /tmp/pbf-gpu-baseline/Solver/Tools/pbf_bench
+}
+# bench_one TREE LABEL ROUND ARGS...: one kernel benchmark, its JSON as LABEL-ROUND.json
+bench_one() {
+  local tree=$1 label=$2 round=$3
+  shift 3
+  timeout 60 "$(binary_of "$tree")" --backend cuda "$@" --json "$out/$label-$round.json" \
+    --label "$label" >/dev/null 2>&1 || echo "$label round $round: FAILED"
+}
 for round in 1 2; do
   for config in "${configs[@]}"; do
     name=${config%%:*}
-    for skin in "${skins[@]}"; do
-      # shellcheck disable=SC2086
-      timeout 60 "$this_build/Solver/Tools/pbf_bench" --backend cuda ${config#*:} --skin "$skin" \
-        --json "$out/$name-skin$skin-$round.json" --label "$name-skin$skin" >/dev/null 2>&1 ||
-        echo "$name skin $skin round $round: FAILED"
-    done
+    # shellcheck disable=SC2086
+    {
+      bench_one baseline "$name-baseline" "$round" ${config#*:}
+      bench_one this "$name-this" "$round" ${config#*:}
+      for skin in "${skins[@]}"; do
+        bench_one this "$name-skin$skin" "$round" ${config#*:} --skin "$skin"
+      done
+    }
   done
-done
-
-refined=(${PBF_COMPARE_REFINED:-})
-for round in 1 2; do
   for run in "${refined[@]}"; do
     for tree in baseline this; do
-      binary=/tmp/pbf-gpu-baseline/Solver/Tools/pbf_bench
-      [[ $tree == this ]] && binary=$this_build/Solver/Tools/pbf_bench
-      timeout 240 "$binary" --backend cuda --refined "${run%%:*}" --until "${run#*:}" \
+      timeout 240 "$(binary_of "$tree")" --backend cuda --refined "${run%%:*}" --until "${run#*:}" \
         --modes defaults >"$out/refined-${run%%:*}-$tree-$round.txt" 2>&1 ||
         echo "refined $run $tree round $round: FAILED"
     done
