@@ -225,26 +225,20 @@ PBF_HD PBF_INLINE WallMirrors<Real> nearWalls(const Vec3<Real>& p, const Coeffic
   return m;
 }
 
-// Calls visit(image, isOriginal) for q and each of its reflections in the walls of m, in the order
-// of three nested loops over x, y, z (z innermost), the neighbour itself first. One loop with one
-// call of visit, so that a pass inlines its neighbour body once: most particles see no wall and
-// leave after the first image, and on a GPU a second copy of the body for the images (nested
-// loops re-reading q) had cost 8% of the density pass's instructions and 17% of the correction
-// pass's. The wall is picked by a select, not an index, for the reason given in nearWalls; 2 w is
-// exact, so an image is 2 w - q rounded once, whatever the path.
+// Calls visit(image) for each reflection of q in the walls of m (not q itself), in the order of
+// three nested loops over x, y, z (z innermost). A reflection is never closer to a particle on the
+// fluid's side of a wall than q is, so the passes visit q's reflections only when q itself lies
+// within h: most candidates, and every candidate of a particle that sees no wall, pay one test
+// instead of the loop (on a GPU its counters and selects had been a sixth of the density pass's
+// instructions). The wall is picked by a select, not an index, for the reason given in nearWalls;
+// 2 w is exact, so an image is 2 w - q rounded once, whatever the path.
 template <class Real, class Visit>
-PBF_HD PBF_INLINE void forEachImage(const WallMirrors<Real>& m, const Vec3<Real> q, Visit&& visit)
+PBF_HD PBF_INLINE void forEachReflection(const WallMirrors<Real>& m, const Vec3<Real> q, Visit&& visit)
 {
   const int images = m.count[0] * m.count[1] * m.count[2];
-  Vec3<Real> image = q;
   int ix = 0, iy = 0, iz = 0;
-  for (int k = 0;;)
+  for (int k = 1; k < images; ++k)
   {
-    visit(image, k == 0);
-    if (++k == images)
-    {
-      return;
-    }
     // The next (ix, iy, iz), z fastest.
     if (++iz == m.count[2])
     {
@@ -255,10 +249,18 @@ PBF_HD PBF_INLINE void forEachImage(const WallMirrors<Real>& m, const Vec3<Real>
         ++ix;
       }
     }
+    Vec3<Real> image;
     image.x = ix == 0 ? q.x : Real(2) * (ix == 1 ? m.wall[0][0] : m.wall[0][1]) - q.x;
     image.y = iy == 0 ? q.y : Real(2) * (iy == 1 ? m.wall[1][0] : m.wall[1][1]) - q.y;
     image.z = iz == 0 ? q.z : Real(2) * (iz == 1 ? m.wall[2][0] : m.wall[2][1]) - q.z;
+    visit(image);
   }
+}
+
+template <class Real>
+PBF_HD PBF_INLINE bool hasReflections(const WallMirrors<Real>& m)
+{
+  return m.count[0] * m.count[1] * m.count[2] > 1;
 }
 
 // Algorithm 1, lines 1-4: apply gravity, predict x*_i = x_i + dt v_i.
@@ -281,18 +283,32 @@ PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real, N
   Real rho = Real(0);
   Vec3<Real> gradI{ Real(0), Real(0), Real(0) }; // grad_{p_i} C_i
   Real sumGradJ2 = Real(0);                      // sum_j |grad_{p_j} C_i|^2
+  const bool reflections = hasReflections(mirrors);
+  const auto add = [&](const Vec3<Real>& r, Real r2) {
+    rho += f.c.kernels.poly6Within(r2);
+    const Vec3<Real> g = f.c.kernels.spikyGradientWithin(r, r2) * f.c.massOverRho0;
+    gradI += g;
+    sumGradJ2 += dot(g, g);
+  };
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
-    forEachImage(mirrors, f.p[j], [&](const Vec3<Real>& pj, bool) {
-      const Vec3<Real> r = pi - pj;
-      const Real r2 = dot(r, r);
-      if (r2 < f.c.kernels.h2)
+    const Vec3<Real> pj = f.p[j];
+    const Vec3<Real> r = pi - pj;
+    const Real r2 = dot(r, r);
+    if (r2 < f.c.kernels.h2)
+    {
+      add(r, r2);
+      if (reflections)
       {
-        rho += f.c.kernels.poly6Within(r2);
-        const Vec3<Real> g = f.c.kernels.spikyGradientWithin(r, r2) * f.c.massOverRho0;
-        gradI += g;
-        sumGradJ2 += dot(g, g);
+        forEachReflection(mirrors, pj, [&](const Vec3<Real>& image) {
+          const Vec3<Real> ri = pi - image;
+          const Real ri2 = dot(ri, ri);
+          if (ri2 < f.c.kernels.h2)
+          {
+            add(ri, ri2);
+          }
+        });
       }
-    });
+    }
   });
   // Each solid within h: its share, the lattice reflected in its tangent plane (Boundary.h).
   forEachNearSolid(pi, f,
@@ -321,18 +337,36 @@ PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real,
   const Real lambdaI = f.lambda[i];
   const Real tensile = f.tensile ? f.time->tensile : Real(0);
   Vec3<Real> delta{ Real(0), Real(0), Real(0) };
+  const bool reflections = hasReflections(mirrors);
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
-    const Real lambdaJ = f.lambda[j];
-    forEachImage(mirrors, f.p[j], [&](const Vec3<Real>& pj, bool original) {
-      const Vec3<Real> r = pi - pj;
-      const Real r2 = dot(r, r);
-      if (r2 < f.c.kernels.h2 && !(original && j == i))
-      {
-        const Real ratio = f.c.kernels.poly6Within(r2) * f.c.inverseWDeltaQ;
+    const Vec3<Real> pj = f.p[j];
+    const Vec3<Real> r = pi - pj;
+    const Real r2 = dot(r, r);
+    if (r2 < f.c.kernels.h2)
+    {
+      const Real lambdaJ = f.lambda[j];
+      const auto add = [&](const Vec3<Real>& d, Real d2) {
+        const Real ratio = f.c.kernels.poly6Within(d2) * f.c.inverseWDeltaQ;
         const Real sCorr = tensile == Real(0) ? Real(0) : -tensile * power(ratio, f.c.sCorrN);
-        delta += f.c.kernels.spikyGradientWithin(r, r2) * (lambdaI + lambdaJ + sCorr);
+        delta += f.c.kernels.spikyGradientWithin(d, d2) * (lambdaI + lambdaJ + sCorr);
+      };
+      if (j != i)
+      {
+        add(r, r2);
       }
-    });
+      if (reflections)
+      {
+        // A particle's own reflections count: they are the wall's share next to it.
+        forEachReflection(mirrors, pj, [&](const Vec3<Real>& image) {
+          const Vec3<Real> ri = pi - image;
+          const Real ri2 = dot(ri, ri);
+          if (ri2 < f.c.kernels.h2)
+          {
+            add(ri, ri2);
+          }
+        });
+      }
+    }
   });
   // The solid's share carries lambda_i, as a mirror image does (Boundary.h).
   forEachNearSolid(pi, f,
@@ -412,7 +446,7 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   {
     mirrors = nearWalls(pi, f.c);
   }
-  const bool images = mirrors.count[0] * mirrors.count[1] * mirrors.count[2] > 1;
+  const bool images = hasReflections(mirrors);
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
     const Vec3<Real> pj = f.p[j];
     const Vec3<Real> r = pi - pj;
@@ -429,10 +463,10 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
       // An image is never closer than its neighbour (both on the fluid's side of the wall).
       const Vec3<Real> vj = f.v[j];
       const Real volume = volumeOf(j, f);
-      forEachImage(mirrors, pj, [&](const Vec3<Real>& image, bool original) {
+      forEachReflection(mirrors, pj, [&](const Vec3<Real>& image) {
         const Vec3<Real> ri = pi - image;
         const Real ri2 = dot(ri, ri);
-        if (!original && ri2 < f.c.kernels.h2)
+        if (ri2 < f.c.kernels.h2)
         {
           smoothing += wallFrictionImage(
             pj, image, vj, friction * volume * f.c.kernels.poly6Within(ri2));
