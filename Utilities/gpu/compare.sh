@@ -7,8 +7,8 @@
 # then runs 1M single, 1M double and 10M single twice each, alternating baseline and this tree so
 # that a drift of the clocks hits both alike, and prints the median ms/step of each and the
 # change. JSON under $OUT (else output/gpu-compare). .baseline/ is git-ignored.
-# PBF_COMPARE_SKINS="0.01 0.02": also this tree at those mask skins (--skin), each config once
-# per round, as rows "this, skin S".
+# PBF_COMPARE_VARIANTS="thin=--skin 0.002;global=--per-particle-from 1e12": also this tree with
+# those extra pbf_bench options, each config once per round, as rows "this tree, LABEL".
 # PBF_COMPARE_REFINED="0.005:0.5 0.0025:0.2": also the refined dam break at spacing S to time T
 # with the defaults (pbf_bench --refined S --until T --modes defaults), both trees, two rounds:
 # ms per step, per frame and per simulated second. PBF_COMPARE_ONLY_REFINED=1: nothing else.
@@ -30,11 +30,12 @@ this_build=${PBF_GPU_BUILD:-/tmp/pbf-gpu-build}
 [[ -x $this_build/Solver/Tools/pbf_bench ]] || build "$root" "$this_build" || { echo "this tree: build FAILED"; exit 1; }
 build "$baseline" /tmp/pbf-gpu-baseline || { tail -20 "$out"/build-pbf-gpu-baseline.log; echo "baseline: build FAILED"; exit 1; }
 
-configs=("1M_f32:--particles 1000000 --warmup 20 --steps 100"
+configs=("64k_f32:--particles 64000 --warmup 20 --steps 100"
+  "1M_f32:--particles 1000000 --warmup 20 --steps 100"
   "1M_f64:--precision double --particles 1000000 --warmup 20 --steps 100"
   "10M_f32:--particles 10000000 --warmup 10 --steps 50")
 [[ ${PBF_COMPARE_ONLY_REFINED:-0} == 1 ]] && configs=()
-skins=(${PBF_COMPARE_SKINS:-})
+IFS=';' read -r -a variants <<<"${PBF_COMPARE_VARIANTS:-}"
 refined=(${PBF_COMPARE_REFINED:-})
 binary_of() { # binary_of baseline|this: that tree's pbf_bench
   [[ $1 == this ]] && echo "$this_build/Solver/Tools/pbf_bench" || echo /tmp/pbf-gpu-baseline/Solver/Tools/pbf_bench
@@ -53,8 +54,8 @@ for round in 1 2; do
     {
       bench_one baseline "$name-baseline" "$round" ${config#*:}
       bench_one this "$name-this" "$round" ${config#*:}
-      for skin in "${skins[@]}"; do
-        bench_one this "$name-skin$skin" "$round" ${config#*:} --skin "$skin"
+      for variant in "${variants[@]}"; do
+        bench_one this "$name-${variant%%=*}" "$round" ${config#*:} ${variant#*=}
       done
     }
   done
@@ -74,12 +75,12 @@ if ((${#refined[@]})); then
   done
 fi
 
-python3 - "$out" "${skins[@]}" <<'PY'
+python3 - "$out" "${variants[@]%%=*}" <<'PY'
 import glob, json, os, statistics, sys
 out = sys.argv[1]
 print("| run | baseline ms/step | this tree ms/step | change |")
 print("|---|---:|---:|---:|")
-for name in ("1M_f32", "1M_f64", "10M_f32"):
+for name in ("64k_f32", "1M_f32", "1M_f64", "10M_f32"):
     def median(tree):
         values = [json.load(open(p))["runs"][0]["median_ms"]
                   for p in sorted(glob.glob(os.path.join(out, f"{name}-{tree}-*.json")))]
@@ -93,7 +94,7 @@ for name in ("1M_f32", "1M_f64", "10M_f32"):
                   for p in sorted(glob.glob(os.path.join(out, f"{name}-{tree}-*.json")))]
         return statistics.median(values) if values else float("nan")
     print(f"|   mask builds per particle-step: baseline {builds('baseline'):.2f}, this {builds('this'):.2f} | | | |")
-    for skin in sys.argv[2:]:
-        c = median(f"skin{skin}")
-        print(f"| {name}, this tree at skin {skin} ({builds('skin' + skin):.2f} builds) | {a:.3f} | {c:.3f} | {100 * (c / a - 1):+.1f} % |")
+    for variant in sys.argv[2:]:
+        c = median(variant)
+        print(f"| {name}, this tree, {variant} ({builds(variant):.2f} builds) | {a:.3f} | {c:.3f} | {100 * (c / a - 1):+.1f} % |")
 PY
