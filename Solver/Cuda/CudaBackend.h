@@ -41,12 +41,6 @@ struct Options
   // dam break, 0.075 h was the fastest of 0.002-0.1 h (Documentation/Performance.md): 2.3 builds
   // a step of 4 projections instead of 5; thicker skins visit more candidates than they save.
   double skin = 0.075;
-  // Particle count from which each particle decides its own rebuilds (MovedSinceSort); below it,
-  // one bound for all particles (MaskSchedule::rebuildAt) decides. The per-particle check reads
-  // the 27 cells' displacements in each pass that may rebuild: where the passes run in one wave of
-  // blocks their latency is the step's, and that check costs more than the rebuilds it saves.
-  // Results do not depend on it. 0: always per particle.
-  std::size_t perParticleRebuildsFrom = 0;
   // Replay each step as one CUDA graph (no launch gaps); off: launch the kernels one by one.
   bool graphs = true;
   // Threads per block of the neighbour passes: a multiple of 32 up to 128.

@@ -109,7 +109,6 @@ private:
   void releaseGraphs();
   void evaluateAtRest();
   void captureGraphs();
-  StepBuffers<Real> stepBuffers() const;
   // Uploads x, v and id of the n_ particles into a fresh allocation.
   void restore(const std::vector<Vec3<Real>>& x, const std::vector<Vec3<Real>>& v,
     const std::vector<std::int64_t>& id);
@@ -243,26 +242,12 @@ void DeviceStepper<Real, Device>::releaseGraphs()
   }
 }
 
-// The buffers a step sees: without the per-particle displacements below
-// Options::perParticleRebuildsFrom, so that one bound decides every particle's rebuilds.
-template <class Real, class Device>
-StepBuffers<Real> DeviceStepper<Real, Device>::stepBuffers() const
-{
-  StepBuffers<Real> b = buffers_;
-  if (n_ < options_.perParticleRebuildsFrom)
-  {
-    b.moved = nullptr;
-    b.cellMoved = nullptr;
-  }
-  return b;
-}
-
 template <class Real, class Device>
 void DeviceStepper<Real, Device>::evaluateAtRest()
 {
   auto exec = device_->executor();
   enqueueEvaluateAtRest(
-    exec, stepBuffers(), constants_, static_cast<std::uint32_t>(n_), roles_, &sortedKeys_);
+    exec, buffers_, constants_, static_cast<std::uint32_t>(n_), roles_, &sortedKeys_);
 }
 
 template <class Real, class Device>
@@ -282,7 +267,7 @@ void DeviceStepper<Real, Device>::captureGraphs()
     roles.x = x;
     roles.v = 1 - x;
     Graph* g = &graphs_[x];
-    const StepBuffers<Real> buffers = stepBuffers();
+    const StepBuffers<Real> buffers = buffers_;
     const StepConstants<Real> constants = constants_;
     const auto n = static_cast<std::uint32_t>(n_);
     device_->capture(g->graph, [=](auto& exec) {
@@ -321,7 +306,7 @@ void DeviceStepper<Real, Device>::step()
   {
     auto exec = device_->executor();
     roles_ = enqueueStep(
-      exec, stepBuffers(), constants_, static_cast<std::uint32_t>(n_), roles_, &sortedKeys_);
+      exec, buffers_, constants_, static_cast<std::uint32_t>(n_), roles_, &sortedKeys_);
   }
   ++steps_;
   stepped_ = true;

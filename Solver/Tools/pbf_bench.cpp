@@ -66,8 +66,7 @@ double percentile(std::vector<double> v, double q)
 }
 
 Result benchmark(const ToolOptions& options, double particles, int warmup, int steps,
-  const std::string& neighbors, double skin, double perParticleFrom, bool graphs, int block,
-  int solid)
+  const std::string& neighbors, double skin, bool graphs, int block, int solid)
 {
   const Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
   const Parameters parameters = withSceneDomain(options.parameters, scene);
@@ -90,7 +89,6 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
     cuda::Options o;
     o.search = neighbors == "walk" ? cuda::NeighborSearch::CellWalk : cuda::NeighborSearch::RowMasks;
     o.skin = skin;
-    o.perParticleRebuildsFrom = static_cast<std::size_t>(perParticleFrom);
     o.graphs = graphs;
     o.block = block;
     auto made = cuda::makeCudaStepper(options.precision, parameters, batch, o);
@@ -305,7 +303,6 @@ int main(int argc, char** argv)
     { "warmup", "untimed steps before timing (default 20)" },
     { "neighbors", "CUDA neighbour search: masks | walk (default masks)" },
     { "skin", "CUDA mask reach beyond h, fraction of h (default: cuda::Options::skin)" },
-    { "per-particle-from", "CUDA: particle count from which each particle decides its own mask rebuilds (default: cuda::Options::perParticleRebuildsFrom)" },
     { "graphs", "CUDA: 1 replays a step as one graph, 0 launches kernels (default 1)" },
     { "block", "CUDA: threads per block of the neighbour passes (default 128)" },
     { "json", "write the results to this JSON file" },
@@ -356,14 +353,6 @@ int main(int argc, char** argv)
     const double defaultSkin = 0; // no CUDA stepper to use it
 #endif
     const double skin = options.extra.count("skin") ? std::stod(options.extra["skin"]) : defaultSkin;
-#ifdef PBF_WITH_CUDA
-    const double defaultFrom = static_cast<double>(cuda::Options{}.perParticleRebuildsFrom);
-#else
-    const double defaultFrom = 0;
-#endif
-    const double perParticleFrom = options.extra.count("per-particle-from")
-      ? std::stod(options.extra["per-particle-from"])
-      : defaultFrom;
     const bool graphs = extra("graphs", "1") != "0";
     const int block = std::stoi(extra("block", "128"));
     const std::string solid = extra("solid", "0");
@@ -388,8 +377,7 @@ int main(int argc, char** argv)
     for (double count : counts)
     {
       results.push_back(benchmark(
-        options, count, warmup, steps, neighbors, skin, perParticleFrom, graphs, block,
-        std::stoi(solid)));
+        options, count, warmup, steps, neighbors, skin, graphs, block, std::stoi(solid)));
       printRow(results.back());
     }
     if (!results.empty())

@@ -40,7 +40,6 @@ struct Case
   bool backwards;
   double tolerance = 0; // densityErrorTolerance [%]: adaptive mode when > 0
   bool graphs = true;
-  std::size_t perParticleFrom = 0; // Options::perParticleRebuildsFrom
 };
 
 cuda::Options optionsOf(const Case& c)
@@ -49,7 +48,6 @@ cuda::Options optionsOf(const Case& c)
   o.search = c.masks ? cuda::NeighborSearch::RowMasks : cuda::NeighborSearch::CellWalk;
   o.skin = c.skin;
   o.graphs = c.graphs;
-  o.perParticleRebuildsFrom = c.perParticleFrom;
   return o;
 }
 
@@ -146,25 +144,6 @@ TEST(StepSchedule, ParticlesRebuildTheirMasksOnlyWhereTheyMovedAndStayExact)
   EXPECT_GT(perStep, 1.05);
   EXPECT_LT(perStep, 4.5);
   std::printf("dam break, skin 0.005 h: %.3f mask builds per particle and step\n", perStep);
-}
-
-TEST(StepSchedule, BelowThePerParticleSizeOneBoundRebuildsEveryParticleAtOnce)
-{
-  // The same run as above with fewer particles than Options::perParticleRebuildsFrom: one bound
-  // decides for all, so every build is a build of every particle, there are more of them, and
-  // the bits are still the serial backend's.
-  const int steps = 60;
-  double global = 0, perParticle = 0;
-  Case c{ "dam_break", 4, true, 0.005, false };
-  c.perParticleFrom = 1000000000;
-  compareWithSerial<float>(c, steps, &global);
-  c.perParticleFrom = 0;
-  compareWithSerial<float>(c, steps, &perParticle);
-  EXPECT_EQ(global, std::floor(global)); // whole builds of the fluid
-  EXPECT_GE(global, steps + 1.0);
-  EXPECT_GT(global, perParticle + 0.5);
-  std::printf("dam break, skin 0.005 h: %.3f builds per particle and step with one bound, %.3f "
-              "per particle\n", (global - 1) / steps, (perParticle - 1) / steps);
 }
 
 TEST(StepSchedule, MasksStayExactWhenEveryPassMustRebuildThem)
