@@ -346,8 +346,12 @@ PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real,
     {
       const Real lambdaJ = f.lambda[j];
       const auto add = [&](const Vec3<Real>& d, Real d2) {
-        const Real ratio = f.c.kernels.poly6Within(d2) * f.c.inverseWDeltaQ;
-        const Real sCorr = tensile == Real(0) ? Real(0) : -tensile * power(ratio, f.c.sCorrN);
+        // s_corr only in the step's first projection: the later ones do not evaluate poly6.
+        Real sCorr = Real(0);
+        if (tensile != Real(0))
+        {
+          sCorr = -tensile * power(f.c.kernels.poly6Within(d2) * f.c.inverseWDeltaQ, f.c.sCorrN);
+        }
         delta += f.c.kernels.spikyGradientWithin(d, d2) * (lambdaI + lambdaJ + sCorr);
       };
       if (j != i)
