@@ -1,60 +1,73 @@
 #!/usr/bin/env python3
-"""Per-kernel summary of `ncu --page source --print-source sass --csv` (gpu/hotspots.sh): the
-executed warp instructions of each profiled kernel, and its hottest SASS lines with their share."""
+"""Where a kernel's instructions go, from ncu's per-SASS-instruction source counters
+(`ncu ... --section SourceCounters`, then `ncu -i REPORT --page source --csv --print-source sass`;
+gpu/probe.sh writes one such CSV per profiled pass into probe.tgz and calls this on each):
+
+    python3 Utilities/gpu/hotspots.py density.sass.csv [--top 25]
+
+For each kernel in the file: its executed warp instructions, then its costliest straight-line
+blocks (consecutive instructions executed equally often) with their length, how often they ran,
+their share of the kernel and their first instruction, in address order."""
+import argparse
 import csv
-import sys
 
 
-def tables(path):
-    """Yields (title, header, rows) for each kernel's table in the CSV."""
-    title, header, rows = "", None, []
+def kernels(path):
+    """Yields (name, rows) for each kernel table; rows are dicts keyed by the CSV's header."""
+    name, header, rows = None, None, []
     with open(path, newline="", errors="replace") as f:
         for row in csv.reader(f):
             if not row:
                 continue
-            if any(cell.strip() == "Source" for cell in row) and any("Address" in c for c in row):
+            if row[0] == "Kernel Name":
                 if header is not None:
-                    yield title, header, rows
-                header, rows = [c.strip() for c in row], []
+                    yield name, rows
+                name, header, rows = row[1] if len(row) > 1 else "", None, []
+            elif row[0] == "Address":
+                if header is not None and rows:
+                    yield name, rows
+                    rows = []
+                header = row
             elif header is not None and len(row) == len(header):
-                rows.append(row)
-            else:
-                if header is not None:
-                    yield title, header, rows
-                    header, rows = None, []
-                title = " ".join(row)[:160]
-    if header is not None:
-        yield title, header, rows
+                rows.append(dict(zip(header, row)))
+    if header is not None and rows:
+        yield name, rows
 
 
-def number(text):
+def count(text):
     try:
         return float(text.replace(",", ""))
     except ValueError:
         return 0.0
 
 
-def main(path, top=45):
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("csv")
+    parser.add_argument("--top", type=int, default=25)
+    args = parser.parse_args()
     found = False
-    for title, header, rows in tables(path):
-        columns = [i for i, c in enumerate(header) if c.startswith("Instructions Executed")]
-        if not columns:
+    for name, rows in kernels(args.csv):
+        executed = [count(r.get("Instructions Executed", "")) for r in rows]
+        total = sum(executed)
+        if total == 0:
             continue
         found = True
-        executed, source = columns[0], header.index("Source")
-        address = next(i for i, c in enumerate(header) if "Address" in c)
-        total = sum(number(r[executed]) for r in rows)
-        print(f"\n== {title}\n{len(rows)} SASS lines, {total:,.0f} warp instructions executed")
-        hottest = sorted(rows, key=lambda r: -number(r[executed]))[:top]
-        for r in sorted(hottest, key=lambda r: int(r[address], 16) if r[address].startswith("0x") else 0):
-            n = number(r[executed])
-            print(f"{r[address]:>8} {n:14,.0f} {100 * n / total:5.1f} %  {r[source].strip()[:90]}")
+        blocks = []  # [first row, times executed, length]
+        for i, n in enumerate(executed):
+            if blocks and n == blocks[-1][1] and i == blocks[-1][0] + blocks[-1][2]:
+                blocks[-1][2] += 1
+            else:
+                blocks.append([i, n, 1])
+        print(f"\n== {(name or '')[:150]}\n{len(rows)} SASS instructions, {total:,.0f} warp instructions executed")
+        costliest = sorted(blocks, key=lambda b: -b[1] * b[2])[: args.top]
+        for first, n, length in sorted(costliest):
+            r = rows[first]
+            print(f"  {r['Address'][-6:]:>6}  {length:4d} instr x {n:12,.0f}  {100 * n * length / total:5.1f} %"
+                  f"  threads {r.get('Avg. Threads Executed', '?'):>5}  {r['Source'].strip()[:60]}")
     if not found:
-        print("no instruction counts found; the file begins:")
-        with open(path, errors="replace") as f:
-            for _, line in zip(range(12), f):
-                print(line.rstrip()[:200])
+        print(f"{args.csv}: no per-instruction counts (was the SourceCounters section collected?)")
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    main()

@@ -3,7 +3,8 @@
 #   bash Utilities/gpu/probe.sh
 # builds the tree (A), times 1M particles in single and double precision, runs the fast GPU tests
 # and profiles the density and correction passes with ncu, source-level counters included
-# ($OUT/probe.tgz: .ncu-rep, details, per-SASS-instruction CSV; the log is $OUT/probe.log; without
+# ($OUT/probe.tgz: .ncu-rep, details, per-SASS-instruction CSV, summarised in the log by
+# gpu/hotspots.py; the log is $OUT/probe.log; without
 # $OUT both go to output/probe/, git-ignored). Options, by environment:
 #   PBF_PROBE_IEEE=1        also build B: PBF_PROBE_B_FLAGS (CMake flags; default
 #                           -DPBF_CUDA_IEEE_GRADIENT=ON) and/or PBF_PROBE_B_MASKS (a file that
@@ -103,6 +104,7 @@ if [[ ${PBF_PROBE_NCU:-1} != 0 ]]; then
       --steps 1 >/tmp/$1.ncu.log 2>&1
     ncu -i "/tmp/$1.ncu-rep" --page details >"/tmp/$1.details.txt" 2>&1
     ncu -i "/tmp/$1.ncu-rep" --page source --csv --print-source sass >"/tmp/$1.sass.csv" 2>&1
+    python3 "$root/Utilities/gpu/hotspots.py" "/tmp/$1.sass.csv" --top 12 | head -16
     grep -E "Duration|Issue Slots Busy|Executed Ipc A|Registers Per|Achieved Occupancy|No Eligible|thread_inst_executed_per|inst_executed.sum|Branch Efficiency|Avg. Divergent" "/tmp/$1.details.txt" | head -14
   }
   if [[ ${PBF_PROBE_NCU:-1} != times ]]; then
