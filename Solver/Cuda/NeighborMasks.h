@@ -116,6 +116,21 @@ PBF_HD PBF_INLINE bool rowRange(const GridView<Real>& grid, const RowFrame& f, i
 
 } // namespace detail
 
+#if defined(__CUDA_ARCH__)
+namespace detail
+{
+// The word whose top bit is the sign of x (the rest of it is not used).
+PBF_HD PBF_INLINE std::uint32_t signWord(float x)
+{
+  return __float_as_uint(x);
+}
+PBF_HD PBF_INLINE std::uint32_t signWord(double x)
+{
+  return static_cast<std::uint32_t>(static_cast<unsigned long long>(__double_as_longlong(x)) >> 32);
+}
+} // namespace detail
+#endif
+
 // Marks, in each of particle i's rows, the candidates j among the first 32 with |p_i - p_j|^2 <
 // reach2 = (h + skin)^2. Only particle i's own masks are written, so a pass may rebuild them
 // while other particles read positions.
@@ -140,7 +155,13 @@ PBF_HD PBF_INLINE void buildNeighborMasks(std::uint32_t i, const GridView<Real>&
       for (std::uint32_t k = 0; k < count; ++k)
       {
         const Vec3<Real> d = pi - q[k];
+#if defined(__CUDA_ARCH__)
+        // The sign of r^2 - reach2 is the bit (negative: closer than the reach; equal gives +0):
+        // one funnel shift moves it in, where a compare, a select, a shift and an or did.
+        reversed = __funnelshift_l(detail::signWord(dot(d, d) - reach2), reversed, 1);
+#else
         reversed = (reversed << 1) | (dot(d, d) < reach2 ? 1u : 0u);
+#endif
       }
       mask = count == 0 ? 0u : detail::reverseBits(reversed) >> (kMaskWidth - count);
     }
