@@ -42,26 +42,28 @@ struct MaskedNeighbors
 namespace detail
 {
 
-PBF_HD PBF_INLINE int lowestSetBit(std::uint32_t mask)
+// A mask holds candidate k of its row at bit 31 - k, so the next candidate in ascending order is
+// the highest set bit: one leading-zero count (on a GPU a bit reversal and a find-first had
+// cost two instructions a visit).
+PBF_HD PBF_INLINE int firstCandidate(std::uint32_t mask)
 {
 #if defined(__CUDA_ARCH__)
-  return __ffs(static_cast<int>(mask)) - 1;
+  return __clz(static_cast<int>(mask));
 #else
-  return __builtin_ctz(mask);
+  return __builtin_clz(mask);
 #endif
 }
 
-PBF_HD PBF_INLINE std::uint32_t reverseBits(std::uint32_t v)
+// The mask without candidate k (its first): the bits below bit 31 - k.
+PBF_HD PBF_INLINE std::uint32_t withoutFirst(std::uint32_t mask, int k)
 {
-#if defined(__CUDA_ARCH__)
-  return __brev(v);
-#else
-  v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
-  v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
-  v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
-  v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
-  return (v >> 16) | (v << 16);
-#endif
+  return mask & (0x7fffffffu >> k);
+}
+
+// The first `count` candidates of a row, all marked (a row's tail beyond the first 32).
+PBF_HD PBF_INLINE std::uint32_t firstCandidates(std::uint32_t count)
+{
+  return count >= static_cast<std::uint32_t>(kMaskWidth) ? ~0u : ~(~0u >> count);
 }
 
 // The cell of sorted particle i and the x range of its rows, as forEachNeighbor computes them.
@@ -146,7 +148,7 @@ PBF_HD PBF_INLINE void buildNeighborMasks(std::uint32_t i, const GridView<Real>&
     if (detail::rowRange(grid, frame, r, begin, end))
     {
       // The first candidate is shifted in first and ends in the highest of `count` bits; one
-      // bit reversal at the end puts candidate k at bit k. A shift and an add a candidate,
+      // shift at the end puts candidate k at bit 31 - k (firstCandidate). A shift a candidate,
       // instead of a shift by k, an or and the index arithmetic (on a GPU the build is a third
       // of the density pass).
       const std::uint32_t count = end - begin > kMaskWidth ? kMaskWidth : end - begin;
@@ -163,7 +165,7 @@ PBF_HD PBF_INLINE void buildNeighborMasks(std::uint32_t i, const GridView<Real>&
         reversed = (reversed << 1) | (dot(d, d) < reach2 ? 1u : 0u);
 #endif
       }
-      mask = count == 0 ? 0u : detail::reverseBits(reversed) >> (kMaskWidth - count);
+      mask = count == 0 ? 0u : reversed << (kMaskWidth - count);
     }
     masks[static_cast<std::size_t>(r) * stride + i] = mask;
   }
@@ -225,7 +227,7 @@ PBF_HD PBF_INLINE void forEachNeighbor(
           if (count < kMaskWords)
           {
             word[count * kMaskBlock] =
-              make_uint2(b, left >= kMaskWidth ? ~0u : (std::uint32_t(1) << left) - 1u);
+              make_uint2(b, detail::firstCandidates(left));
           }
           ++count;
         }
@@ -252,8 +254,9 @@ PBF_HD PBF_INLINE void forEachNeighbor(
       base = w.x;
       mask = w.y;
     }
-    const std::uint32_t j = base + static_cast<std::uint32_t>(detail::lowestSetBit(mask));
-    mask &= mask - 1;
+    const int k = detail::firstCandidate(mask);
+    const std::uint32_t j = base + static_cast<std::uint32_t>(k);
+    mask = detail::withoutFirst(mask, k);
     visit(j);
   }
 #else
@@ -277,8 +280,9 @@ PBF_HD PBF_INLINE void forEachNeighbor(
     std::uint32_t j;
     if (mask != 0)
     {
-      j = base + static_cast<std::uint32_t>(detail::lowestSetBit(mask));
-      mask &= mask - 1;
+      const int k = detail::firstCandidate(mask);
+      j = base + static_cast<std::uint32_t>(k);
+      mask = detail::withoutFirst(mask, k);
     }
     else if (tail != tailEnd)
     {
