@@ -354,10 +354,9 @@ PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real,
         }
         delta += f.c.kernels.spikyGradientWithin(d, d2) * (lambdaI + lambdaJ + sCorr);
       };
-      if (j != i)
-      {
-        add(r, r2);
-      }
+      // The particle itself needs no test: its gradient at r = 0 is exactly zero
+      // (spikyGradientWithin), so it adds a zero to a sum that started at +0.
+      add(r, r2);
       if (reflections)
       {
         // A particle's own reflections count: they are the wall's share next to it.
@@ -455,7 +454,7 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
     const Vec3<Real> pj = f.p[j];
     const Vec3<Real> r = pi - pj;
     const Real r2 = dot(r, r);
-    if (r2 < f.c.kernels.h2 && j != i)
+    if (r2 < f.c.kernels.h2) // the particle itself adds zeros: no test
     {
       const Real volume = volumeOf(j, f);
       const Vec3<Real> vij = f.v[j] - vi;
@@ -508,7 +507,7 @@ PBF_HD PBF_INLINE void vorticityConfinement(std::uint32_t i, const FluidView<Rea
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
     const Vec3<Real> r = pi - f.p[j];
     const Real r2 = dot(r, r);
-    if (r2 < f.c.kernels.h2 && j != i)
+    if (r2 < f.c.kernels.h2) // the particle itself adds zeros: no test
     {
       const Real volume = volumeOf(j, f);
       eta += f.c.kernels.spikyGradientWithin(r, r2) * (volume * (omegaLengthOf(j, f) - magI));
