@@ -257,6 +257,21 @@ PBF_HD PBF_INLINE void forEachReflection(const WallMirrors<Real>& m, const Vec3<
   }
 }
 
+// Calls add(r, r2) for each reflection of q closer to p than h (r = p - reflection, r2 = |r|^2).
+template <class Real, class Add>
+PBF_HD PBF_INLINE void forEachReflectionWithin(
+  const WallMirrors<Real>& m, const Vec3<Real>& p, const Vec3<Real>& q, Real h2, Add&& add)
+{
+  forEachReflection(m, q, [&](const Vec3<Real>& image) {
+    const Vec3<Real> r = p - image;
+    const Real r2 = dot(r, r);
+    if (r2 < h2)
+    {
+      add(r, r2);
+    }
+  });
+}
+
 template <class Real>
 PBF_HD PBF_INLINE bool hasReflections(const WallMirrors<Real>& m)
 {
@@ -299,14 +314,7 @@ PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real, N
       add(r, r2);
       if (reflections)
       {
-        forEachReflection(mirrors, pj, [&](const Vec3<Real>& image) {
-          const Vec3<Real> ri = pi - image;
-          const Real ri2 = dot(ri, ri);
-          if (ri2 < f.c.kernels.h2)
-          {
-            add(ri, ri2);
-          }
-        });
+        forEachReflectionWithin(mirrors, pi, pj, f.c.kernels.h2, add);
       }
     }
   });
@@ -360,14 +368,7 @@ PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real,
       if (reflections)
       {
         // A particle's own reflections count: they are the wall's share next to it.
-        forEachReflection(mirrors, pj, [&](const Vec3<Real>& image) {
-          const Vec3<Real> ri = pi - image;
-          const Real ri2 = dot(ri, ri);
-          if (ri2 < f.c.kernels.h2)
-          {
-            add(ri, ri2);
-          }
-        });
+        forEachReflectionWithin(mirrors, pi, pj, f.c.kernels.h2, add);
       }
     }
   });
