@@ -66,6 +66,18 @@ PBF_HD PBF_INLINE std::uint32_t firstCandidates(std::uint32_t count)
   return count >= static_cast<std::uint32_t>(kMaskWidth) ? ~0u : ~(~0u >> count);
 }
 
+#if defined(__CUDA_ARCH__)
+// The word whose top bit is the sign of x (the rest of it is not used): the mask build's bit.
+PBF_HD PBF_INLINE std::uint32_t signWord(float x)
+{
+  return __float_as_uint(x);
+}
+PBF_HD PBF_INLINE std::uint32_t signWord(double x)
+{
+  return static_cast<std::uint32_t>(static_cast<unsigned long long>(__double_as_longlong(x)) >> 32);
+}
+#endif
+
 // The cell of sorted particle i and the x range of its rows, as forEachNeighbor computes them.
 struct RowFrame
 {
@@ -86,52 +98,25 @@ PBF_HD PBF_INLINE RowFrame rowFrame(const GridView<Real>& grid, std::uint32_t i)
   return f;
 }
 
-// The key of the first cell (x = 0) of row r (z-major, as forEachNeighbor loops); false outside
-// the grid.
+// Row r (z-major, as forEachNeighbor loops) as a sorted index range; false outside the grid.
 template <class Real>
-PBF_HD PBF_INLINE bool rowKey(const GridGeometry<Real>& g, const RowFrame& f, int r, CellKey& row)
+PBF_HD PBF_INLINE bool rowRange(const GridView<Real>& grid, const RowFrame& f, int r,
+  std::uint32_t& begin, std::uint32_t& end)
 {
+  const GridGeometry<Real>& g = grid.geometry;
   const int z = f.cz - 1 + r / 3;
   const int y = f.cy - 1 + r % 3;
   if (z < 0 || z >= g.nz || y < 0 || y >= g.ny)
   {
     return false;
   }
-  row = (static_cast<CellKey>(z) * g.ny + y) * g.nx;
-  return true;
-}
-
-// Row r as a sorted index range; false outside the grid.
-template <class Real>
-PBF_HD PBF_INLINE bool rowRange(const GridView<Real>& grid, const RowFrame& f, int r,
-  std::uint32_t& begin, std::uint32_t& end)
-{
-  CellKey row = 0;
-  if (!rowKey(grid.geometry, f, r, row))
-  {
-    return false;
-  }
+  const CellKey row = (static_cast<CellKey>(z) * g.ny + y) * g.nx;
   begin = grid.cellOffsets[row + f.x0];
   end = grid.cellOffsets[row + f.x1 + 1];
   return true;
 }
 
 } // namespace detail
-
-#if defined(__CUDA_ARCH__)
-namespace detail
-{
-// The word whose top bit is the sign of x (the rest of it is not used).
-PBF_HD PBF_INLINE std::uint32_t signWord(float x)
-{
-  return __float_as_uint(x);
-}
-PBF_HD PBF_INLINE std::uint32_t signWord(double x)
-{
-  return static_cast<std::uint32_t>(static_cast<unsigned long long>(__double_as_longlong(x)) >> 32);
-}
-} // namespace detail
-#endif
 
 // Marks, in each of particle i's rows, the candidates j among the first 32 with |p_i - p_j|^2 <
 // reach2 = (h + skin)^2. Only particle i's own masks are written, so a pass may rebuild them

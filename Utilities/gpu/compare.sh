@@ -7,7 +7,7 @@
 # then runs 1M single, 1M double and 10M single twice each, alternating baseline and this tree so
 # that a drift of the clocks hits both alike, and prints the median ms/step of each and the
 # change. JSON under $OUT (else output/gpu-compare). .baseline/ is git-ignored.
-# PBF_COMPARE_VARIANTS="thin=--skin 0.002;global=--per-particle-from 1e12": also this tree with
+# PBF_COMPARE_VARIANTS="skin0.05=--skin 0.05;block96=--block 96": also this tree with
 # those extra pbf_bench options, each config once per round, as rows "this tree, LABEL".
 # PBF_COMPARE_REFINED="0.005:0.5 0.0025:0.2": also the refined dam break at spacing S to time T
 # with the defaults (pbf_bench --refined S --until T --modes defaults), both trees, two rounds:
