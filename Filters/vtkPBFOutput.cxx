@@ -192,6 +192,7 @@ vtkSmartPointer<vtkFieldData> vtkPBFOutput::FrameFieldData(
   AddValue(fieldData, "SCorrDeltaQ", p.sCorrDeltaQ);
   AddValue(fieldData, "XSPHViscosity", p.xsphViscosity);
   AddValue(fieldData, "XSPHKinematicViscosity", p.xsphNu());
+  AddValue(fieldData, "XSPHHyperViscosity", p.xsphHyperViscosity);
   AddValue(fieldData, "VorticityEpsilon", p.vorticityEpsilon);
   AddInteger(fieldData, "Unilateral", p.unilateral ? 1 : 0);
   AddInteger(fieldData, "MirrorWalls", p.mirrorWalls ? 1 : 0);

@@ -52,6 +52,7 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->SCorrN = defaults.sCorrN;
   this->SCorrDeltaQ = defaults.sCorrDeltaQ;
   this->XSPHViscosity = defaults.xsphViscosity;
+  this->XSPHHyperViscosity = defaults.xsphHyperViscosity;
   this->VorticityEpsilon = defaults.vorticityEpsilon;
   this->Unilateral = defaults.unilateral;
   this->MirrorWalls = defaults.mirrorWalls;
@@ -431,6 +432,7 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "SCorrN: " << this->SCorrN << "\n";
   os << indent << "SCorrDeltaQ: " << this->SCorrDeltaQ << "\n";
   os << indent << "XSPHViscosity: " << this->XSPHViscosity << "\n";
+  os << indent << "XSPHHyperViscosity: " << this->XSPHHyperViscosity << "\n";
   os << indent << "VorticityEpsilon: " << this->VorticityEpsilon << "\n";
   os << indent << "Unilateral: " << (this->Unilateral ? "On" : "Off") << "\n";
   os << indent << "MirrorWalls: " << (this->MirrorWalls ? "On" : "Off") << "\n";

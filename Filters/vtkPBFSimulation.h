@@ -178,6 +178,8 @@ public:
   vtkGetMacro(SCorrDeltaQ, double);
   vtkSetMacro(XSPHViscosity, double);
   vtkGetMacro(XSPHViscosity, double);
+  vtkSetMacro(XSPHHyperViscosity, double);
+  vtkGetMacro(XSPHHyperViscosity, double);
   vtkSetMacro(VorticityEpsilon, double);
   vtkGetMacro(VorticityEpsilon, double);
   vtkSetMacro(Unilateral, bool);
@@ -377,6 +379,7 @@ protected:
   double SCorrN;
   double SCorrDeltaQ;
   double XSPHViscosity;
+  double XSPHHyperViscosity;
   double VorticityEpsilon;
   bool Unilateral;
   bool MirrorWalls;

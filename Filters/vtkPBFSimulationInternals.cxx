@@ -123,6 +123,7 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
   p.sCorrN = self->SCorrN;
   p.sCorrDeltaQ = self->SCorrDeltaQ;
   p.xsphViscosity = self->XSPHViscosity;
+  p.xsphHyperViscosity = self->XSPHHyperViscosity;
   p.vorticityEpsilon = self->VorticityEpsilon;
   p.unilateral = self->Unilateral;
   p.mirrorWalls = self->MirrorWalls;

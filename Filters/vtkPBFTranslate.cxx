@@ -104,6 +104,7 @@ std::string vtkPBFInUserTerms(std::string text)
     { "restDensity", "Rest Density" },
     { "cflNumber", "CFL Number" },
     { "xsphViscosity", "XSPH Viscosity" },
+    { "xsphHyperViscosity", "XSPH Hyper Viscosity" },
     { "vorticityEpsilon", "Vorticity Epsilon" },
     { "wallFriction", "Wall Friction" },
     { "sCorrDeltaQ", "S Corr Delta Q" },

@@ -52,6 +52,8 @@ struct HostFluid
     f.lambda = lambda.data();
     f.scratch = scratch.data();
     f.omega = omega.data();
+    // XSPH's sum goes where delta p was: the solve is over when it is written.
+    f.smoothing = scratch.data();
     f.grid = GridView<Real>{ geometry, cellOffsets.data(), keys.data() };
     f.c = coefficients;
     f.time = &time;
@@ -161,7 +163,7 @@ enum class HostField
   DensityAndLambda, // after the density pass
   Predicted,        // p, after each position correction
   Velocity,         // after the velocity update
-  Vorticity         // omega, before the confinement
+  Vorticity         // omega and XSPH's sum, before the confinement
 };
 
 // The constraint projections and the velocity passes of one step (Algorithm 1, lines 8-23) over
@@ -207,7 +209,8 @@ void projectAndUpdate(HostFluid<Real>& fluid, ForEach&& forEach, Refresh&& refre
   refresh(HostField::Velocity);
   forEach([&](std::uint32_t i) { vorticityAndXsph(i, f); });
   refresh(HostField::Vorticity);
-  forEach([&](std::uint32_t i) { vorticityConfinement(i, f); });
+  // The velocity in place: each particle reads only its own.
+  forEach([&](std::uint32_t i) { vorticityConfinement(i, f, f.v); });
   forEach([&](std::uint32_t i) { commitPosition(i, f, fluid.x.data()); });
 }
 

@@ -98,6 +98,8 @@ void DeviceSubdomainStepper<Real, Device>::solve(Roles4 r, const CellKey* sorted
   const FluidView<Real, MaskedNeighbors<Real>> f =
     detail::afterIterationsView(b, after, sortedKeys, x, v, positions);
   exec = device_->executor();
+  // The ghosts' omega, and their XSPH sums where the bi-Laplacian reads them.
+  Vec3<Real>* const ghostSmoothing = parameters_.xsphHyperViscosity > 0 ? f.smoothing : nullptr;
   detail::withVorticityPass(k.c.wallFriction, [&](auto pass) {
     {
       auto edge = device_->borderExecutor();
@@ -105,19 +107,18 @@ void DeviceSubdomainStepper<Real, Device>::solve(Roles4 r, const CellKey* sorted
       detail::firstPassOnPositions(
         edge, VorticityStage{}, be, after, border, f, performed, false, pass, onBorder);
     }
-    sendRefresh<Vec3<Real>>(x, nullptr);
+    sendRefresh<Vec3<Real>>(x, ghostSmoothing);
     detail::firstPassOnPositions(
       exec, VorticityStage{}, b, after, interior, f, performed, false, pass, onInterior);
   });
   device_->joinBorder();
-  receiveRefresh<Vec3<Real>>(x, nullptr);
+  receiveRefresh<Vec3<Real>>(x, ghostSmoothing);
   exec = device_->executor();
-  FluidView<Real, MaskedNeighbors<Real>> confine = f;
-  confine.v = f.scratch;
-  subdomain::confine<Real>(exec, n, ownedList_, confine);
-  // Line 23 and the ghosts dropped: x = the corrected positions, v = f.scratch, owned only, into
-  // the buffers that held v and omega.
-  keepOwned(f.p, f.scratch, r.v, r.x);
+  // The velocities in place (omega = x, XSPH's sum = f.scratch: the neighbours read both).
+  subdomain::confine<Real>(exec, n, ownedList_, f);
+  // Line 23 and the ghosts dropped: x = the corrected positions, v, owned only, into the
+  // buffers that held omega and XSPH's sum.
+  keepOwned(f.p, v, r.x, f.scratch == vec_[r.p] ? r.p : r.free);
 }
 
 template <class Real, class Device>

@@ -243,8 +243,9 @@ FluidView<Real, MaskedNeighbors<Real>> iterationView(const StepBuffers<Real>& b,
 }
 
 // After the iterations (vorticity, XSPH, confinement): the corrected positions are
-// positions[k.iterations & 1], the other buffer is free for the XSPH velocity, and omega goes
-// into x's buffer, which the step no longer needs.
+// positions[k.iterations & 1]; the other buffer (scratch) and x's, which the step no longer
+// needs, hold omega and XSPH's sum: omega in x's and the sum in scratch here (the decomposed
+// step's layout; the single-GPU step swaps them, see enqueueStep).
 template <class Real>
 FluidView<Real, MaskedNeighbors<Real>> afterIterationsView(const StepBuffers<Real>& b,
   const StepConstants<Real>& k, const CellKey* sortedKeys, Vec3<Real>* x, Vec3<Real>* v,
@@ -255,6 +256,7 @@ FluidView<Real, MaskedNeighbors<Real>> afterIterationsView(const StepBuffers<Rea
   f.v = v;
   f.omega = x;
   f.scratch = positions[(k.iterations + 1) & 1];
+  f.smoothing = f.scratch;
   f.volume = b.volume;
   f.omegaLength = b.omegaLength;
   return f;
@@ -478,18 +480,20 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
     detail::correctionPass(exec, b, n, f, iteration, last, adaptive ? b.adaptive : nullptr);
   }
 
-  // Lines 22-23 (vorticity confinement and XSPH) on the corrected positions.
-  const FluidView<Real, MaskedNeighbors<Real>> f =
+  // Lines 22-23 (vorticity confinement and XSPH) on the corrected positions. XSPH's sum goes
+  // into x's buffer and omega into the other position buffer, where the confinement then writes
+  // the velocity over each particle's own omega (the neighbours read |omega_j| from
+  // b.omegaLength): v ends in a buffer of x and v's pair, as Roles expects.
+  FluidView<Real, MaskedNeighbors<Real>> f =
     detail::afterIterationsView(b, k, sortedKeys, D, C, positions);
+  f.omega = f.scratch;
+  f.smoothing = D;
   detail::withVorticityPass(k.c.wallFriction, [&](auto pass) {
     detail::firstPassOnPositions(exec, VorticityStage{}, b, k, n, f, k.iterations, false, pass);
   });
-  // The confined velocity overwrites the XSPH velocity in place: each particle reads only its
-  // own, and f.scratch becomes v.
-  FluidView<Real, MaskedNeighbors<Real>> confine = f;
-  confine.v = f.scratch;
+  Vec3<Real>* const velocity = f.scratch;
   exec.forEach(ConfinementStage{}, n,
-    [=] PBF_HD(std::uint32_t i) { vorticityConfinement(i, confine); });
+    [=] PBF_HD(std::uint32_t i) { vorticityConfinement(i, f, velocity); });
 
   // Line 23, x_i = x*_i: the corrected positions' buffer becomes x.
   Roles next;

@@ -349,14 +349,14 @@ void cellKeys(Exec& exec, const GridGeometry<Real>& g, std::uint32_t n, const Ve
   });
 }
 
-// Eq. 16 on the XSPH velocities in place (f.v = f.scratch), as StepSchedule's last stage, for
-// the particles of a list.
+// XSPH and eq. 16 on the velocities in place (each particle reads only its own), as
+// StepSchedule's last stage, for the particles of a list.
 template <class Real, class Exec>
 void confine(Exec& exec, std::uint32_t n, const std::uint32_t* list,
   const FluidView<Real, MaskedNeighbors<Real>>& f)
 {
-  exec.forEach(
-    ConfinementStage{}, n, [=] PBF_HD(std::uint32_t k) { vorticityConfinement(list[k], f); });
+  exec.forEach(ConfinementStage{}, n,
+    [=] PBF_HD(std::uint32_t k) { vorticityConfinement(list[k], f, f.v); });
 }
 
 // Algorithm 1, line 21, for the particles of a list: v_i = (x*_i - x_i) / dt (adaptive mode, when

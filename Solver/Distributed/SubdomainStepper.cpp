@@ -423,6 +423,11 @@ void SubdomainStepper<Real>::stepAlone()
         break;
       case HostField::Vorticity:
         refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.omega[i]; });
+        if (fluid_.parameters.xsphHyperViscosity > 0)
+        {
+          // XSPH's sum (HostFluid::view puts it in scratch), which the bi-Laplacian smooths.
+          refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.scratch[i]; });
+        }
         break;
     }
   };

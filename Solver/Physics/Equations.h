@@ -76,6 +76,7 @@ struct StepTime
   // surface push, so that a flat free surface is pushed by k g0 dt^2 in the step.
   Real tensile;
   Real xsph;      // XSPH blend c of eq. 17 for this step: nu dt / (beta h^2), Parameters::xsphNu
+  Real xsphHyper; // the bi-Laplacian blend c_4: nu_4 dt / (beta h^2), Parameters::xsphHyperNu
 
   static StepTime make(const Parameters& p, const LatticeCalibration& lattice, double dt)
   {
@@ -84,10 +85,14 @@ struct StepTime
     t.inverseDt = static_cast<Real>(1.0 / dt);
     t.tensile =
       static_cast<Real>(p.sCorrK * kStandardGravity * dt * dt / lattice.tensileSurfacePush);
-    // At most kMaxXsphBlend: explicit smoothing beyond it is unstable. Automatic steps stay below
-    // (Simulation::nextTimeStep); a long fixed step is clamped there.
-    t.xsph = static_cast<Real>(
-      std::min(kMaxXsphBlend, p.xsphNu() * dt / lattice.xsphSecondMoment));
+    // c + c_4 at most kMaxXsphBlend: explicit smoothing beyond it is unstable (a pattern's gain
+    // S is at most about 1 on the lattice, so each blend damps, never flips, it). Automatic steps
+    // stay below (Simulation::nextTimeStep); a long fixed step scales both down to it.
+    const double c = p.xsphNu() * dt / lattice.xsphSecondMoment;
+    const double c4 = p.xsphHyperNu() * dt / lattice.xsphSecondMoment;
+    const bool clamped = c + c4 > kMaxXsphBlend;
+    t.xsph = static_cast<Real>(clamped ? kMaxXsphBlend * (c / (c + c4)) : c);
+    t.xsphHyper = static_cast<Real>(clamped ? kMaxXsphBlend * (c4 / (c + c4)) : c4);
     return t;
   }
 };
@@ -105,8 +110,9 @@ struct FluidView
   Vec3<Real>* v;
   Real* density;
   Real* lambda;
-  Vec3<Real>* scratch; // delta p_i during the solve, then the XSPH velocity
+  Vec3<Real>* scratch; // delta p_i during the solve
   Vec3<Real>* omega;   // vorticity
+  Vec3<Real>* smoothing; // XSPH's sum of eq. 17 (vorticityAndXsph), which the confinement reads
   // Optional, per particle (null: computed in place for every pair, as the CPU backends do): the
   // SPH volume m / rho_j, written with the last correction, and |omega_j|, written with omega.
   // The vorticity passes read them for every neighbour pair; stored once, they save a division
@@ -431,8 +437,10 @@ PBF_HD PBF_INLINE Vec3<Real> wallFrictionImage(
     weight;
 }
 
-// Eq. 15 (vorticity omega_i) and eq. 17 (XSPH viscosity) from the same neighbour pass. Both sums
-// carry the SPH volume m / rho_j, so omega is a true curl in 1/s and c is a dimensionless blend.
+// Eq. 15 (vorticity omega_i) and eq. 17's sum S_i = sum_j V_j (v_j - v_i) W_ij (XSPH) from the
+// same neighbour pass, into f.omega and f.smoothing; the confinement pass applies XSPH, because
+// its bi-Laplacian needs every neighbour's S_j first. Both sums carry the SPH volume
+// V_j = m / rho_j, so omega is a true curl in 1/s and c is a dimensionless blend.
 // With wall friction the walls' images join the smoothing (wallFrictionImage), in the same pass:
 // one neighbour walk, so the GPU stages its neighbour rows once. Friction = false compiles them
 // out: the GPU launches that pass when the friction is 0, as the images' code made the kernel
@@ -492,19 +500,27 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   {
     f.omegaLength[i] = length(omega);
   }
-  f.scratch[i] = vi + smoothing * f.time->xsph;
+  f.smoothing[i] = smoothing;
 }
 
-// Eq. 16: f_i = epsilon (N x omega_i), N = eta / |eta|, eta = grad |omega|_i (SPH difference
-// gradient, zero in uniform rotation). Applied to the XSPH velocity as an acceleration. Where
-// |eta| h is negligible against |omega| the direction N is noise, and the force is dropped.
+// The step's new velocity into velocityOut[i]: XSPH, v_i + c S_i (eq. 17), minus c_4 times S
+// smoothed once more, S(S)_i = sum_j V_j (S_j - S_i) W_ij (Parameters::xsphHyperViscosity; a
+// pattern of gain g under S is damped by c g + c_4 g^2, so long waves, g ~ (k h)^2, hardly feel
+// c_4), plus eq. 16: f_i = epsilon (N x omega_i), N = eta / |eta|, eta = grad |omega|_i (SPH
+// difference gradient, zero in uniform rotation), as an acceleration. Where |eta| h is negligible
+// against |omega| the direction N is noise, and the force is dropped. velocityOut may be f.v or
+// f.omega: each particle reads only its own of those.
 template <class Real, class Neighbors>
-PBF_HD PBF_INLINE void vorticityConfinement(std::uint32_t i, const FluidView<Real, Neighbors>& f)
+PBF_HD PBF_INLINE void vorticityConfinement(
+  std::uint32_t i, const FluidView<Real, Neighbors>& f, Vec3<Real>* velocityOut)
 {
   const Vec3<Real> pi = f.p[i];
   const Vec3<Real> omegaI = f.omega[i];
   const Real magI = omegaLengthOf(i, f);
+  const Vec3<Real> si = f.smoothing[i];
+  const bool smoothTwice = f.time->xsphHyper != Real(0);
   Vec3<Real> eta{ Real(0), Real(0), Real(0) };
+  Vec3<Real> hyper{ Real(0), Real(0), Real(0) };
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
     const Vec3<Real> r = pi - f.p[j];
     const Real r2 = dot(r, r);
@@ -512,16 +528,25 @@ PBF_HD PBF_INLINE void vorticityConfinement(std::uint32_t i, const FluidView<Rea
     {
       const Real volume = volumeOf(j, f);
       eta += f.c.kernels.spikyGradientWithin(r, r2) * (volume * (omegaLengthOf(j, f) - magI));
+      if (smoothTwice)
+      {
+        hyper += (f.smoothing[j] - si) * (volume * f.c.kernels.poly6Within(r2));
+      }
     }
   });
-  Vec3<Real> v = f.scratch[i];
+  // XSPH (eq. 17) and its bi-Laplacian: v + c S_i - c_4 S(S)_i.
+  Vec3<Real> v = f.v[i] + si * f.time->xsph;
+  if (smoothTwice)
+  {
+    v -= hyper * f.time->xsphHyper;
+  }
   const Real etaLength = length(eta);
   if (etaLength * f.c.kernels.h > Real(1e-4) * magI && etaLength > Real(0))
   {
     const Vec3<Real> N = eta * (Real(1) / etaLength);
     v += cross(N, omegaI) * (f.c.vorticityEpsilon * f.time->dt);
   }
-  f.v[i] = v;
+  velocityOut[i] = v;
 }
 
 // Algorithm 1, line 23: x_i = x*_i. The step's start positions become the corrected ones.

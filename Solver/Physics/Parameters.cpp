@@ -208,6 +208,12 @@ void Parameters::validate() const
     reject("xsphViscosity", xsphViscosity,
       "must lie in [0, 1] (the artificial viscosity alpha of nu = alpha h v_scene)");
   }
+  requireNonNegative("xsphHyperViscosity", xsphHyperViscosity);
+  if (xsphHyperViscosity > 1.0)
+  {
+    reject("xsphHyperViscosity", xsphHyperViscosity,
+      "must lie in [0, 1] (alpha_4 of nu_4 = alpha_4 h v_scene)");
+  }
   requireNonNegative("wallFriction", wallFriction);
   if (wallFriction > 1.0)
   {
@@ -274,6 +280,8 @@ void validatePrecision(const Parameters& p)
   requireFits<Real>("sCorrK", p.sCorrK, "k g0 over the tensile term's surface push",
     p.sCorrK * kStandardGravity / lattice.tensileSurfacePush, true);
   requireFits<Real>("xsphViscosity", p.xsphViscosity, "xsphViscosity", p.xsphViscosity, true);
+  requireFits<Real>("xsphHyperViscosity", p.xsphHyperViscosity, "xsphHyperViscosity",
+    p.xsphHyperViscosity, true);
   requireFits<Real>("vorticityEpsilon", p.vorticityEpsilon, "vorticityEpsilon",
     p.vorticityEpsilon, true);
   requireFits<Real>("timeStep", p.timeStep, "timeStep", p.timeStep);
@@ -362,7 +370,9 @@ std::string describe(const Parameters& p)
                  "% mean, " + std::to_string(p.maxDensityErrorTolerance) + "% max)"
                                        : "")
       << " epsilon=" << p.relaxation << " k=" << p.sCorrK << " n=" << p.sCorrN
-      << " dq=" << p.sCorrDeltaQ << " xsph=" << p.xsphViscosity << " (nu " << p.xsphNu() << ")" << " vorticity=" << p.vorticityEpsilon
+      << " dq=" << p.sCorrDeltaQ << " xsph=" << p.xsphViscosity << " (nu " << p.xsphNu() << ")"
+      << (p.xsphHyperViscosity > 0 ? " xsphHyper=" + std::to_string(p.xsphHyperViscosity) : "")
+      << " vorticity=" << p.vorticityEpsilon
       << (p.wallFriction > 0 ? " wallFriction=" + std::to_string(p.wallFriction) : "")
       << (p.timeStepping == TimeStepping::Automatic
              ? " dt=auto (CFL " + std::to_string(p.cflNumber) + ", at most " +

@@ -80,6 +80,13 @@ struct Parameters
   // particle-scale velocity noise of the Jacobi projections: 0.05 keeps a 120-layer column at
   // rest, where 0.001 (the paper's c = 0.01 at 240 steps/s) lets it boil at 1-2 m/s.
   double xsphViscosity = 0.05;
+  // XSPH's sum smoothed once more (a bi-Laplacian, hyperviscous filter), alpha_4: each step takes
+  // c_4 S(S(v)) off the velocity, S the sum of eq. 17 and c_4 = nu_4 dt / (beta h^2) with
+  // nu_4 = alpha_4 h v_scene (xsphHyperNu()), the blend of xsphViscosity's form. On the particle
+  // scale, where the Jacobi projections leave their noise, it damps as XSPH does at the same
+  // alpha; a flow on a scale L >> h it damps by about (h / L)^4 instead of (h / L)^2, so a bore
+  // or a collapsing column is slowed far less. 0: off (the paper's XSPH alone).
+  double xsphHyperViscosity = 0.0;
   double vorticityEpsilon = 0.01; // epsilon of eq. 16 [m/s]: confinement acceleration per |omega|
   bool unilateral = true;       // clamp C_i at 0: a free surface is not pulled together
   bool mirrorWalls = true;      // walls mirror the fluid near them (Equations.h, WallMirrors)
@@ -109,6 +116,7 @@ struct Parameters
   double smoothingLength() const { return smoothingRatio * particleSpacing; }
   double sceneSpeed() const;
   double xsphNu() const { return xsphViscosity * smoothingLength() * sceneSpeed(); } // [m^2/s]
+  double xsphHyperNu() const { return xsphHyperViscosity * smoothingLength() * sceneSpeed(); }
 
   // Throws InvalidInput naming the first bad field and its value.
   void validate() const;

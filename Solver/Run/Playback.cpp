@@ -36,7 +36,8 @@ bool sameParameters(const Parameters& a, const Parameters& b)
     a.densityErrorTolerance == b.densityErrorTolerance &&
     a.maxDensityErrorTolerance == b.maxDensityErrorTolerance && a.relaxation == b.relaxation &&
     a.sCorrK == b.sCorrK && a.sCorrN == b.sCorrN && a.sCorrDeltaQ == b.sCorrDeltaQ &&
-    a.xsphViscosity == b.xsphViscosity && a.vorticityEpsilon == b.vorticityEpsilon &&
+    a.xsphViscosity == b.xsphViscosity && a.xsphHyperViscosity == b.xsphHyperViscosity &&
+    a.vorticityEpsilon == b.vorticityEpsilon &&
     a.unilateral == b.unilateral && a.mirrorWalls == b.mirrorWalls &&
     a.wallFriction == b.wallFriction && a.gravity.x == b.gravity.x &&
     a.gravity.y == b.gravity.y && a.gravity.z == b.gravity.z && a.timeStep == b.timeStep &&

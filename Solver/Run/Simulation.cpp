@@ -106,9 +106,10 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   const bool automatic = parameters_.timeStepping == TimeStepping::Automatic;
   checkInterval_ = backend == Backend::CUDA && !automatic ? 0 : 1;
   const LatticeCalibration lattice = calibrateLattice(parameters_);
-  xsphStepLimit_ = parameters_.xsphNu() > 0
-    ? kMaxXsphBlend * lattice.xsphSecondMoment / parameters_.xsphNu()
-    : std::numeric_limits<double>::infinity();
+  // Both blends together (StepTime::make): c + c_4 <= kMaxXsphBlend.
+  const double xsphNu = parameters_.xsphNu() + parameters_.xsphHyperNu();
+  xsphStepLimit_ = xsphNu > 0 ? kMaxXsphBlend * lattice.xsphSecondMoment / xsphNu
+                              : std::numeric_limits<double>::infinity();
   const Health start = stepper_->health();
   health_ = start;
   healthValid_ = true;
@@ -139,7 +140,10 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
       { c * s / sceneSpeed, g > 0 ? gravityName : "the initial or emitted speed",
         g > 0 ? gravityValue : v0 },
       { g > 0 ? c * std::sqrt(s / g) : parameters_.timeStep, gravityName, gravityValue },
-      { xsphStepLimit_, "xsphViscosity", parameters_.xsphViscosity },
+      { xsphStepLimit_,
+        parameters_.xsphHyperViscosity > parameters_.xsphViscosity ? "xsphHyperViscosity"
+                                                                   : "xsphViscosity",
+        std::max(parameters_.xsphViscosity, parameters_.xsphHyperViscosity) },
     };
     for (const auto& b : bounds)
     {

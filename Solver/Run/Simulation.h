@@ -130,7 +130,7 @@ public:
   //     in a column of depth H after k projections grows as |g| dt^2 H / (k s^2), and with dt
   //     proportional to s / v_scene it is the same at every spacing and depth,
   //   cflNumber sqrt(s / |g|): gravity moves a resting particle at most cflNumber^2 spacings,
-  //   kMaxXsphBlend beta h^2 / nu: explicit XSPH smoothing stays stable.
+  //   kMaxXsphBlend beta h^2 / (nu + nu_4): explicit XSPH smoothing stays stable.
   // The smallest step it may choose [s]: below it single precision's 1 / dt and dt^2 lose their
   // meaning, and no physical scene needs it. At construction a smaller step is InvalidInput
   // naming the parameter that forces it; later, SimulationDiverged.
@@ -193,7 +193,7 @@ private:
   // automatic step. Valid when healthValid_.
   Health health_;
   bool healthValid_ = false;
-  double xsphStepLimit_ = 0; // kMaxXsphBlend beta h^2 / nu [s]; infinity without XSPH
+  double xsphStepLimit_ = 0; // kMaxXsphBlend beta h^2 / (nu + nu_4) [s]; infinity without XSPH
   std::int64_t nextId_ = 0;
   std::vector<std::int64_t> layersEmitted_; // per emitter
   DivergenceLimits limits_;

@@ -484,6 +484,29 @@ TEST(CudaStepper, WallFrictionMatchesTheSerialBackend)
   EXPECT_GT(test::maxRelativePositionError(c, a), 1e-4); // friction changed the flow
 }
 
+TEST(CudaStepper, XsphHyperViscosityMatchesTheSerialBackend)
+{
+  PBF_REQUIRE_GPU();
+  // As WallFrictionMatchesTheSerialBackend: the filter acts on the velocities, so positions show
+  // it from the second step on; rounding only (1e-10 after two steps).
+  const Scene scene = presetScene("dam_break");
+  Parameters p = withSceneDomain(smallParameters(0.04), scene);
+  p.xsphHyperViscosity = 0.1;
+  Simulation serial(scene, p, Backend::Serial, Precision::Double);
+  Simulation gpu(scene, p, Backend::CUDA, Precision::Double);
+  Simulation plain(scene, withSceneDomain(smallParameters(0.04), scene), Backend::Serial,
+    Precision::Double);
+  serial.advance(2);
+  gpu.advance(2);
+  plain.advance(2);
+  Snapshot<double> a, b, c;
+  serial.stepper().read(a);
+  gpu.stepper().read(b);
+  plain.stepper().read(c);
+  EXPECT_LE(test::maxRelativePositionError(b, a), 1e-10);
+  EXPECT_GT(test::maxRelativePositionError(c, a), 1e-9); // the filter changed the flow
+}
+
 TEST(CudaStepper, MovingSolidsMatchTheSerialBackend)
 {
   PBF_REQUIRE_GPU();

@@ -40,6 +40,7 @@ struct Case
   bool backwards;
   double tolerance = 0; // densityErrorTolerance [%]: adaptive mode when > 0
   bool graphs = true;
+  double hyper = 0;     // xsphHyperViscosity
 };
 
 cuda::Options optionsOf(const Case& c)
@@ -69,6 +70,7 @@ Parameters fixedParameters(const Case& c, const Scene& scene)
   p.particleSpacing = 0.04;
   p.solverIterations = c.iterations;
   p.densityErrorTolerance = c.tolerance;
+  p.xsphHyperViscosity = c.hyper;
   return withSceneDomain(p, scene);
 }
 
@@ -131,6 +133,14 @@ TEST(StepSchedule, NeighborMasksReproduceTheSerialBackendBitForBit)
     compareWithSerial<float>({ "dam_break", 4, true, 0.1, backwards }, 60);
     compareWithSerial<double>({ "double_dam_break", 3, true, 0.1, backwards }, 60);
   }
+}
+
+TEST(StepSchedule, XsphHyperViscosityReproducesTheSerialBackendBitForBit)
+{
+  // The bi-Laplacian reads every neighbour's XSPH sum in the confinement pass, where the device
+  // schedule keeps the sums in x's buffer and writes the velocity over omega.
+  compareWithSerial<float>({ "dam_break", 4, true, 0.1, true, 0, true, 0.05 }, 40);
+  compareWithSerial<double>({ "double_dam_break", 3, false, 0.1, false, 0, false, 0.1 }, 40);
 }
 
 TEST(StepSchedule, ParticlesRebuildTheirMasksOnlyWhereTheyMovedAndStayExact)
@@ -311,7 +321,7 @@ namespace
 // With `moving`, the sphere rolls into the column and the box turns, their poses set before each
 // step as Simulation sets them.
 template <class Real>
-std::size_t expectSolidsAsSerial(double wallFriction, bool moving = false)
+std::size_t expectSolidsAsSerial(double wallFriction, bool moving = false, double hyper = 0)
 {
   Scene scene = test::damBreakWithSolids();
   if (moving)
@@ -323,6 +333,7 @@ std::size_t expectSolidsAsSerial(double wallFriction, bool moving = false)
   }
   Parameters p = fixedParameters({ "dam_break", 4, true, 0.02, false }, scene);
   p.wallFriction = wallFriction;
+  p.xsphHyperViscosity = hyper;
   const std::vector<DistanceGrid> solids = solidFields(scene.solids, p);
   const std::vector<SolidMotion> motions = solidMotions(scene.solids);
   std::size_t removed = 0;
@@ -360,6 +371,8 @@ TEST(DeviceStepperOnHost, WallFrictionReproducesTheSerialBackendBitForBit)
   // Friction at the box's walls (the images of the neighbours) and at the solids (the image of
   // the particle itself), in the vorticity pass of the device schedule.
   expectSolidsAsSerial<float>(0.7);
+  // With the bi-Laplacian the walls' share of XSPH's sum is smoothed with the fluid's.
+  expectSolidsAsSerial<double>(0.7, false, 0.05);
 }
 
 TEST(DeviceStepperOnHost, MovingSolidsReproduceTheSerialBackendBitForBit)

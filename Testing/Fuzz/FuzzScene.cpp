@@ -37,6 +37,7 @@ double Parameters::*const kFields[] = {
   &Parameters::sCorrN,
   &Parameters::sCorrDeltaQ,
   &Parameters::xsphViscosity,
+  &Parameters::xsphHyperViscosity,
   &Parameters::vorticityEpsilon,
   &Parameters::densityErrorTolerance,
   &Parameters::maxDensityErrorTolerance,

@@ -25,6 +25,7 @@ FIELDS = {
     "sCorrN": ("SCorrN", "SCorrN"),
     "sCorrDeltaQ": ("SCorrDeltaQ", "SCorrDeltaQ"),
     "xsphViscosity": ("XSPHViscosity", "XSPHViscosity"),
+    "xsphHyperViscosity": ("XSPHHyperViscosity", "XSPHHyperViscosity"),
     "vorticityEpsilon": ("VorticityEpsilon", "VorticityEpsilon"),
     "unilateral": ("Unilateral", "Unilateral"),
     "mirrorWalls": ("MirrorWalls", "MirrorWalls"),
@@ -115,7 +116,7 @@ expect(T.field_value(data, "Domain") == (0.0, 1.6, 0.0, 0.8, 0.0, 0.6),
 changed = {
     "RestDensity": 800.0, "ParticleSpacing": 0.05, "SmoothingRatio": 2.5, "SolverIterations": 3,
     "RelaxationEpsilon": 0.02, "SCorrK": 0.05, "SCorrN": 3.0, "SCorrDeltaQ": 0.25,
-    "XSPHViscosity": 0.02, "VorticityEpsilon": 0.005, "Unilateral": 0, "MirrorWalls": 0,
+    "XSPHViscosity": 0.02, "XSPHHyperViscosity": 0.03, "VorticityEpsilon": 0.005, "Unilateral": 0, "MirrorWalls": 0,
     "WallFriction": 0.25,
     "Gravity": [0.5, -5.0, 0.25], "CFLNumber": 0.3, "MaxTimeStep": 0.005, "MaxDensityErrorTolerance": 3.0,
 }

@@ -54,6 +54,7 @@ std::vector<std::pair<std::string, double Parameters::*>> scalarFields()
     { "sCorrN", &Parameters::sCorrN },
     { "sCorrDeltaQ", &Parameters::sCorrDeltaQ },
     { "xsphViscosity", &Parameters::xsphViscosity },
+    { "xsphHyperViscosity", &Parameters::xsphHyperViscosity },
     { "cflNumber", &Parameters::cflNumber },
     { "vorticityEpsilon", &Parameters::vorticityEpsilon },
     { "timeStep", &Parameters::timeStep },

@@ -54,6 +54,8 @@ TEST(Parameters, BadValuesNameTheFieldAndTheValue)
   expectRejected([](Parameters& p) { p.relaxation = 0; }, "relaxation", "0");
   expectRejected([](Parameters& p) { p.sCorrDeltaQ = 1.5; }, "sCorrDeltaQ", "1.5");
   expectRejected([](Parameters& p) { p.xsphViscosity = -1; }, "xsphViscosity", "-1");
+  expectRejected([](Parameters& p) { p.xsphHyperViscosity = -1; }, "xsphHyperViscosity", "-1");
+  expectRejected([](Parameters& p) { p.xsphHyperViscosity = 2; }, "xsphHyperViscosity", "2");
   expectRejected([](Parameters& p) { p.cflNumber = 0; }, "cflNumber", "0");
   expectRejected([](Parameters& p) { p.cflNumber = 1.5; }, "cflNumber", "1.5");
   expectRejected([&](Parameters& p) { p.gravity.y = nan; }, "gravity.y", "nan");

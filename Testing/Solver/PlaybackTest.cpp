@@ -165,6 +165,9 @@ TEST(Playback, AnotherKeyDropsEverythingAndTheSameKeepsIt)
   EXPECT_TRUE(playback.checkpointFrames().empty());
   EXPECT_TRUE(playback.rows().empty());
   EXPECT_EQ(playback.live(), nullptr);
+  PlaybackKey hyper = other;
+  hyper.parameters.xsphHyperViscosity = 0.05;
+  EXPECT_TRUE(playback.adopt(hyper));
 }
 
 TEST(Playback, ADeviceFaultKeepsTheCheckpointsAndRowsForTheCpu)
