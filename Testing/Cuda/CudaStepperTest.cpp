@@ -67,6 +67,17 @@ Snapshot<Real> runCuda(const std::string& sceneName, Precision precision, int st
   return out;
 }
 
+// The state after two steps in double precision (the comparisons of an option that acts on the
+// velocities: positions show it from the second step on).
+Snapshot<double> afterTwoSteps(const Scene& scene, const Parameters& p, Backend backend)
+{
+  Simulation simulation(scene, p, backend, Precision::Double);
+  simulation.advance(2);
+  Snapshot<double> state;
+  simulation.stepper().read(state);
+  return state;
+}
+
 cuda::Options withSearch(cuda::NeighborSearch search)
 {
   cuda::Options o;
@@ -470,16 +481,9 @@ TEST(CudaStepper, WallFrictionMatchesTheSerialBackend)
   Parameters p = smallParameters(0.04);
   p.wallFriction = 0.7;
   const Scene scene = test::damBreakWithSolids();
-  Simulation serial(scene, p, Backend::Serial, Precision::Double);
-  Simulation gpu(scene, p, Backend::CUDA, Precision::Double);
-  Simulation slipping(scene, smallParameters(0.04), Backend::Serial, Precision::Double);
-  serial.advance(2);
-  gpu.advance(2);
-  slipping.advance(2);
-  Snapshot<double> a, b, c;
-  serial.stepper().read(a);
-  gpu.stepper().read(b);
-  slipping.stepper().read(c);
+  const Snapshot<double> a = afterTwoSteps(scene, p, Backend::Serial);
+  const Snapshot<double> b = afterTwoSteps(scene, p, Backend::CUDA);
+  const Snapshot<double> c = afterTwoSteps(scene, smallParameters(0.04), Backend::Serial);
   EXPECT_LE(test::maxRelativePositionError(b, a), 1e-10);
   EXPECT_GT(test::maxRelativePositionError(c, a), 1e-4); // friction changed the flow
 }
@@ -492,17 +496,10 @@ TEST(CudaStepper, XsphHyperViscosityMatchesTheSerialBackend)
   const Scene scene = presetScene("dam_break");
   Parameters p = withSceneDomain(smallParameters(0.04), scene);
   p.xsphHyperViscosity = 0.1;
-  Simulation serial(scene, p, Backend::Serial, Precision::Double);
-  Simulation gpu(scene, p, Backend::CUDA, Precision::Double);
-  Simulation plain(scene, withSceneDomain(smallParameters(0.04), scene), Backend::Serial,
-    Precision::Double);
-  serial.advance(2);
-  gpu.advance(2);
-  plain.advance(2);
-  Snapshot<double> a, b, c;
-  serial.stepper().read(a);
-  gpu.stepper().read(b);
-  plain.stepper().read(c);
+  const Snapshot<double> a = afterTwoSteps(scene, p, Backend::Serial);
+  const Snapshot<double> b = afterTwoSteps(scene, p, Backend::CUDA);
+  const Snapshot<double> c =
+    afterTwoSteps(scene, withSceneDomain(smallParameters(0.04), scene), Backend::Serial);
   EXPECT_LE(test::maxRelativePositionError(b, a), 1e-10);
   EXPECT_GT(test::maxRelativePositionError(c, a), 1e-9); // the filter changed the flow
 }
@@ -522,16 +519,9 @@ TEST(CudaStepper, MovingSolidsMatchTheSerialBackend)
     { 0.1, { -0.1, 0, 0 }, Rotation::fromDegrees({ 0, 0, 60 }) } };
   scene.solids[1].motion.keyframes = { { 0.0, { 0, 0, 0 }, Rotation{} },
     { 0.1, { 0, 0.02, 0 }, Rotation::fromDegrees({ 0, 10, 0 }) } };
-  Simulation serial(scene, p, Backend::Serial, Precision::Double);
-  Simulation gpu(scene, p, Backend::CUDA, Precision::Double);
-  Simulation unmoved(still, p, Backend::Serial, Precision::Double);
-  serial.advance(2);
-  gpu.advance(2);
-  unmoved.advance(2);
-  Snapshot<double> a, b, c;
-  serial.stepper().read(a);
-  gpu.stepper().read(b);
-  unmoved.stepper().read(c);
+  const Snapshot<double> a = afterTwoSteps(scene, p, Backend::Serial);
+  const Snapshot<double> b = afterTwoSteps(scene, p, Backend::CUDA);
+  const Snapshot<double> c = afterTwoSteps(still, p, Backend::Serial);
   EXPECT_LE(test::maxRelativePositionError(b, a), 1e-10);
   EXPECT_GT(test::maxRelativePositionError(c, a), 1e-3); // the motion changed the flow
 }
