@@ -357,6 +357,37 @@ struct VorticityPass
   }
 };
 
+// The confinement pass (XSPH, its bi-Laplacian, eq. 16) into velocity[i]; with SmoothTwice false
+// the bi-Laplacian is compiled out.
+template <bool SmoothTwice>
+struct ConfinementPass
+{
+};
+
+template <class Real, class Exec, class Particles, bool SmoothTwice>
+void confinementPass(Exec& exec, std::uint32_t n, Particles particles,
+  const FluidView<Real, MaskedNeighbors<Real>>& f, Vec3<Real>* velocity, ConfinementPass<SmoothTwice>)
+{
+  exec.forEach(ConfinementStage{}, n, [=] PBF_HD(std::uint32_t k) {
+    vorticityConfinement<Real, MaskedNeighbors<Real>, SmoothTwice>(particles(k), f, velocity);
+  });
+}
+
+// run(pass) with the confinement pass for these coefficients: with the bi-Laplacian only when
+// alpha_4 > 0.
+template <class Real, class Run>
+void withConfinementPass(const Coefficients<Real>& c, Run&& run)
+{
+  if (c.xsphHyper)
+  {
+    run(ConfinementPass<true>{});
+  }
+  else
+  {
+    run(ConfinementPass<false>{});
+  }
+}
+
 // run(pass) with the vorticity pass for this friction: with it only when there is any.
 template <class Real, class Run>
 void withVorticityPass(Real wallFriction, Run&& run)
@@ -492,8 +523,9 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
     detail::firstPassOnPositions(exec, VorticityStage{}, b, k, n, f, k.iterations, false, pass);
   });
   Vec3<Real>* const velocity = f.scratch;
-  exec.forEach(ConfinementStage{}, n,
-    [=] PBF_HD(std::uint32_t i) { vorticityConfinement(i, f, velocity); });
+  detail::withConfinementPass(k.c, [&](auto pass) {
+    detail::confinementPass(exec, n, detail::AllParticles{}, f, velocity, pass);
+  });
 
   // Line 23, x_i = x*_i: the corrected positions' buffer becomes x.
   Roles next;

@@ -355,8 +355,9 @@ template <class Real, class Exec>
 void confine(Exec& exec, std::uint32_t n, const std::uint32_t* list,
   const FluidView<Real, MaskedNeighbors<Real>>& f)
 {
-  exec.forEach(ConfinementStage{}, n,
-    [=] PBF_HD(std::uint32_t k) { vorticityConfinement(list[k], f, f.v); });
+  detail::withConfinementPass(f.c, [&](auto pass) {
+    detail::confinementPass(exec, n, detail::ListedParticles{ list }, f, f.v, pass);
+  });
 }
 
 // Algorithm 1, line 21, for the particles of a list: v_i = (x*_i - x_i) / dt (adaptive mode, when

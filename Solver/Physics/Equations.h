@@ -34,6 +34,7 @@ struct Coefficients
   bool unilateral;
   bool mirrorWalls;
   Real wallFriction;        // phi of wallFrictionImage: 0 free-slip, 1 no-slip
+  bool xsphHyper;           // alpha_4 > 0: the confinement pass reads the neighbours' XSPH sums
 
   // Throws InvalidInput when a constant does not fit Real (validatePrecision).
   static Coefficients make(const Parameters& p)
@@ -60,6 +61,7 @@ struct Coefficients
     c.unilateral = p.unilateral;
     c.mirrorWalls = p.mirrorWalls;
     c.wallFriction = static_cast<Real>(p.wallFriction);
+    c.xsphHyper = p.xsphHyperViscosity > 0;
     return c;
   }
 };
@@ -509,8 +511,10 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
 // c_4), plus eq. 16: f_i = epsilon (N x omega_i), N = eta / |eta|, eta = grad |omega|_i (SPH
 // difference gradient, zero in uniform rotation), as an acceleration. Where |eta| h is negligible
 // against |omega| the direction N is noise, and the force is dropped. velocityOut may be f.v or
-// f.omega: each particle reads only its own of those.
-template <class Real, class Neighbors>
+// f.omega: each particle reads only its own of those. SmoothTwice = false compiles the
+// bi-Laplacian out: the GPU launches that pass when alpha_4 is 0 (its registers made the double
+// precision pass spill).
+template <class Real, class Neighbors, bool SmoothTwice = true>
 PBF_HD PBF_INLINE void vorticityConfinement(
   std::uint32_t i, const FluidView<Real, Neighbors>& f, Vec3<Real>* velocityOut)
 {
@@ -518,7 +522,7 @@ PBF_HD PBF_INLINE void vorticityConfinement(
   const Vec3<Real> omegaI = f.omega[i];
   const Real magI = omegaLengthOf(i, f);
   const Vec3<Real> si = f.smoothing[i];
-  const bool smoothTwice = f.time->xsphHyper != Real(0);
+  const bool smoothTwice = SmoothTwice && f.time->xsphHyper != Real(0);
   Vec3<Real> eta{ Real(0), Real(0), Real(0) };
   Vec3<Real> hyper{ Real(0), Real(0), Real(0) };
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
