@@ -60,6 +60,7 @@ public:
     name_ = std::string(properties.name) + " (device " + std::to_string(device_) + ")";
     check(cudaStreamCreate(&stream_), "cudaStreamCreate");
     check(cudaStreamCreate(&copyStream_), "cudaStreamCreate");
+    check(cudaStreamCreateWithFlags(&bodyStream_, cudaStreamNonBlocking), "cudaStreamCreate");
     int least = 0, greatest = 0;
     check(cudaDeviceGetStreamPriorityRange(&least, &greatest), "cudaDeviceGetStreamPriorityRange");
     check(cudaStreamCreateWithPriority(&borderStream_, cudaStreamDefault, greatest),
@@ -86,6 +87,7 @@ public:
     cudaEventDestroy(forked_);
     cudaEventDestroy(joined_);
     cudaStreamDestroy(borderStream_);
+    cudaStreamDestroy(bodyStream_);
     cudaStreamDestroy(copyStream_);
     cudaStreamDestroy(stream_);
   }
@@ -93,7 +95,10 @@ public:
   CudaDevicePolicy(const CudaDevicePolicy&) = delete;
   CudaDevicePolicy& operator=(const CudaDevicePolicy&) = delete;
 
-  KernelExecutor executor() const { return KernelExecutor(stream_, temp_, tempBytes_, block_); }
+  KernelExecutor executor() const
+  {
+    return KernelExecutor(stream_, temp_, tempBytes_, block_, bodyStream_);
+  }
   // The border stream's executor: per-particle launches only (no scratch: a sort or selection
   // there would fail, not race the compute stream's).
   KernelExecutor borderExecutor() const { return KernelExecutor(borderStream_, nullptr, 0, block_); }
@@ -295,6 +300,7 @@ private:
   cudaStream_t stream_ = nullptr;
   cudaStream_t copyStream_ = nullptr;
   cudaStream_t borderStream_ = nullptr;
+  cudaStream_t bodyStream_ = nullptr; // where conditional bodies are captured (KernelExecutor)
   cudaEvent_t event_ = nullptr, packed_ = nullptr, uploaded_ = nullptr;
   cudaEvent_t forked_ = nullptr, joined_ = nullptr;
   void* temp_ = nullptr;

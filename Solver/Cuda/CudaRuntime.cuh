@@ -198,10 +198,17 @@ __global__ void __launch_bounds__(kReduceThreads) compressionBlocksKernel(const 
   }
 }
 
+// A captured step's condition for one projection (KernelExecutor::branch); valid false: none.
+struct GraphBranch
+{
+  cudaGraphConditionalHandle handle;
+  bool valid;
+};
+
 template <class Real> // only so that each translation unit has its own instance
 __global__ void __launch_bounds__(kReduceThreads) compressionFinalKernel(
   std::uint32_t blocks, std::uint32_t n, double tolerance, double maxTolerance,
-  AdaptiveState* state, const double* blockSums)
+  AdaptiveState* state, const double* blockSums, GraphBranch next)
 {
   __shared__ double shared[kReduceThreads];
   __shared__ double largest[kReduceThreads];
@@ -233,20 +240,90 @@ __global__ void __launch_bounds__(kReduceThreads) compressionFinalKernel(
     {
       ++state->iterations;
     }
+    if (next.valid)
+    {
+      // The next projection runs only if this one does not end the solve.
+      cudaGraphSetConditional(next.handle, state->done ? 0u : 1u);
+    }
   }
 }
 
 // Runs the schedule's stages as kernels on one stream. Nothing here synchronises or allocates,
 // so a step can be captured into a CUDA graph.
+// While the stream is captured, runIf makes a conditional node and captures its body on
+// bodyStream (a stream of its own: a capturing stream cannot capture into another graph).
 class KernelExecutor
 {
 public:
-  KernelExecutor(cudaStream_t stream, void* temp, std::size_t tempBytes, int neighborBlock)
+  KernelExecutor(cudaStream_t stream, void* temp, std::size_t tempBytes, int neighborBlock,
+    cudaStream_t bodyStream = nullptr)
     : stream_(stream)
     , temp_(temp)
     , tempBytes_(tempBytes)
     , neighborBlock_(neighborBlock)
+    , bodyStream_(bodyStream)
   {
+  }
+
+  using Branch = GraphBranch;
+  static Branch noBranch() { return { 0, false }; }
+
+  // A condition of the graph being captured, off at each launch until a kernel sets it; none
+  // when the stream is not being captured (runIf then runs its body unconditionally).
+  Branch branch()
+  {
+    cudaGraph_t graph = nullptr;
+    if (!capturing(&graph))
+    {
+      return noBranch();
+    }
+    Branch b{ 0, true };
+    check(cudaGraphConditionalHandleCreate(&b.handle, graph, 0, cudaGraphCondAssignDefault),
+      "cudaGraphConditionalHandleCreate");
+    return b;
+  }
+
+  // body(executor) as the body of an if-node on `b` in the graph being captured; at once when
+  // there is no graph or no condition.
+  template <class Body>
+  void runIf(Branch b, Body&& body)
+  {
+    cudaGraph_t graph = nullptr;
+    if (!b.valid || !bodyStream_ || !capturing(&graph))
+    {
+      body(*this);
+      return;
+    }
+    const cudaGraphNode_t* dependencies = nullptr;
+    std::size_t count = 0;
+    cudaStreamCaptureStatus status{};
+    check(cudaStreamGetCaptureInfo(stream_, &status, nullptr, &graph, &dependencies, nullptr, &count),
+      "cudaStreamGetCaptureInfo");
+    cudaGraphNodeParams params{};
+    params.type = cudaGraphNodeTypeConditional;
+    params.conditional.handle = b.handle;
+    params.conditional.type = cudaGraphCondTypeIf;
+    params.conditional.size = 1;
+    cudaGraphNode_t node = nullptr;
+    check(cudaGraphAddNode(&node, graph, dependencies, nullptr, count, &params), "cudaGraphAddNode");
+    check(cudaStreamUpdateCaptureDependencies(stream_, &node, nullptr, 1,
+            cudaStreamSetCaptureDependencies),
+      "cudaStreamUpdateCaptureDependencies");
+    cudaGraph_t inner = params.conditional.phGraph_out[0];
+    check(cudaStreamBeginCaptureToGraph(bodyStream_, inner, nullptr, nullptr, 0,
+            cudaStreamCaptureModeThreadLocal),
+      "cudaStreamBeginCaptureToGraph");
+    KernelExecutor e(bodyStream_, temp_, tempBytes_, neighborBlock_);
+    try
+    {
+      body(e);
+    }
+    catch (...)
+    {
+      cudaStreamEndCapture(bodyStream_, &inner);
+      throw;
+    }
+    check(cudaStreamEndCapture(bodyStream_, &inner), "cudaStreamEndCapture (conditional body)");
   }
 
   template <class Stage, class F>
@@ -294,7 +371,7 @@ public:
 
   template <class Real>
   void reduceCompression(const Real* density, std::uint32_t n, AdaptiveState* state,
-    double* blockSums, const StepConstants<Real>& k, double tolerance)
+    double* blockSums, const StepConstants<Real>& k, double tolerance, Branch next = noBranch())
   {
     const std::uint32_t blocks = (n + kCompressionBlock - 1) / kCompressionBlock;
     if (blocks > 0)
@@ -304,7 +381,7 @@ public:
       check(cudaGetLastError(), "kernel launch (compression)");
     }
     compressionFinalKernel<Real><<<1, kReduceThreads, 0, stream_>>>(
-      blocks, n, tolerance, k.maxTolerance, state, blockSums);
+      blocks, n, tolerance, k.maxTolerance, state, blockSums, next);
     check(cudaGetLastError(), "kernel launch (compression)");
   }
 
@@ -361,10 +438,18 @@ public:
   }
 
 private:
+  bool capturing(cudaGraph_t* graph) const
+  {
+    cudaStreamCaptureStatus status{};
+    check(cudaStreamGetCaptureInfo(stream_, &status, nullptr, graph), "cudaStreamGetCaptureInfo");
+    return status == cudaStreamCaptureStatusActive;
+  }
+
   cudaStream_t stream_;
   void* temp_;
   std::size_t tempBytes_;
   int neighborBlock_;
+  cudaStream_t bodyStream_;
 };
 
 } // namespace cuda

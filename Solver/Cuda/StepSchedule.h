@@ -18,9 +18,16 @@
 //   sortByKey(keys, keysAlt, values, valuesAlt, n, keyBits) -> SortedPairs (stable radix sort)
 //   maxScan(data, count)                 inclusive max-scan in place
 //   fillZero(pointer, bytes), copy(destination, source, bytes)
-//   reduceCompression(density, n, state, blockSums, constants, tolerance)   adaptive mode, see
-//                                        AdaptiveState (blockSums: 2 per block of
-//                                        kCompressionBlock); a negative tolerance never finishes
+//   reduceCompression(density, n, state, blockSums, constants, tolerance[, next])   adaptive
+//                                        mode, see AdaptiveState (blockSums: 2 per block of
+//                                        kCompressionBlock); a negative tolerance never finishes;
+//                                        next (a Branch) is set to whether the solve goes on
+//   Branch, branch() -> Branch           a condition for one runIf, off unless a reduction sets it
+//                                        (Exec::noBranch() names none)
+//   runIf(branch, body)                  body(exec') queued to run only when branch is set: a
+//                                        CUDA graph's conditional node while the step is
+//                                        captured; elsewhere at once (on the GPU always, its
+//                                        kernels then return at once after done, see AdaptiveState)
 #pragma once
 
 #include "Equations.h"
@@ -32,6 +39,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace pbf
 {
@@ -51,9 +59,13 @@ struct ConfinementStage {};
 
 // Adaptive mode (Parameters::densityErrorTolerance > 0), kept on the device: after each density
 // evaluation reduceCompression stores the mean compression mean(max(rho_i / rho_0 - 1, 0)) and
-// either counts one more projection or, when it is within the tolerance, sets done; the passes
-// that follow in the step then return at once (the skipped corrections copy the positions, so the
-// buffers stay where the captured graph expects them).
+// either counts one more projection or, when it is within the tolerance, sets done. The
+// projections after that are not run: in a captured step each one is the body of a conditional
+// node that the previous reduction switches off (so a step of 2 projections under a cap of 40
+// does not launch 38 empty ones); queued stage by stage, their kernels return at once. Either
+// way the corrected positions stay in positions[iterations & 1], and one pass after the solve
+// (finishAdaptiveSolve) moves them to where the captured step expects them and updates the
+// velocity (line 21).
 // Adaptive mode's mean compression is summed in blocks of this many particles, in order (on the
 // device each block in a fixed tree, then the block sums by one block): the same on every run.
 constexpr int kCompressionBlock = 4096;
@@ -420,12 +432,7 @@ void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
       apply.scratch = f.p;
       if (state && state->done)
       {
-        // Adaptive mode is done: the positions stay, copied to where the next pass reads them.
-        f.scratch[i] = f.p[i];
-        if (last)
-        {
-          updateVelocity(i, apply);
-        }
+        // Adaptive mode is done: the positions stay where they are (finishAdaptiveSolve).
         return 0.0;
       }
       // delta p_i lands in the other position buffer (f.scratch), which nobody reads in this
@@ -447,6 +454,29 @@ void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
       }
       return distance;
     });
+}
+
+// Adaptive mode, after the projections: the corrected positions, in positions[state->iterations
+// & 1] (the last projection run wrote there, or the first one not run would have read there), go
+// to positions[iterations & 1], where the rest of the step reads them, and line 21 updates the
+// velocity from them (the fused update of the last correction when the count is fixed).
+template <class Real, class Exec>
+void finishAdaptiveSolve(Exec& exec, std::uint32_t n, const FluidView<Real, MaskedNeighbors<Real>>& f,
+  Vec3<Real>* const (&positions)[2], int iterations, const AdaptiveState* state)
+{
+  Vec3<Real>* const even = positions[0];
+  Vec3<Real>* const odd = positions[1];
+  const int end = iterations & 1;
+  exec.forEach(CorrectionStage{}, n, [=] PBF_HD(std::uint32_t i) {
+    const int at = state->iterations & 1;
+    FluidView<Real, MaskedNeighbors<Real>> apply = f;
+    apply.p = end == 0 ? even : odd;
+    if (at != end)
+    {
+      apply.p[i] = (at == 0 ? even : odd)[i];
+    }
+    updateVelocity(i, apply);
+  });
 }
 
 } // namespace detail
@@ -494,21 +524,45 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
   {
     exec.fillZero(b.adaptive, sizeof(AdaptiveState));
   }
+  // Adaptive mode: projection `iteration` runs when the reduction before it says so
+  // (proceed[iteration]). The conditions belong to the step's own graph, so they are all made
+  // before its first projection.
+  std::vector<typename Exec::Branch> proceed(static_cast<std::size_t>(k.iterations) + 1);
+  for (int iteration = 0; iteration <= k.iterations; ++iteration)
+  {
+    proceed[iteration] =
+      adaptive && iteration > 0 && iteration < k.iterations ? exec.branch() : Exec::noBranch();
+  }
   for (int iteration = 0; iteration < k.iterations; ++iteration)
   {
     const FluidView<Real, MaskedNeighbors<Real>> f =
       detail::iterationView(b, k, sortedKeys, D, C, positions, iteration);
-    detail::firstPassOnPositions(
-      exec, DensityStage<Real>{}, b, k, n, f, iteration, adaptive, detail::DensityPass{});
-    if (adaptive)
+    const auto projection = [&](auto& e) {
+      detail::firstPassOnPositions(
+        e, DensityStage<Real>{}, b, k, n, f, iteration, adaptive, detail::DensityPass{});
+      if (adaptive)
+      {
+        // The first projection always runs: it carries the step's tensile push.
+        e.reduceCompression(b.density, n, b.adaptive, b.blockSums, k,
+          iteration == 0 ? -1.0 : k.tolerance, proceed[iteration + 1]);
+      }
+      const bool last = !adaptive && iteration + 1 == k.iterations;
+      detail::correctionPass(e, b, n, f, iteration, last, adaptive ? b.adaptive : nullptr);
+    };
+    if (adaptive && iteration > 0)
     {
-      // The first projection always runs: it carries the step's tensile push.
-      exec.reduceCompression(
-        b.density, n, b.adaptive, b.blockSums, k, iteration == 0 ? -1.0 : k.tolerance);
+      exec.runIf(proceed[iteration], projection);
     }
-
-    const bool last = iteration + 1 == k.iterations;
-    detail::correctionPass(exec, b, n, f, iteration, last, adaptive ? b.adaptive : nullptr);
+    else
+    {
+      projection(exec);
+    }
+  }
+  if (adaptive)
+  {
+    const FluidView<Real, MaskedNeighbors<Real>> f =
+      detail::iterationView(b, k, sortedKeys, D, C, positions, k.iterations);
+    detail::finishAdaptiveSolve(exec, n, f, positions, k.iterations, b.adaptive);
   }
 
   // Lines 22-23 (vorticity confinement and XSPH) on the corrected positions. XSPH's sum goes

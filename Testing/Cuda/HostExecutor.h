@@ -25,8 +25,11 @@ namespace test
 class HostExecutor
 {
 public:
-  explicit HostExecutor(bool backwards)
+  // conditionals: runIf may skip its body, as in a captured CUDA graph (HostDevicePolicy::launch);
+  // without, every body runs and its stages return at once after done, as on a CUDA stream.
+  explicit HostExecutor(bool backwards, bool conditionals = false)
     : backwards_(backwards)
+    , conditionals_(conditionals)
   {
   }
 
@@ -75,14 +78,42 @@ public:
 
   // Adaptive mode's mean compression summed exactly as CpuStepper::meanDensityError sums it
   // (blocks of 4096 in order), so that the decisions match the serial backend bit for bit.
+  // A captured step's conditions, as CUDA's conditional nodes: off until a reduction sets one,
+  // and a body runs only when its condition is on (every launch makes them anew).
+  using Branch = int;
+  static Branch noBranch() { return -1; }
+  Branch branch()
+  {
+    if (!conditionals_)
+    {
+      return noBranch();
+    }
+    branches_.push_back(0);
+    return static_cast<Branch>(branches_.size() - 1);
+  }
+  template <class Body>
+  void runIf(Branch b, Body&& body)
+  {
+    if (b < 0 || branches_[static_cast<std::size_t>(b)])
+    {
+      body(*this);
+    }
+  }
+
   template <class Real>
   void reduceCompression(const Real* density, std::uint32_t n, cuda::AdaptiveState* state,
-    double*, const cuda::StepConstants<Real>& k, double tolerance)
+    double*, const cuda::StepConstants<Real>& k, double tolerance, Branch next = noBranch())
   {
     if (state->done)
     {
       return;
     }
+    const auto setNext = [&] {
+      if (next >= 0)
+      {
+        branches_[static_cast<std::size_t>(next)] = state->done ? 0 : 1;
+      }
+    };
     double total = 0.0, top = 0.0;
     for (std::uint32_t begin = 0; begin < n; begin += 4096)
     {
@@ -105,6 +136,7 @@ public:
     {
       ++state->iterations;
     }
+    setNext();
   }
 
   template <class Pred>
@@ -129,6 +161,8 @@ public:
 
 private:
   bool backwards_;
+  bool conditionals_;
+  std::vector<char> branches_;
 };
 
 // The Device policy of both GPU steppers (cuda::DeviceStepper, cuda::DeviceSubdomainStepper) on
@@ -208,7 +242,7 @@ public:
   }
   void launch(const Graph& g)
   {
-    HostExecutor exec = executor();
+    HostExecutor exec(backwards_, true);
     g.replay(exec);
   }
   void destroy(Graph& g) { g.replay = nullptr; }
