@@ -151,6 +151,12 @@ std::unique_ptr<Stepper> makeCudaStepper(
   {
     options.faultAtStep = std::strtoull(at, nullptr, 10);
   }
+  // PBF_CUDA_GRAPHS=0 launches the kernels one by one (Options::graphs): the same kernels, for
+  // compute-sanitizer's racecheck, which dies on a graph with conditional nodes (run.sh).
+  if (const char* graphs = std::getenv("PBF_CUDA_GRAPHS"))
+  {
+    options.graphs = std::string(graphs) != "0";
+  }
   return cuda::makeCudaStepper(precision, parameters, initial, options);
 }
 

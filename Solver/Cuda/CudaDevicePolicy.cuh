@@ -95,10 +95,7 @@ public:
   CudaDevicePolicy(const CudaDevicePolicy&) = delete;
   CudaDevicePolicy& operator=(const CudaDevicePolicy&) = delete;
 
-  KernelExecutor executor() const
-  {
-    return KernelExecutor(stream_, temp_, tempBytes_, block_, bodyStream_);
-  }
+  KernelExecutor executor() const { return KernelExecutor(stream_, temp_, tempBytes_, block_); }
   // The border stream's executor: per-particle launches only (no scratch: a sort or selection
   // there would fail, not race the compute stream's).
   KernelExecutor borderExecutor() const { return KernelExecutor(borderStream_, nullptr, 0, block_); }
@@ -159,7 +156,8 @@ public:
   void capture(Graph& g, Enqueue&& enqueue)
   {
     destroy(g);
-    KernelExecutor exec = executor();
+    // Its conditional nodes' bodies are captured on the body stream (KernelExecutor::runIf).
+    KernelExecutor exec(stream_, temp_, tempBytes_, block_, bodyStream_);
     cudaGraph_t graph = nullptr;
     check(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal),
       "cudaStreamBeginCapture");

@@ -208,7 +208,7 @@ struct GraphBranch
 template <class Real> // only so that each translation unit has its own instance
 __global__ void __launch_bounds__(kReduceThreads) compressionFinalKernel(
   std::uint32_t blocks, std::uint32_t n, double tolerance, double maxTolerance,
-  AdaptiveState* state, const double* blockSums, GraphBranch next)
+  AdaptiveState* state, const double* blockSums)
 {
   __shared__ double shared[kReduceThreads];
   __shared__ double largest[kReduceThreads];
@@ -240,17 +240,23 @@ __global__ void __launch_bounds__(kReduceThreads) compressionFinalKernel(
     {
       ++state->iterations;
     }
-    if (next.valid)
-    {
-      // The next projection runs only if this one does not end the solve.
-      cudaGraphSetConditional(next.handle, state->done ? 0u : 1u);
-    }
   }
+}
+
+// A captured step's next projection runs only if this reduction did not end the solve. A kernel
+// of its own, launched only into graphs, so that the stage-by-stage step calls no device runtime
+// function: that is the step compute-sanitizer's racecheck checks (2025.3.1 dies with SIGSEGV
+// on a graph with conditional nodes; Utilities/gpu/run.sh sets PBF_CUDA_GRAPHS=0 for it).
+template <class Real> // only so that each translation unit has its own instance
+__global__ void setBranchKernel(const AdaptiveState* state, cudaGraphConditionalHandle next)
+{
+  cudaGraphSetConditional(next, state->done ? 0u : 1u);
 }
 
 // Runs the schedule's stages as kernels on one stream. Nothing here synchronises or allocates,
 // so a step can be captured into a CUDA graph.
-// While the stream is captured, runIf makes a conditional node and captures its body on
+// An executor given a bodyStream records into the graph being captured on `stream`
+// (CudaDevicePolicy::capture): runIf then makes a conditional node and captures its body on
 // bodyStream (a stream of its own: a capturing stream cannot capture into another graph).
 class KernelExecutor
 {
@@ -289,15 +295,17 @@ public:
   void runIf(Branch b, Body&& body)
   {
     cudaGraph_t graph = nullptr;
-    if (!b.valid || !bodyStream_ || !capturing(&graph))
+    if (!b.valid || !capturing(&graph))
     {
       body(*this);
       return;
     }
     const cudaGraphNode_t* dependencies = nullptr;
+    const cudaGraphEdgeData* edges = nullptr;
     std::size_t count = 0;
     cudaStreamCaptureStatus status{};
-    check(cudaStreamGetCaptureInfo(stream_, &status, nullptr, &graph, &dependencies, nullptr, &count),
+    unsigned long long id = 0;
+    check(cudaStreamGetCaptureInfo(stream_, &status, &id, &graph, &dependencies, &edges, &count),
       "cudaStreamGetCaptureInfo");
     cudaGraphNodeParams params{};
     params.type = cudaGraphNodeTypeConditional;
@@ -381,8 +389,13 @@ public:
       check(cudaGetLastError(), "kernel launch (compression)");
     }
     compressionFinalKernel<Real><<<1, kReduceThreads, 0, stream_>>>(
-      blocks, n, tolerance, k.maxTolerance, state, blockSums, next);
+      blocks, n, tolerance, k.maxTolerance, state, blockSums);
     check(cudaGetLastError(), "kernel launch (compression)");
+    if (next.valid)
+    {
+      setBranchKernel<Real><<<1, 1, 0, stream_>>>(state, next.handle);
+      check(cudaGetLastError(), "kernel launch (branch)");
+    }
   }
 
   // The indices i in [0, n) with pred(i), ascending, into out; their number into *count (device
@@ -438,10 +451,21 @@ public:
   }
 
 private:
+  // Whether this executor records into a graph (CudaDevicePolicy::capture gives it the body
+  // stream), and which: a step queued stage by stage asks the stream nothing.
   bool capturing(cudaGraph_t* graph) const
   {
+    if (!bodyStream_)
+    {
+      return false;
+    }
     cudaStreamCaptureStatus status{};
-    check(cudaStreamGetCaptureInfo(stream_, &status, nullptr, graph), "cudaStreamGetCaptureInfo");
+    const cudaGraphNode_t* dependencies = nullptr;
+    const cudaGraphEdgeData* edges = nullptr;
+    std::size_t count = 0;
+    unsigned long long id = 0;
+    check(cudaStreamGetCaptureInfo(stream_, &status, &id, graph, &dependencies, &edges, &count),
+      "cudaStreamGetCaptureInfo");
     return status == cudaStreamCaptureStatusActive;
   }
 
