@@ -8,7 +8,8 @@
 //   between steps x and v live in vec[0] and vec[1] (in either order, see Roles).
 // - The sort is stable and keyed like the CPU's counting sort, so the permutation is the same.
 // - The Jacobi update (applyCorrection) is fused into positionCorrection by writing the corrected
-//   positions to the other of two position buffers, and updateVelocity into the last correction.
+//   positions to the other of two position buffers, and updateVelocity into the last correction
+//   (with a fixed count; in adaptive mode into the pass after the solve, finishAdaptiveSolve).
 // - Algorithm 1, line 23 (x_i = x*_i) is a relabelling: the corrected positions' buffer becomes x.
 // - The neighbour passes walk row masks (NeighborMasks.h) or, with masks off, the 27 cells.
 //
