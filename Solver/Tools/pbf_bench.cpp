@@ -319,7 +319,23 @@ int main(int argc, char** argv)
   try
   {
     ToolOptions options = parseToolOptions(argc, argv, keys);
-    if (options.extra.count("refined"))
+    // Each benchmark's own options are refused by the other, not ignored: a measurement must not
+    // silently be of something else than the command says.
+    const bool refined = options.extra.count("refined") > 0;
+    const std::vector<std::string> widenedOnly = { "particles", "sweep", "steps", "warmup",
+      "neighbors", "skin", "graphs", "block", "solid", "json", "label" };
+    const std::vector<std::string> refinedOnly = { "until", "frame", "modes", "csv" };
+    for (const std::string& key : refined ? widenedOnly : refinedOnly)
+    {
+      if (options.extra.count(key))
+      {
+        throw InvalidInput("--" + key + " applies to " +
+          (refined ? std::string("the widened dam break, not to --refined") : "--refined only") +
+          (key == "graphs" ? " (with --refined, PBF_CUDA_GRAPHS=0 launches the kernels one by one)"
+                           : ""));
+      }
+    }
+    if (refined)
     {
       const RefinedSettings settings = refinedSettings(options);
       const Scene scene = toolScene(options);
