@@ -108,12 +108,6 @@ public:
     {
       return;
     }
-    const auto setNext = [&] {
-      if (next >= 0)
-      {
-        branches_[static_cast<std::size_t>(next)] = state->done ? 0 : 1;
-      }
-    };
     double total = 0.0, top = 0.0;
     for (std::uint32_t begin = 0; begin < n; begin += 4096)
     {
@@ -136,7 +130,10 @@ public:
     {
       ++state->iterations;
     }
-    setNext();
+    if (next >= 0)
+    {
+      branches_[static_cast<std::size_t>(next)] = state->done ? 0 : 1;
+    }
   }
 
   template <class Pred>
