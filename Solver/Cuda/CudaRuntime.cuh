@@ -278,13 +278,13 @@ public:
   // when the stream is not being captured (runIf then runs its body unconditionally).
   Branch branch()
   {
-    cudaGraph_t graph = nullptr;
-    if (!capturing(&graph))
+    const Capture at = capture();
+    if (!at.graph)
     {
       return noBranch();
     }
     Branch b{ 0, true };
-    check(cudaGraphConditionalHandleCreate(&b.handle, graph, 0, cudaGraphCondAssignDefault),
+    check(cudaGraphConditionalHandleCreate(&b.handle, at.graph, 0, cudaGraphCondAssignDefault),
       "cudaGraphConditionalHandleCreate");
     return b;
   }
@@ -294,26 +294,20 @@ public:
   template <class Body>
   void runIf(Branch b, Body&& body)
   {
-    cudaGraph_t graph = nullptr;
-    if (!b.valid || !capturing(&graph))
+    const Capture at = b.valid ? capture() : Capture{};
+    if (!at.graph)
     {
       body(*this);
       return;
     }
-    const cudaGraphNode_t* dependencies = nullptr;
-    const cudaGraphEdgeData* edges = nullptr;
-    std::size_t count = 0;
-    cudaStreamCaptureStatus status{};
-    unsigned long long id = 0;
-    check(cudaStreamGetCaptureInfo(stream_, &status, &id, &graph, &dependencies, &edges, &count),
-      "cudaStreamGetCaptureInfo");
     cudaGraphNodeParams params{};
     params.type = cudaGraphNodeTypeConditional;
     params.conditional.handle = b.handle;
     params.conditional.type = cudaGraphCondTypeIf;
     params.conditional.size = 1;
     cudaGraphNode_t node = nullptr;
-    check(cudaGraphAddNode(&node, graph, dependencies, nullptr, count, &params), "cudaGraphAddNode");
+    check(cudaGraphAddNode(&node, at.graph, at.dependencies, nullptr, at.count, &params),
+      "cudaGraphAddNode");
     check(cudaStreamUpdateCaptureDependencies(stream_, &node, nullptr, 1,
             cudaStreamSetCaptureDependencies),
       "cudaStreamUpdateCaptureDependencies");
@@ -451,22 +445,29 @@ public:
   }
 
 private:
-  // Whether this executor records into a graph (CudaDevicePolicy::capture gives it the body
-  // stream), and which: a step queued stage by stage asks the stream nothing.
-  bool capturing(cudaGraph_t* graph) const
+  // The graph this executor records into and the nodes the next one depends on; no graph when it
+  // does not record (CudaDevicePolicy::capture gives a recording executor the body stream): a
+  // step queued stage by stage asks the stream nothing.
+  struct Capture
   {
+    cudaGraph_t graph = nullptr;
+    const cudaGraphNode_t* dependencies = nullptr;
+    std::size_t count = 0;
+  };
+  Capture capture() const
+  {
+    Capture at;
     if (!bodyStream_)
     {
-      return false;
+      return at;
     }
     cudaStreamCaptureStatus status{};
-    const cudaGraphNode_t* dependencies = nullptr;
     const cudaGraphEdgeData* edges = nullptr;
-    std::size_t count = 0;
     unsigned long long id = 0;
-    check(cudaStreamGetCaptureInfo(stream_, &status, &id, graph, &dependencies, &edges, &count),
+    check(cudaStreamGetCaptureInfo(
+            stream_, &status, &id, &at.graph, &at.dependencies, &edges, &at.count),
       "cudaStreamGetCaptureInfo");
-    return status == cudaStreamCaptureStatusActive;
+    return status == cudaStreamCaptureStatusActive ? at : Capture{};
   }
 
   cudaStream_t stream_;

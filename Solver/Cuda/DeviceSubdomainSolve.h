@@ -100,7 +100,7 @@ void DeviceSubdomainStepper<Real, Device>::solve(Roles4 r, const CellKey* sorted
   exec = device_->executor();
   // The ghosts' omega, and their XSPH sums where the bi-Laplacian reads them.
   Vec3<Real>* const ghostSmoothing = parameters_.xsphHyperViscosity > 0 ? f.smoothing : nullptr;
-  detail::withVorticityPass(k.c.wallFriction, [&](auto pass) {
+  detail::withPass<detail::VorticityPass>(k.c.wallFriction != Real(0), [&](auto pass) {
     {
       auto edge = device_->borderExecutor();
       device_->forkBorder();

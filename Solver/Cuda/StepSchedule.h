@@ -386,35 +386,21 @@ void confinementPass(Exec& exec, std::uint32_t n, Particles particles,
   });
 }
 
-// run(pass) with the confinement pass for these coefficients: with the bi-Laplacian only when
-// alpha_4 > 0.
-template <class Real, class Run>
-void withConfinementPass(const Coefficients<Real>& c, Run&& run)
+// run(Pass<true>{}) when `on`, else run(Pass<false>{}): a pass whose optional terms are compiled
+// out when unused (VorticityPass: wall friction; ConfinementPass: the bi-Laplacian), because
+// their registers cost the kernels that do not need them.
+template <template <bool> class Pass, class Run>
+void withPass(bool on, Run&& run)
 {
-  if (c.xsphHyper)
+  if (on)
   {
-    run(ConfinementPass<true>{});
+    run(Pass<true>{});
   }
   else
   {
-    run(ConfinementPass<false>{});
+    run(Pass<false>{});
   }
 }
-
-// run(pass) with the vorticity pass for this friction: with it only when there is any.
-template <class Real, class Run>
-void withVorticityPass(Real wallFriction, Run&& run)
-{
-  if (wallFriction != Real(0))
-  {
-    run(VorticityPass<true>{});
-  }
-  else
-  {
-    run(VorticityPass<false>{});
-  }
-}
-
 
 // Lines 10-19 and, in the last iteration, 21: delta p_i (eq. 14) into f.scratch, then the Jacobi
 // update in place there, so f.scratch holds the corrected positions afterwards; the largest
@@ -574,11 +560,11 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
     detail::afterIterationsView(b, k, sortedKeys, D, C, positions);
   f.omega = f.scratch;
   f.smoothing = D;
-  detail::withVorticityPass(k.c.wallFriction, [&](auto pass) {
+  detail::withPass<detail::VorticityPass>(k.c.wallFriction != Real(0), [&](auto pass) {
     detail::firstPassOnPositions(exec, VorticityStage{}, b, k, n, f, k.iterations, false, pass);
   });
   Vec3<Real>* const velocity = f.scratch;
-  detail::withConfinementPass(k.c, [&](auto pass) {
+  detail::withPass<detail::ConfinementPass>(k.c.xsphHyper, [&](auto pass) {
     detail::confinementPass(exec, n, detail::AllParticles{}, f, velocity, pass);
   });
 
