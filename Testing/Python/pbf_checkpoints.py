@@ -101,8 +101,8 @@ expect(list(table["Frame"]) == list(range(7)),
        "XSPHViscosity 0.1: diagnostics of frames %s, expected 0..6" % list(table["Frame"]))
 expect(abs(T.frame(source, 6 * INTERVAL)["velocity"] - straight[6]["velocity"]).max() > 1e-4,
        "XSPHViscosity 0.1 left frame 6 unchanged")
-source.XSPHViscosity = 0.05
-visit(source, 5, ("initial", 0, 5 * SUBSTEPS), "XSPHViscosity back to 0.05")
+source.XSPHViscosity = 0.0125
+visit(source, 5, ("initial", 0, 5 * SUBSTEPS), "XSPHViscosity back to 0.0125")
 
 # Memory budget: room for 5.5 checkpoints, one taken every frame. Each time the sixth arrives,
 # the interval doubles and those off it go: 0..5 -> 0 2 4 -> ... -> 0 8 16 24.

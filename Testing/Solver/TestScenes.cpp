@@ -32,6 +32,7 @@ Parameters coarseFixedSteps()
   p.densityErrorTolerance = 0;
   p.solverIterations = 4;
   p.xsphViscosity = 0.001; // the paper's c = 0.01 per step at the default 1/240 s
+  p.xsphHyperViscosity = 0; // and the paper's XSPH alone
   return p;
 }
 

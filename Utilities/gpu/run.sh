@@ -254,7 +254,9 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
   # into $out/resolution, the summary tables into the log. PBF_GPU_RESOLUTION=1: the 1.15M and
   # 9.2M dam breaks and the Martin & Moyce fronts; 2: the smoothing ratios, the CFL halving and
   # the CPU (OpenMP) dam breaks; 3: both; 5: the refined benchmark (pbf_bench --refined); 6: MARIN
-  # at 2, 1 and 0.75 cm (pbf_marin).
+  # at 2, 1 and 0.75 cm (pbf_marin; PBF_GPU_MARIN_SPACINGS other spacings). Several at once:
+  # PBF_GPU_RESOLUTION="2 6".
+  level() { [[ " $PBF_GPU_RESOLUTION " == *" $1 "* ]]; }
   res=$out/resolution
   mkdir -p "$res"
   bench=$build/Solver/Tools/pbf_bench
@@ -269,7 +271,7 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
     tail -n 10 "$res/$name.log"
     record "resolution $name: exit $status"
   }
-  if [[ $PBF_GPU_RESOLUTION == 1 || $PBF_GPU_RESOLUTION == 3 ]]; then
+  if level 1 || level 3; then
     refine dam_break_1M 150 --backend cuda --refined 0.005 --until 2
     refine dam_break_9M 200 --backend cuda --refined 0.0025 --until 0.5
     for across in 10 20 40 80; do
@@ -279,27 +281,28 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
       record "martin-moyce $across: $(grep -E 'rms_relative_error,|fitted' "$res/mm_$across.txt" | tr '\n' ' ')"
     done
   fi
-  if [[ $PBF_GPU_RESOLUTION == 5 ]]; then
+  if level 5; then
     # The benchmark of the scene users run (Documentation/Performance.md): 144k and
     # 1.15M to 2 s, 9.2M to 0.5 s, fixed steps, automatic with 4 projections and the defaults.
     refine bench_refined 200 --backend cuda --refined 0.01,0.005 --until 2
     refine bench_refined_9M 200 --backend cuda --refined 0.0025 --until 0.5
   fi
-  if [[ $PBF_GPU_RESOLUTION == 6 ]]; then
+  if level 6; then
     # MARIN (Kleefsman et al. 2005) to 6 s at 2, 1 and 0.75 cm: gauge heights against the records.
-    phase "marin 0.02, 0.01 and 0.0075 to 6 s"
+    marin_spacings=${PBF_GPU_MARIN_SPACINGS:-0.02,0.01,0.0075}
+    phase "marin $marin_spacings to 6 s"
     timeout "$(limit 400)" "$build/Solver/Tools/pbf_marin" --backend cuda \
-      --records "$root/Testing/Validation" --spacings 0.02,0.01,0.0075 --until 6 \
+      --records "$root/Testing/Validation" --spacings "$marin_spacings" --until 6 \
       --csv "$res/marin.csv" >"$res/marin.txt" 2>&1
     cat "$res/marin.txt"
     record "marin: $(tail -n +2 "$res/marin.txt" | tr '\n' ' ')"
   fi
-  if [[ $PBF_GPU_RESOLUTION == 4 ]]; then
+  if level 4; then
     refine dam_break_1M_defaults 60 --backend cuda --refined 0.005 --until 2 --modes defaults
     # The CPU's finest case: OpenMP on this machine's cores.
     refine dam_break_openmp_fine 420 --backend openmp --refined 0.01 --until 2 --modes defaults
   fi
-  if [[ $PBF_GPU_RESOLUTION == 2 || $PBF_GPU_RESOLUTION == 3 ]]; then
+  if level 2 || level 3; then
     for ratio in 1.5 2 2.5 3; do
       refine "tank_ratio_$ratio" 40 --backend cuda --scene "$root/Testing/Validation/hydrostatic_tank.json" \
         --refined 0.02 --smoothing-ratio "$ratio" --until 0.5 --modes defaults
