@@ -166,7 +166,7 @@ TEST(Playback, AnotherKeyDropsEverythingAndTheSameKeepsIt)
   EXPECT_TRUE(playback.rows().empty());
   EXPECT_EQ(playback.live(), nullptr);
   PlaybackKey hyper = other;
-  hyper.parameters.xsphHyperViscosity = 0.05;
+  hyper.parameters.xsphHyperViscosity += 0.05;
   EXPECT_TRUE(playback.adopt(hyper));
 }
 
