@@ -106,12 +106,24 @@ MarinRun runMarin(const Parameters& parameters, Backend backend, Precision preci
   MarinRun run;
   run.spacing = parameters.particleSpacing;
   run.particles = simulation.stepper().size();
+  bool arrived = false;
   for (long k = 0;; ++k)
   {
     const double t = static_cast<double>(k) * sampleInterval;
     if (t > until + 1e-12)
     {
       break;
+    }
+    // Until the first wave has passed H2, step by step (stepToward takes the steps advanceTo
+    // would) and read H2 after each.
+    AdvanceReport report;
+    while (!arrived && simulation.time() < t)
+    {
+      simulation.stepToward(t, report);
+      const double height = waterHeight(simulation, kGaugeH2);
+      run.h2Steps.t.push_back(simulation.time());
+      run.h2Steps.value.push_back(height);
+      arrived = height > kArrivalHeight;
     }
     simulation.advanceTo(t);
     run.h2.t.push_back(t);
@@ -158,12 +170,12 @@ double rms(const TimeSeries& simulated, const TimeSeries& record)
 
 } // namespace
 
-MarinComparison compareMarin(
-  const MarinRun& run, const TimeSeries& recordH2, const TimeSeries& recordH4)
+MarinComparison compareMarin(const MarinRun& run, const TimeSeries& recordH2,
+  const TimeSeries& recordH4, const TimeSeries* recordH2Arrival)
 {
   MarinComparison c;
-  c.arrivalH2 = firstCrossing(run.h2, kArrivalHeight);
-  c.arrivalH2Experiment = firstCrossing(recordH2, kArrivalHeight);
+  c.arrivalH2 = firstCrossing(run.h2Steps.t.empty() ? run.h2 : run.h2Steps, kArrivalHeight);
+  c.arrivalH2Experiment = firstCrossing(recordH2Arrival ? *recordH2Arrival : recordH2, kArrivalHeight);
   c.rmsH2 = rms(run.h2, recordH2);
   c.rmsH4 = rms(run.h4, recordH4);
   return c;

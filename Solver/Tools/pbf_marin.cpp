@@ -33,6 +33,7 @@ int main(int argc, char** argv)
     const std::string folder = options.extra["records"];
     const TimeSeries h2 = readGaugeRecord(folder + "/marin_2005_H2.csv");
     const TimeSeries h4 = readGaugeRecord(folder + "/marin_2005_H4.csv");
+    const TimeSeries h2Arrival = readGaugeRecord(folder + "/marin_2005_H2_arrival.csv");
     const std::vector<double> spacings = toolReals(options, "spacings", 0.02);
     const double until = toolReal(options, "until", 6.0);
     const double sample = toolReal(options, "sample", 0.01);
@@ -47,7 +48,7 @@ int main(int argc, char** argv)
       runs.push_back(runMarin(p, options.backend, options.precision, until, sample));
       const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      const MarinComparison c = compareMarin(runs.back(), h2, h4);
+      const MarinComparison c = compareMarin(runs.back(), h2, h4, &h2Arrival);
       std::printf("%.4g,%zu,%s,%.4f,%.4f,%+.4f,%.4f,%.4f,%.1f\n", s, runs.back().particles,
         toString(options.backend), c.arrivalH2, c.arrivalH2Experiment,
         c.arrivalH2 / c.arrivalH2Experiment - 1.0, c.rmsH2, c.rmsH4, seconds);
