@@ -175,7 +175,8 @@ MarinComparison compareMarin(const MarinRun& run, const TimeSeries& recordH2,
 {
   MarinComparison c;
   c.arrivalH2 = firstCrossing(run.h2Steps.t.empty() ? run.h2 : run.h2Steps, kArrivalHeight);
-  c.arrivalH2Experiment = firstCrossing(recordH2Arrival ? *recordH2Arrival : recordH2, kArrivalHeight);
+  c.arrivalH2Experiment =
+    firstCrossing(recordH2Arrival ? *recordH2Arrival : recordH2, kArrivalHeight);
   c.rmsH2 = rms(run.h2, recordH2);
   c.rmsH4 = rms(run.h4, recordH4);
   return c;

@@ -53,7 +53,9 @@ MarinRun runMarin(const Parameters& parameters, Backend backend, Precision preci
 
 struct MarinComparison
 {
-  double arrivalH2 = 0;           // [s] first time H2 exceeds kArrivalHeight, simulated (h2Steps)
+  // [s] first time H2 exceeds kArrivalHeight, simulated: from h2Steps, or from the samples of a
+  // run that has none (one not made by runMarin)
+  double arrivalH2 = 0;
   double arrivalH2Experiment = 0; // [s] the same in the record (at full rate when given)
   double rmsH2 = 0, rmsH4 = 0;    // [m] over the samples up to the run's end
 };
