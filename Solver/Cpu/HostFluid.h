@@ -6,6 +6,7 @@
 #pragma once
 
 #include "CellSort.h"
+#include "Chebyshev.h"
 #include "Equations.h"
 #include "Boundary.h"
 #include "HostParticles.h"
@@ -179,6 +180,10 @@ void projectAndUpdate(HostFluid<Real>& fluid, ForEach&& forEach, Refresh&& refre
   const FluidView<Real> first = fluid.view(true); // the first projection adds s_corr
   const Parameters& parameters = fluid.parameters;
   const bool adaptive = parameters.densityErrorTolerance > 0;
+  // Chebyshev's positions two projections back (Chebyshev.h) live in omega's array, which the
+  // solve does not use: each projection leaves there the positions it started from, which the
+  // next one's blend reads as p^{k-1}.
+  Vec3<Real>* const twoBack = fluid.omega.data();
   for (int iteration = 0; iteration < parameters.solverIterations; ++iteration)
   {
     forEach([&](std::uint32_t i) { densityAndLambda(i, f); });
@@ -197,7 +202,24 @@ void projectAndUpdate(HostFluid<Real>& fluid, ForEach&& forEach, Refresh&& refre
     }
     const FluidView<Real>& pass = iteration == 0 ? first : f;
     forEach([&](std::uint32_t i) { positionCorrection(i, pass); });
-    forEach([&](std::uint32_t i) { applyCorrection(i, f); });
+    const Real omega = static_cast<Real>(chebyshevWeight(parameters.chebyshevRho, iteration));
+    if (parameters.chebyshevRho > 0)
+    {
+      // p^k is kept for the next projection's blend, which reads it as p^{k-1}.
+      forEach([&](std::uint32_t i) {
+        const Vec3<Real> before = f.p[i];
+        applyCorrection(i, f);
+        if (iteration > 0)
+        {
+          f.p[i] = acceleratedCorrection(f.p[i], twoBack[i], omega, f);
+        }
+        twoBack[i] = before;
+      });
+    }
+    else
+    {
+      forEach([&](std::uint32_t i) { applyCorrection(i, f); });
+    }
     refresh(HostField::Predicted);
     ++report.iterations;
   }

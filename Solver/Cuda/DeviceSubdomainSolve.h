@@ -63,12 +63,18 @@ void DeviceSubdomainStepper<Real, Device>::solve(Roles4 r, const CellKey* sorted
       }
     }
     const bool last = iteration + 1 == k.iterations;
+    // Chebyshev's blend reads each owned particle's own positions two projections back, which
+    // the other position buffer still holds (StepSchedule.h's correctionPass).
+    const bool accelerate = k.chebyshevRho > 0 && iteration > 0;
+    const Real omega = static_cast<Real>(chebyshevWeight(k.chebyshevRho, iteration));
     exec = device_->executor();
     device_->forkBorder();
-    detail::correctionPass(edge, be, border, f, iteration, last, nullptr, onBorder);
+    detail::correctionPass(
+      edge, be, border, f, iteration, last, nullptr, accelerate, omega, onBorder);
     // The last correction also updates the velocities, which XSPH and vorticity read.
     sendRefresh<Vec3<Real>>(f.scratch, last ? v : nullptr);
-    detail::correctionPass(exec, b, interior, f, iteration, last, nullptr, onInterior);
+    detail::correctionPass(
+      exec, b, interior, f, iteration, last, nullptr, accelerate, omega, onInterior);
     device_->joinBorder();
     receiveRefresh<Vec3<Real>>(f.scratch, last ? v : nullptr);
     ++performed;

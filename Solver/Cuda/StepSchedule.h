@@ -31,6 +31,7 @@
 //                                        kernels then return at once after done, see AdaptiveState)
 #pragma once
 
+#include "Chebyshev.h"
 #include "Equations.h"
 #include "Grid.h"
 #include "HostDevice.h"
@@ -121,6 +122,7 @@ struct StepConstants
   double tolerance;            // adaptive mode when > 0: densityErrorTolerance as a fraction
   double maxTolerance;         // maxDensityErrorTolerance as a fraction; 0: not a criterion
   double inverseRestDensity;   // 1 / rho_0 in double, for the compression of adaptive mode
+  double chebyshevRho;         // Parameters::chebyshevRho: 0, plain Jacobi
   // This step's dt and what follows from it, in the stepper's memory (device memory on a GPU):
   // the stepper writes it before a step, so a captured step reads the current values.
   const StepTime<Real>* time;
@@ -159,6 +161,7 @@ StepConstants<Real> makeStepConstants(const Parameters& parameters, double skin,
   k.tolerance = parameters.densityErrorTolerance / 100.0;
   k.maxTolerance = parameters.maxDensityErrorTolerance / 100.0;
   k.inverseRestDensity = 1.0 / parameters.restDensity;
+  k.chebyshevRho = parameters.chebyshevRho;
   return k;
 }
 
@@ -404,11 +407,14 @@ void withPass(bool on, Run&& run)
 
 // Lines 10-19 and, in the last iteration, 21: delta p_i (eq. 14) into f.scratch, then the Jacobi
 // update in place there, so f.scratch holds the corrected positions afterwards; the largest
-// |delta p_i| goes to maxMoved[iteration] for the mask schedule.
+// |delta p_i| goes to maxMoved[iteration] for the mask schedule. With Chebyshev's acceleration
+// (accelerate: a projection after the first, Chebyshev.h) the update is blended with
+// omega: f.scratch holds p^{k-1} when the pass starts (the projection before the last wrote
+// there), so each particle reads its own before overwriting it, and no buffer is added.
 template <class Real, class Exec, class Visit = AllParticles>
 void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
-  const AdaptiveState* state, Visit visit = Visit{})
+  const AdaptiveState* state, bool accelerate, Real omega, Visit visit = Visit{})
 {
   const MovedSinceSort local{ b.moved, b.cellMoved };
   exec.forEachMax(CorrectionStage{}, n, b.maxMoved + iteration,
@@ -425,15 +431,22 @@ void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
       // delta p_i lands in the other position buffer (f.scratch), which nobody reads in this
       // pass; applyCorrection then adds p_i to it in place. IEEE addition is commutative, so
       // this is exactly x*_i + delta p_i, and no particle reads a position that moved.
+      const Vec3<Real> twoBack = accelerate ? f.scratch[i] : Vec3<Real>{};
       positionCorrection(i, f);
       const Vec3<Real> delta = f.scratch[i];
       applyCorrection(i, apply);
+      if (accelerate)
+      {
+        f.scratch[i] = acceleratedCorrection(f.scratch[i], twoBack, omega, f);
+      }
       if (last)
       {
         updateVelocity(i, apply); // line 21 needs only particle i's own corrected position
       }
-      // What the masks must allow for: delta p_i, or more where a solid moved the particle on.
-      const Real moved = f.obstacleCount > 0 ? length(f.scratch[i] - f.p[i]) : Real(0);
+      // What the masks must allow for: delta p_i, or more where a solid or the blend moved the
+      // particle on.
+      const Real moved =
+        f.obstacleCount > 0 || accelerate ? length(f.scratch[i] - f.p[i]) : Real(0);
       const double distance = static_cast<double>(length(delta) > moved ? length(delta) : moved);
       if (local.moved)
       {
@@ -534,7 +547,9 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
           iteration == 0 ? -1.0 : k.tolerance, proceed[iteration + 1]);
       }
       const bool last = !adaptive && iteration + 1 == k.iterations;
-      detail::correctionPass(e, b, n, f, iteration, last, adaptive ? b.adaptive : nullptr);
+      const bool accelerate = k.chebyshevRho > 0 && iteration > 0;
+      detail::correctionPass(e, b, n, f, iteration, last, adaptive ? b.adaptive : nullptr,
+        accelerate, static_cast<Real>(chebyshevWeight(k.chebyshevRho, iteration)));
     };
     if (adaptive && iteration > 0)
     {

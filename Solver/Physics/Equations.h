@@ -395,6 +395,16 @@ PBF_HD PBF_INLINE void applyCorrection(std::uint32_t i, const FluidView<Real, Ne
   f.p[i] = collideWithObstacles(collideWithBox(f.p[i] + f.scratch[i], f.c), f);
 }
 
+// Chebyshev's acceleration of that update (Chebyshev.h): the Jacobi result `jacobi` blended with
+// the particle's positions two projections back, p^{k+1} = p^{k-1} + omega (jacobi - p^{k-1}),
+// then the collisions again (the blend may reach past a wall that jacobi was kept from).
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE Vec3<Real> acceleratedCorrection(const Vec3<Real>& jacobi,
+  const Vec3<Real>& twoBack, Real omega, const FluidView<Real, Neighbors>& f)
+{
+  return collideWithObstacles(collideWithBox(twoBack + (jacobi - twoBack) * omega, f.c), f);
+}
+
 // Algorithm 1, line 21: v_i = (x*_i - x_i) / dt. The density is final now, so the volume that the
 // vorticity passes read is stored here when the view keeps one.
 template <class Real, class Neighbors>

@@ -189,6 +189,13 @@ void Parameters::validate() const
   requireNonNegative("densityErrorTolerance", densityErrorTolerance);
   requireNonNegative("maxDensityErrorTolerance", maxDensityErrorTolerance);
   requirePositive("relaxation", relaxation);
+  requireNonNegative("chebyshevRho", chebyshevRho);
+  if (chebyshevRho >= 1.0)
+  {
+    // At 1 the weights approach 2 and no pattern shrinks: the projections never converge.
+    reject("chebyshevRho", chebyshevRho,
+      "must lie in [0, 1) (the spectral radius estimate of a Jacobi projection; 0: plain Jacobi)");
+  }
   requireNonNegative("sCorrK", sCorrK);
   requirePositive("sCorrN", sCorrN);
   if (sCorrN > 16.0)
@@ -369,6 +376,7 @@ std::string describe(const Parameters& p)
       << (p.densityErrorTolerance > 0 ? " (adaptive to " + std::to_string(p.densityErrorTolerance) +
                  "% mean, " + std::to_string(p.maxDensityErrorTolerance) + "% max)"
                                        : "")
+      << (p.chebyshevRho > 0 ? " chebyshevRho=" + std::to_string(p.chebyshevRho) : "")
       << " epsilon=" << p.relaxation << " k=" << p.sCorrK << " n=" << p.sCorrN
       << " dq=" << p.sCorrDeltaQ << " xsph=" << p.xsphViscosity << " (nu " << p.xsphNu() << ")"
       << (p.xsphHyperViscosity > 0 ? " xsphHyper=" + std::to_string(p.xsphHyperViscosity) : "")

@@ -57,6 +57,12 @@ struct Parameters
   // (0: the mean alone decides). The mean alone lets an impact squeeze single particles by 20 %
   // at one projection per step (the dam break at 1.15M particles); the cap still bounds the cost.
   double maxDensityErrorTolerance = 5.0;
+  // Chebyshev acceleration of the projections (Chebyshev.h): the estimate rho in [0, 1) of the
+  // spectral radius of one Jacobi projection; 0: plain Jacobi (the paper). The projections from
+  // the second on blend each Jacobi result with the positions two projections back, so a deep
+  // column needs fewer of them for the same tolerance; an estimate above the true radius
+  // amplifies the patterns beyond it (a 120-layer column boils at 0.9).
+  double chebyshevRho = 0.0;
   // epsilon of eq. 11 is in units of the bulk denominator of eq. 11 (see LatticeCalibration): it
   // softens the constraint by that fraction at any h, s and rho_0 (the paper's value assumes its
   // own unit system). It is a regularisation for particles with few neighbours, not a stiffness:

@@ -51,6 +51,10 @@ std::map<std::string, std::pair<std::string, Setter>> parameterSetters()
           o.parameters.solverIterations = static_cast<int>(n);
         } } },
     { "epsilon", { "relaxation epsilon (bulk denominator units)", real(&Parameters::relaxation) } },
+    { "chebyshev",
+      { "Chebyshev acceleration of the projections: spectral radius estimate rho in [0, 1) "
+        "(0: plain Jacobi)",
+        real(&Parameters::chebyshevRho) } },
     { "tolerance",
       { "adaptive iterations: mean compression target [%] (0: fixed count)",
         real(&Parameters::densityErrorTolerance) } },

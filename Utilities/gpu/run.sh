@@ -254,8 +254,11 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
   # into $out/resolution, the summary tables into the log. PBF_GPU_RESOLUTION=1: the 1.15M and
   # 9.2M dam breaks and the Martin & Moyce fronts; 2: the smoothing ratios, the CFL halving and
   # the CPU (OpenMP) dam breaks; 3: both; 5: the refined benchmark (pbf_bench --refined); 6: MARIN
-  # at 2, 1 and 0.75 cm (pbf_marin; PBF_GPU_MARIN_SPACINGS other spacings). Several at once:
-  # PBF_GPU_RESOLUTION="2 6".
+  # at 2, 1 and 0.75 cm (pbf_marin; PBF_GPU_MARIN_SPACINGS other spacings); 7: the defaults alone
+  # (the 1.15M and 9.2M dam breaks, Martin & Moyce at 40 and 80 across). Several at once:
+  # PBF_GPU_RESOLUTION="2 6". PBF_GPU_SOLVER_ARGS (e.g. "--chebyshev 0.8") is added to every
+  # run of these phases, to measure a solver option against the defaults in the same call.
+  read -r -a solver_args <<<"${PBF_GPU_SOLVER_ARGS:-}"
   level() { [[ " $PBF_GPU_RESOLUTION " == *" $1 "* ]]; }
   res=$out/resolution
   mkdir -p "$res"
@@ -266,7 +269,7 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
     local name=$1 seconds=$2
     shift 2
     phase "resolution $name: $*"
-    timeout "$(limit "$seconds")" "$bench" "$@" --csv "$res" >"$res/$name.log" 2>&1
+    timeout "$(limit "$seconds")" "$bench" "$@" "${solver_args[@]}" --csv "$res" >"$res/$name.log" 2>&1
     local status=$?
     tail -n 10 "$res/$name.log"
     record "resolution $name: exit $status"
@@ -277,7 +280,19 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
     for across in 10 20 40 80; do
       phase "martin-moyce $across across"
       timeout "$(limit 60)" "$mm" --backend cuda --across "$across" --experiment "$experiment" \
-        --front "$res/mm_$across.csv" >"$res/mm_$across.txt" 2>"$res/mm_$across.err"
+        "${solver_args[@]}" --front "$res/mm_$across.csv" >"$res/mm_$across.txt" 2>"$res/mm_$across.err"
+      record "martin-moyce $across: $(grep -E 'rms_relative_error,|fitted' "$res/mm_$across.txt" | tr '\n' ' ')"
+    done
+  fi
+  if level 7; then
+    # The defaults alone, to compare a solver option (PBF_GPU_SOLVER_ARGS) with them in one call:
+    # the 1.15M and 9.2M dam breaks and Martin & Moyce at 40 and 80 across.
+    refine dam_break_1M_defaults 100 --backend cuda --refined 0.005 --until 2 --modes defaults
+    refine dam_break_9M_defaults 150 --backend cuda --refined 0.0025 --until 0.5 --modes defaults
+    for across in 40 80; do
+      phase "martin-moyce $across across"
+      timeout "$(limit 60)" "$mm" --backend cuda --across "$across" --experiment "$experiment" \
+        "${solver_args[@]}" --front "$res/mm_$across.csv" >"$res/mm_$across.txt" 2>"$res/mm_$across.err"
       record "martin-moyce $across: $(grep -E 'rms_relative_error,|fitted' "$res/mm_$across.txt" | tr '\n' ' ')"
     done
   fi
@@ -292,7 +307,7 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
     marin_spacings=${PBF_GPU_MARIN_SPACINGS:-0.02,0.01,0.0075}
     phase "marin $marin_spacings to 6 s"
     timeout "$(limit 400)" "$build/Solver/Tools/pbf_marin" --backend cuda \
-      --records "$root/Testing/Validation" --spacings "$marin_spacings" --until 6 \
+      --records "$root/Testing/Validation" --spacings "$marin_spacings" --until 6 "${solver_args[@]}" \
       --csv "$res/marin.csv" >"$res/marin.txt" 2>&1
     cat "$res/marin.txt"
     record "marin: $(tail -n +2 "$res/marin.txt" | tr '\n' ' ')"
@@ -324,7 +339,8 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
     for across in 40 80; do
       phase "martin-moyce $across across, CFL 0.2"
       timeout "$(limit 60)" "$mm" --backend cuda --across "$across" --experiment "$experiment" \
-        --dt-factor 0.5 --front "$res/mm_${across}_cfl0.2.csv" >"$res/mm_${across}_cfl0.2.txt" 2>&1
+        --dt-factor 0.5 "${solver_args[@]}" --front "$res/mm_${across}_cfl0.2.csv" \
+        >"$res/mm_${across}_cfl0.2.txt" 2>&1
       record "martin-moyce $across, CFL 0.2: $(grep -E 'rms_relative_error,' "$res/mm_${across}_cfl0.2.txt")"
     done
     refine dam_break_openmp 200 --backend openmp --refined 0.04,0.02,0.01 --until 2 --modes defaults
