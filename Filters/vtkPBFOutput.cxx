@@ -187,6 +187,7 @@ vtkSmartPointer<vtkFieldData> vtkPBFOutput::FrameFieldData(
   AddValue(fieldData, "DensityErrorTolerance", p.densityErrorTolerance);
   AddValue(fieldData, "MaxDensityErrorTolerance", p.maxDensityErrorTolerance);
   AddValue(fieldData, "RelaxationEpsilon", p.relaxation);
+  AddValue(fieldData, "ChebyshevRho", p.chebyshevRho);
   AddValue(fieldData, "SCorrK", p.sCorrK);
   AddValue(fieldData, "SCorrN", p.sCorrN);
   AddValue(fieldData, "SCorrDeltaQ", p.sCorrDeltaQ);

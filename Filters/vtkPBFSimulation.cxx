@@ -48,6 +48,7 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->SmoothingRatio = defaults.smoothingRatio;
   this->SolverIterations = defaults.solverIterations;
   this->RelaxationEpsilon = defaults.relaxation;
+  this->ChebyshevRho = defaults.chebyshevRho;
   this->SCorrK = defaults.sCorrK;
   this->SCorrN = defaults.sCorrN;
   this->SCorrDeltaQ = defaults.sCorrDeltaQ;
@@ -428,6 +429,7 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "DensityErrorTolerance: " << this->DensityErrorTolerance << "\n";
   os << indent << "MaxDensityErrorTolerance: " << this->MaxDensityErrorTolerance << "\n";
   os << indent << "RelaxationEpsilon: " << this->RelaxationEpsilon << "\n";
+  os << indent << "ChebyshevRho: " << this->ChebyshevRho << "\n";
   os << indent << "SCorrK: " << this->SCorrK << "\n";
   os << indent << "SCorrN: " << this->SCorrN << "\n";
   os << indent << "SCorrDeltaQ: " << this->SCorrDeltaQ << "\n";

@@ -170,6 +170,11 @@ public:
   vtkGetMacro(SolverIterations, int);
   vtkSetMacro(RelaxationEpsilon, double);
   vtkGetMacro(RelaxationEpsilon, double);
+
+  // Chebyshev acceleration of the projections: the spectral radius estimate rho in [0, 1); 0
+  // projects with plain Jacobi (pbf::Parameters::chebyshevRho).
+  vtkSetMacro(ChebyshevRho, double);
+  vtkGetMacro(ChebyshevRho, double);
   vtkSetMacro(SCorrK, double);
   vtkGetMacro(SCorrK, double);
   vtkSetMacro(SCorrN, double);
@@ -375,6 +380,7 @@ protected:
 
   int SolverIterations;
   double RelaxationEpsilon;
+  double ChebyshevRho;
   double SCorrK;
   double SCorrN;
   double SCorrDeltaQ;

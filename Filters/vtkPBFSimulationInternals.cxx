@@ -119,6 +119,7 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
   p.densityErrorTolerance = self->AdaptiveIterations ? self->DensityErrorTolerance : 0.0;
   p.maxDensityErrorTolerance = self->MaxDensityErrorTolerance;
   p.relaxation = self->RelaxationEpsilon;
+  p.chebyshevRho = self->ChebyshevRho;
   p.sCorrK = self->SCorrK;
   p.sCorrN = self->SCorrN;
   p.sCorrDeltaQ = self->SCorrDeltaQ;

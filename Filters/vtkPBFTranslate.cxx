@@ -107,6 +107,7 @@ std::string vtkPBFInUserTerms(std::string text)
     { "xsphHyperViscosity", "XSPH Hyper Viscosity" },
     { "vorticityEpsilon", "Vorticity Epsilon" },
     { "wallFriction", "Wall Friction" },
+    { "chebyshevRho", "Chebyshev Rho" },
     { "sCorrDeltaQ", "S Corr Delta Q" },
     { "sCorrK", "S Corr K" },
     { "sCorrN", "S Corr N" },

@@ -35,6 +35,7 @@ bool sameParameters(const Parameters& a, const Parameters& b)
     a.smoothingRatio == b.smoothingRatio && a.solverIterations == b.solverIterations &&
     a.densityErrorTolerance == b.densityErrorTolerance &&
     a.maxDensityErrorTolerance == b.maxDensityErrorTolerance && a.relaxation == b.relaxation &&
+    a.chebyshevRho == b.chebyshevRho &&
     a.sCorrK == b.sCorrK && a.sCorrN == b.sCorrN && a.sCorrDeltaQ == b.sCorrDeltaQ &&
     a.xsphViscosity == b.xsphViscosity && a.xsphHyperViscosity == b.xsphHyperViscosity &&
     a.vorticityEpsilon == b.vorticityEpsilon &&

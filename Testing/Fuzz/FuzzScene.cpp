@@ -38,6 +38,7 @@ double Parameters::*const kFields[] = {
   &Parameters::sCorrDeltaQ,
   &Parameters::xsphViscosity,
   &Parameters::xsphHyperViscosity,
+  &Parameters::chebyshevRho,
   &Parameters::vorticityEpsilon,
   &Parameters::densityErrorTolerance,
   &Parameters::maxDensityErrorTolerance,

@@ -55,6 +55,7 @@ std::vector<std::pair<std::string, double Parameters::*>> scalarFields()
     { "sCorrDeltaQ", &Parameters::sCorrDeltaQ },
     { "xsphViscosity", &Parameters::xsphViscosity },
     { "xsphHyperViscosity", &Parameters::xsphHyperViscosity },
+    { "chebyshevRho", &Parameters::chebyshevRho },
     { "cflNumber", &Parameters::cflNumber },
     { "vorticityEpsilon", &Parameters::vorticityEpsilon },
     { "timeStep", &Parameters::timeStep },

@@ -56,6 +56,8 @@ TEST(Parameters, BadValuesNameTheFieldAndTheValue)
   expectRejected([](Parameters& p) { p.xsphViscosity = -1; }, "xsphViscosity", "-1");
   expectRejected([](Parameters& p) { p.xsphHyperViscosity = -1; }, "xsphHyperViscosity", "-1");
   expectRejected([](Parameters& p) { p.xsphHyperViscosity = 2; }, "xsphHyperViscosity", "2");
+  expectRejected([](Parameters& p) { p.chebyshevRho = -0.5; }, "chebyshevRho", "-0.5");
+  expectRejected([](Parameters& p) { p.chebyshevRho = 1; }, "chebyshevRho", "1");
   expectRejected([](Parameters& p) { p.cflNumber = 0; }, "cflNumber", "0");
   expectRejected([](Parameters& p) { p.cflNumber = 1.5; }, "cflNumber", "1.5");
   expectRejected([&](Parameters& p) { p.gravity.y = nan; }, "gravity.y", "nan");

@@ -332,27 +332,42 @@ TEST(Resolution, TallColumnStaysAtRest)
   // 120 layers of s = 5 mm (0.6 m, 4 x 4 particles across between mirror walls: a slice of a
   // wide tank), 1 s from the lattice. The required bounds: mean compression <= 0.5 %, max <= 5 %,
   // max speed <= 0.25 m/s. Measured at 0.2 % tolerance: mean 0.2 %, max 0.7 %, 0.05 m/s,
-  // 9.4 iterations per step.
+  // 9.4 iterations per step. With Chebyshev's acceleration (chebyshevRho 0.8) the same column
+  // must hold the same bounds in fewer projections: measured 5.6 a step, 0.03 m/s; without the
+  // blend it would need the plain count, so at most 0.75 of it fails on a lost acceleration.
   Scene column;
   column.name = "tall_column";
   column.domain = { { 0, 0, 0 }, { 0.02, 0.7, 0.02 } };
   column.boxes.push_back({ { 0, 0, 0 }, { 0.02, 0.6, 0.02 }, { 0, 0, 0 } });
-  Parameters p;
-  p.particleSpacing = 0.005;
-  Simulation simulation(column, p, Backend::OpenMP, Precision::Single);
-  ASSERT_EQ(simulation.stepper().size(), 4u * 120u * 4u);
-  AdvanceReport total;
-  for (int frame = 1; frame <= 60; ++frame)
+  double plainPerStep = 0;
+  for (double rho : { 0.0, 0.8 })
   {
-    total.add(simulation.advanceTo(frame / 60.0));
+    Parameters p;
+    p.particleSpacing = 0.005;
+    p.chebyshevRho = rho;
+    Simulation simulation(column, p, Backend::OpenMP, Precision::Single);
+    ASSERT_EQ(simulation.stepper().size(), 4u * 120u * 4u);
+    AdvanceReport total;
+    for (int frame = 1; frame <= 60; ++frame)
+    {
+      total.add(simulation.advanceTo(frame / 60.0));
+    }
+    const DensityError e = densityErrorNow(simulation);
+    const double speed = simulation.stepper().statistics().maxSpeed;
+    const double perStep = double(total.iterations) / double(total.steps);
+    std::printf("120-layer column after 1 s, chebyshevRho %.1f: mean %.3f %%, max %.3f %%, max "
+                "speed %.4f m/s, %.2f iterations per step, %lu steps\n",
+      rho, 100 * e.average, 100 * e.max, speed, perStep, static_cast<unsigned long>(total.steps));
+    EXPECT_LE(e.average, 0.005) << "chebyshevRho " << rho;
+    EXPECT_LE(e.max, 0.05) << "chebyshevRho " << rho;
+    EXPECT_LE(speed, 0.25) << "chebyshevRho " << rho;
+    if (rho == 0.0)
+    {
+      plainPerStep = perStep;
+    }
+    else
+    {
+      EXPECT_LE(perStep, 0.75 * plainPerStep);
+    }
   }
-  const DensityError e = densityErrorNow(simulation);
-  const double speed = simulation.stepper().statistics().maxSpeed;
-  std::printf("120-layer column after 1 s: mean %.3f %%, max %.3f %%, max speed %.4f m/s, %.1f "
-              "iterations per step, %lu steps\n",
-    100 * e.average, 100 * e.max, speed,
-    double(total.iterations) / double(total.steps), static_cast<unsigned long>(total.steps));
-  EXPECT_LE(e.average, 0.005);
-  EXPECT_LE(e.max, 0.05);
-  EXPECT_LE(speed, 0.25);
 }

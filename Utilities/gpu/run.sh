@@ -256,7 +256,8 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
   # the CPU (OpenMP) dam breaks; 3: both; 5: the refined benchmark (pbf_bench --refined); 6: MARIN
   # at 2, 1 and 0.75 cm (pbf_marin; PBF_GPU_MARIN_SPACINGS other spacings); 7: the defaults alone
   # (the 1.15M and 9.2M dam breaks, Martin & Moyce at 40 and 80 across). Several at once:
-  # PBF_GPU_RESOLUTION="2 6". PBF_GPU_SOLVER_ARGS (e.g. "--chebyshev 0.8") is added to every
+  # PBF_GPU_RESOLUTION="2 6" (PBF_GPU_SKIP_OPENMP=1: level 2 without its OpenMP dam breaks).
+  # PBF_GPU_SOLVER_ARGS (e.g. "--chebyshev 0.8") is added to every
   # run of these phases, to measure a solver option against the defaults in the same call.
   read -r -a solver_args <<<"${PBF_GPU_SOLVER_ARGS:-}"
   level() { [[ " $PBF_GPU_RESOLUTION " == *" $1 "* ]]; }
@@ -343,7 +344,9 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
         >"$res/mm_${across}_cfl0.2.txt" 2>&1
       record "martin-moyce $across, CFL 0.2: $(grep -E 'rms_relative_error,' "$res/mm_${across}_cfl0.2.txt")"
     done
-    refine dam_break_openmp 200 --backend openmp --refined 0.04,0.02,0.01 --until 2 --modes defaults
+    if [[ ${PBF_GPU_SKIP_OPENMP:-0} != 1 ]]; then
+      refine dam_break_openmp 200 --backend openmp --refined 0.04,0.02,0.01 --until 2 --modes defaults
+    fi
   fi
   # The device tool brings back a limited number of files: one archive of them all.
   (cd "$out" && tar czf resolution.tar.gz resolution && rm -rf resolution)
