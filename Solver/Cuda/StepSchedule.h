@@ -408,13 +408,15 @@ void withPass(bool on, Run&& run)
 // Lines 10-19 and, in the last iteration, 21: delta p_i (eq. 14) into f.scratch, then the Jacobi
 // update in place there, so f.scratch holds the corrected positions afterwards; the largest
 // |delta p_i| goes to maxMoved[iteration] for the mask schedule. With Chebyshev's acceleration
-// (accelerate: a projection after the first, Chebyshev.h) the update is blended with
-// omega: f.scratch holds p^{k-1} when the pass starts (the projection before the last wrote
-// there), so each particle reads its own before overwriting it, and no buffer is added.
-template <class Real, class Exec, class Visit = AllParticles>
-void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
+// (Accelerate: a projection after the first, Chebyshev.h) the update is blended with omega:
+// f.scratch holds p^{k-1} when the pass starts (the projection before the last wrote there), so
+// each particle reads its own before overwriting it, and no buffer is added. Accelerate false
+// compiles the blend out, as withPass does for the optional terms of other passes: its registers
+// would cost the plain projections.
+template <bool Accelerate, class Real, class Exec, class Visit>
+void correctionPassOf(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
-  const AdaptiveState* state, bool accelerate, Real omega, Visit visit = Visit{})
+  const AdaptiveState* state, Real omega, Visit visit)
 {
   const MovedSinceSort local{ b.moved, b.cellMoved };
   exec.forEachMax(CorrectionStage{}, n, b.maxMoved + iteration,
@@ -428,16 +430,23 @@ void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
         // Adaptive mode is done: the positions stay where they are (finishAdaptiveSolve).
         return 0.0;
       }
+      // omega is named here, outside the constexpr-if: nvcc's extended lambdas may not capture a
+      // variable there first.
+      const Real weight = omega;
+      Vec3<Real> twoBack{};
+      if constexpr (Accelerate)
+      {
+        twoBack = f.scratch[i];
+      }
       // delta p_i lands in the other position buffer (f.scratch), which nobody reads in this
       // pass; applyCorrection then adds p_i to it in place. IEEE addition is commutative, so
       // this is exactly x*_i + delta p_i, and no particle reads a position that moved.
-      const Vec3<Real> twoBack = accelerate ? f.scratch[i] : Vec3<Real>{};
       positionCorrection(i, f);
       const Vec3<Real> delta = f.scratch[i];
       applyCorrection(i, apply);
-      if (accelerate)
+      if constexpr (Accelerate)
       {
-        f.scratch[i] = acceleratedCorrection(f.scratch[i], twoBack, omega, f);
+        f.scratch[i] = acceleratedCorrection(f.scratch[i], twoBack, weight, f);
       }
       if (last)
       {
@@ -446,7 +455,7 @@ void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
       // What the masks must allow for: delta p_i, or more where a solid or the blend moved the
       // particle on.
       const Real moved =
-        f.obstacleCount > 0 || accelerate ? length(f.scratch[i] - f.p[i]) : Real(0);
+        f.obstacleCount > 0 || Accelerate ? length(f.scratch[i] - f.p[i]) : Real(0);
       const double distance = static_cast<double>(length(delta) > moved ? length(delta) : moved);
       if (local.moved)
       {
@@ -454,6 +463,21 @@ void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
       }
       return distance;
     });
+}
+
+template <class Real, class Exec, class Visit = AllParticles>
+void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
+  const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
+  const AdaptiveState* state, bool accelerate, Real omega, Visit visit = Visit{})
+{
+  if (accelerate)
+  {
+    correctionPassOf<true>(exec, b, n, f, iteration, last, state, omega, visit);
+  }
+  else
+  {
+    correctionPassOf<false>(exec, b, n, f, iteration, last, state, omega, visit);
+  }
 }
 
 // Adaptive mode, after the projections: the corrected positions, in positions[state->iterations

@@ -524,37 +524,41 @@ TEST(CudaStepper, WallFrictionMatchesTheSerialBackend)
   EXPECT_GT(test::maxRelativePositionError(c, a), 1e-4); // friction changed the flow
 }
 
+namespace
+{
+
+// A solver option, CUDA against serial after two steps (one that acts through the velocities
+// shows in the positions from the second step on): the dam break with `set` applied, rounding
+// only (1e-10, as WallFrictionMatchesTheSerialBackend); and against the serial run without the
+// option, which must differ, or the comparison says nothing about it.
+template <class Set>
+void expectOptionMatchesSerialAfterTwoSteps(Set&& set)
+{
+  const Scene scene = presetScene("dam_break");
+  const Parameters plain = withSceneDomain(smallParameters(0.04), scene);
+  Parameters p = plain;
+  set(p);
+  const Snapshot<double> a = afterTwoSteps(scene, p, Backend::Serial);
+  const Snapshot<double> b = afterTwoSteps(scene, p, Backend::CUDA);
+  const Snapshot<double> c = afterTwoSteps(scene, plain, Backend::Serial);
+  EXPECT_LE(test::maxRelativePositionError(b, a), 1e-10);
+  EXPECT_GT(test::maxRelativePositionError(c, a), 1e-9);
+}
+
+} // namespace
+
 TEST(CudaStepper, XsphHyperViscosityMatchesTheSerialBackend)
 {
   PBF_REQUIRE_GPU();
-  // As WallFrictionMatchesTheSerialBackend: the filter acts on the velocities, so positions show
-  // it from the second step on; rounding only (1e-10 after two steps).
-  const Scene scene = presetScene("dam_break");
-  Parameters p = withSceneDomain(smallParameters(0.04), scene);
-  p.xsphHyperViscosity = 0.1;
-  const Snapshot<double> a = afterTwoSteps(scene, p, Backend::Serial);
-  const Snapshot<double> b = afterTwoSteps(scene, p, Backend::CUDA);
-  const Snapshot<double> c =
-    afterTwoSteps(scene, withSceneDomain(smallParameters(0.04), scene), Backend::Serial);
-  EXPECT_LE(test::maxRelativePositionError(b, a), 1e-10);
-  EXPECT_GT(test::maxRelativePositionError(c, a), 1e-9); // the filter changed the flow
+  expectOptionMatchesSerialAfterTwoSteps([](Parameters& p) { p.xsphHyperViscosity = 0.1; });
 }
 
 TEST(CudaStepper, ChebyshevAccelerationMatchesTheSerialBackend)
 {
   PBF_REQUIRE_GPU();
   // The blend reads each particle's positions two projections back from the buffer the
-  // correction is about to overwrite. Rounding only, as the other comparisons after two steps
-  // (1e-10); reading the wrong buffer moves particles by a spacing's fraction.
-  const Scene scene = presetScene("dam_break");
-  Parameters p = withSceneDomain(smallParameters(0.04), scene);
-  p.chebyshevRho = 0.8;
-  const Snapshot<double> a = afterTwoSteps(scene, p, Backend::Serial);
-  const Snapshot<double> b = afterTwoSteps(scene, p, Backend::CUDA);
-  const Snapshot<double> c =
-    afterTwoSteps(scene, withSceneDomain(smallParameters(0.04), scene), Backend::Serial);
-  EXPECT_LE(test::maxRelativePositionError(b, a), 1e-10);
-  EXPECT_GT(test::maxRelativePositionError(c, a), 1e-9); // the acceleration changed the flow
+  // correction is about to overwrite; the wrong buffer moves particles by a spacing's fraction.
+  expectOptionMatchesSerialAfterTwoSteps([](Parameters& p) { p.chebyshevRho = 0.8; });
 }
 
 TEST(CudaStepper, MovingSolidsMatchTheSerialBackend)
