@@ -193,7 +193,8 @@ TEST(StepSchedule, ChebyshevAccelerationReproducesTheSerialBackendBitForBit)
   {
     compareWithSerial<float>({ "dam_break", 5, true, 0.02, false, 0, graphs, 0.05, 0.8 }, 40);
     compareWithSerial<float>({ "dam_break", 8, true, 0.1, true, 0.05, graphs, 0.05, 0.8 }, 40);
-    compareWithSerial<double>({ "double_dam_break", 6, false, 0.1, false, 0.05, graphs, 0, 0.9 }, 40);
+    compareWithSerial<double>(
+      { "double_dam_break", 6, false, 0.1, false, 0.05, graphs, 0, 0.9 }, 40);
   }
 }
 

@@ -399,7 +399,8 @@ TEST(DeviceSubdomainOnHost, WallFrictionMatchesTheSerialBackendOnBothDecomposedS
 namespace
 {
 
-void expectOptionMatchesSerialOnBothDecomposedSteppers(const PresetFluid& on, const PresetFluid& off)
+void expectOptionMatchesSerialOnBothDecomposedSteppers(
+  const PresetFluid& on, const PresetFluid& off)
 {
   const Snapshot<double> reference = serialState(on, 10, Precision::Double);
   for (const DecomposedFactory& factory : { onHost<double>(), serialSubdomains() })
