@@ -257,8 +257,8 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
   # at 2, 1 and 0.75 cm (pbf_marin; PBF_GPU_MARIN_SPACINGS other spacings); 7: the defaults alone
   # (the 1.15M and 9.2M dam breaks, Martin & Moyce at 40 and 80 across). Several at once:
   # PBF_GPU_RESOLUTION="2 6" (PBF_GPU_SKIP_OPENMP=1: level 2 without its OpenMP dam breaks).
-  # PBF_GPU_SOLVER_ARGS (e.g. "--chebyshev 0.8") is added to every
-  # run of these phases, to measure a solver option against the defaults in the same call.
+  # PBF_GPU_SOLVER_ARGS (e.g. "--chebyshev 0.8") is added to every run of these phases, to
+  # measure a solver option against the defaults in the same call.
   read -r -a solver_args <<<"${PBF_GPU_SOLVER_ARGS:-}"
   level() { [[ " $PBF_GPU_RESOLUTION " == *" $1 "* ]]; }
   res=$out/resolution
@@ -275,27 +275,26 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
     tail -n 10 "$res/$name.log"
     record "resolution $name: exit $status"
   }
-  if level 1 || level 3; then
-    refine dam_break_1M 150 --backend cuda --refined 0.005 --until 2
-    refine dam_break_9M 200 --backend cuda --refined 0.0025 --until 0.5
-    for across in 10 20 40 80; do
+  martin_moyce() { # martin_moyce ACROSS...: the fronts at these resolutions (and solver_args)
+    local across
+    for across in "$@"; do
       phase "martin-moyce $across across"
       timeout "$(limit 60)" "$mm" --backend cuda --across "$across" --experiment "$experiment" \
         "${solver_args[@]}" --front "$res/mm_$across.csv" >"$res/mm_$across.txt" 2>"$res/mm_$across.err"
       record "martin-moyce $across: $(grep -E 'rms_relative_error,|fitted' "$res/mm_$across.txt" | tr '\n' ' ')"
     done
+  }
+  if level 1 || level 3; then
+    refine dam_break_1M 150 --backend cuda --refined 0.005 --until 2
+    refine dam_break_9M 200 --backend cuda --refined 0.0025 --until 0.5
+    martin_moyce 10 20 40 80
   fi
   if level 7; then
     # The defaults alone, to compare a solver option (PBF_GPU_SOLVER_ARGS) with them in one call:
     # the 1.15M and 9.2M dam breaks and Martin & Moyce at 40 and 80 across.
     refine dam_break_1M_defaults 100 --backend cuda --refined 0.005 --until 2 --modes defaults
     refine dam_break_9M_defaults 150 --backend cuda --refined 0.0025 --until 0.5 --modes defaults
-    for across in 40 80; do
-      phase "martin-moyce $across across"
-      timeout "$(limit 60)" "$mm" --backend cuda --across "$across" --experiment "$experiment" \
-        "${solver_args[@]}" --front "$res/mm_$across.csv" >"$res/mm_$across.txt" 2>"$res/mm_$across.err"
-      record "martin-moyce $across: $(grep -E 'rms_relative_error,|fitted' "$res/mm_$across.txt" | tr '\n' ' ')"
-    done
+    martin_moyce 40 80
   fi
   if level 5; then
     # The benchmark of the scene users run (Documentation/Performance.md): 144k and
