@@ -156,7 +156,7 @@ public:
   void capture(Graph& g, Enqueue&& enqueue)
   {
     destroy(g);
-    // Its conditional nodes' bodies are captured on the body stream (KernelExecutor::runIf).
+    // Its conditional nodes' bodies are captured on the body stream (KernelExecutor::runIfChain).
     KernelExecutor exec(stream_, temp_, tempBytes_, block_, bodyStream_);
     cudaGraph_t graph = nullptr;
     check(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal),

@@ -25,7 +25,7 @@ namespace test
 class HostExecutor
 {
 public:
-  // conditionals: runIf may skip its body, as in a captured CUDA graph (HostDevicePolicy::launch);
+  // conditionals: runIfChain may skip its bodies, as in a captured CUDA graph (HostDevicePolicy::launch);
   // without, every body runs and its stages return at once after done, as on a CUDA stream.
   explicit HostExecutor(bool backwards, bool conditionals = false)
     : backwards_(backwards)
@@ -91,12 +91,18 @@ public:
     branches_.push_back(0);
     return static_cast<Branch>(branches_.size() - 1);
   }
+  // As nested conditional nodes: the first body whose condition is not set ends the chain.
   template <class Body>
-  void runIf(Branch b, Body&& body)
+  void runIfChain(const Branch* branches, int first, int end, Body&& body)
   {
-    if (b < 0 || branches_[static_cast<std::size_t>(b)])
+    for (int k = first; k < end; ++k)
     {
-      body(*this);
+      const Branch b = branches[k];
+      if (b >= 0 && !branches_[static_cast<std::size_t>(b)])
+      {
+        return;
+      }
+      body(*this, k);
     }
   }
 

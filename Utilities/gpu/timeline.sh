@@ -7,6 +7,9 @@
 # them (Utilities/gpu/timeline.py). The analysis goes under $OUT (else
 # output/gpu-timeline).
 #   Utilities/gpu/timeline.sh [--particles P] [--ranks N] [--steps S] [--no-single]
+#   Utilities/gpu/timeline.sh --bench "ARGS" [--steps S]
+# --bench traces one pbf_bench run on one GPU instead (e.g. "--refined 0.005 --until 0.3 --modes
+# defaults": where the step of the scene users run spends its time) and analyses its last S steps.
 # Extra environment (A/B switches of DeviceSubdomainStepper.h) passes through to the ranks.
 set -uo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
@@ -16,8 +19,10 @@ particles=32000000
 ranks=4
 steps=6
 single=1
+bench_args=""
 while (($#)); do
   case $1 in
+    --bench) bench_args=$2; shift 2 ;;
     --particles) particles=$2; shift 2 ;;
     --ranks) ranks=$2; shift 2 ;;
     --steps) steps=$2; shift 2 ;;
@@ -39,13 +44,14 @@ echo "CUPTI: $cupti_inc $cupti_lib"
 command -v ompi_info >/dev/null && ompi_info --parsable --all 2>/dev/null |
   grep -E "mpi_built_with_cuda_support:value" | head -2
 
-phase "build pbf_bench_mpi"
+phase "build"
 generator=()
 command -v ninja >/dev/null && generator=(-G Ninja)
 if cmake -S "$root" -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DPBF_SOLVER_ONLY=ON \
     -DBUILD_TESTING=OFF -DCMAKE_CUDA_ARCHITECTURES=90 -DPBF_JSON_INCLUDE_DIR="$root/.deps/json" \
     >"$out/configure.log" 2>&1 &&
-  cmake --build "$build" --target pbf_bench_mpi -j "$(nproc)" >"$out/build.log" 2>&1; then
+  cmake --build "$build" --target "$([[ -n $bench_args ]] && echo pbf_bench || echo pbf_bench_mpi)" \
+    -j "$(nproc)" >"$out/build.log" 2>&1; then
   echo "build: ok"
 else
   tail -n 40 "$out/configure.log" "$out/build.log"
@@ -67,6 +73,17 @@ profile() {
   python3 "$root/Utilities/gpu/timeline.py" --steps $((steps - 1)) "$out/$name"/trace-*.csv
   gzip -f "$out/$name"/trace-*.csv
 }
+if [[ -n $bench_args ]]; then
+  phase "pbf_bench --backend cuda $bench_args, GPU activity traced"
+  mkdir -p "$out/bench"
+  read -r -a args <<<"$bench_args"
+  PBF_TRACE_DIR="$out/bench" CUDA_INJECTION64_PATH="$tracer" timeout 300 \
+    "$build/Solver/Tools/pbf_bench" --backend cuda "${args[@]}" 2>&1 | tail -4
+  python3 "$root/Utilities/gpu/timeline.py" --steps "$steps" "$out/bench"/trace-*.csv
+  gzip -f "$out/bench"/trace-*.csv
+  echo "total: $((SECONDS - t0)) s"
+  exit 0
+fi
 profile "ranks-$ranks" "$ranks"
 ((single)) && profile "ranks-1" 1
 echo "total: $((SECONDS - t0)) s"
