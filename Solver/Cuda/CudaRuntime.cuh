@@ -115,8 +115,24 @@ __global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageKern
   }
 }
 
+// The max of a warp's bits, in every lane.
+__device__ inline unsigned long long warpMax(unsigned long long bits)
+{
+  for (int offset = 16; offset > 0; offset >>= 1)
+  {
+    const unsigned long long other = __shfl_xor_sync(0xffffffffu, bits, offset);
+    bits = other > bits ? other : bits;
+  }
+  return bits;
+}
+
 // As stageKernel, and the max of f's non-negative results: a warp max, then one integer atomic
-// per warp. The max is the same in any order, so this stays deterministic.
+// per warp (neighbour passes) or per block (the rest). The max is the same in any order, so this
+// stays deterministic. A per-particle scan is over in a few microseconds, so its atomics on one
+// word are its cost: one a warp had made the health scan's speed and compression maxima 30 us
+// each at 1.15M particles on an H100 (the finiteness scan, which adds nothing, 8 us). A neighbour
+// pass spreads its atomics over hundreds of microseconds, and a barrier before its warps may
+// leave costs more than they do (1M benchmark +0.9 % per block).
 template <class Stage, class F>
 __global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageMaxKernel(
   Stage, std::uint32_t n, unsigned long long* maxBits, F f)
@@ -127,14 +143,32 @@ __global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageMaxK
   {
     bits = MaskSchedule::doubleToBits(f(i));
   }
-  for (int offset = 16; offset > 0; offset >>= 1)
+  bits = warpMax(bits);
+  if constexpr (Launch<Stage>::neighborPass)
   {
-    const unsigned long long other = __shfl_xor_sync(0xffffffffu, bits, offset);
-    bits = other > bits ? other : bits;
+    if ((threadIdx.x & 31u) == 0 && bits != 0)
+    {
+      atomicMax(maxBits, bits);
+    }
   }
-  if ((threadIdx.x & 31u) == 0 && bits != 0)
+  else
   {
-    atomicMax(maxBits, bits);
+    __shared__ unsigned long long blockBits[kMaxBlock / 32];
+    const unsigned warp = threadIdx.x / 32u, warps = (blockDim.x + 31u) / 32u;
+    if ((threadIdx.x & 31u) == 0)
+    {
+      blockBits[warp] = bits;
+    }
+    __syncthreads();
+    if (warp == 0)
+    {
+      bits = threadIdx.x < warps ? blockBits[threadIdx.x] : 0ull;
+      bits = warpMax(bits);
+      if (threadIdx.x == 0 && bits != 0)
+      {
+        atomicMax(maxBits, bits);
+      }
+    }
   }
 }
 
