@@ -376,7 +376,8 @@ public:
           const cudaGraphNode_t* last = nullptr;
           const cudaGraphEdgeData* edges = nullptr;
           std::size_t count = 0;
-          check(cudaStreamGetCaptureInfo(bodyStream_, &status, nullptr, nullptr, &last, &edges, &count),
+          check(cudaStreamGetCaptureInfo(
+                  bodyStream_, &status, nullptr, nullptr, &last, &edges, &count),
             "cudaStreamGetCaptureInfo (conditional body)");
           after.assign(last, last + count);
         }

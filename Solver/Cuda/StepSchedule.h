@@ -23,8 +23,8 @@
 //                                        mode, see AdaptiveState (blockSums: 2 per block of
 //                                        kCompressionBlock); a negative tolerance never finishes;
 //                                        next (a Branch) is set to whether the solve goes on
-//   Branch, branch() -> Branch           a condition for one body of runIfChain, off unless a reduction sets it
-//                                        (Exec::noBranch() names none)
+//   Branch, branch() -> Branch           a condition for one body of runIfChain, off unless a
+//                                        reduction sets it (Exec::noBranch() names none)
 //   runIfChain(branches, first, end, body)   body(exec', k) for k = first, first + 1, ... < end,
 //                                        each only when branches[k] is set and every body before
 //                                        it ran: while the step is captured, CUDA graph conditional

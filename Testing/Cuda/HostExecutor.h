@@ -25,8 +25,9 @@ namespace test
 class HostExecutor
 {
 public:
-  // conditionals: runIfChain may skip its bodies, as in a captured CUDA graph (HostDevicePolicy::launch);
-  // without, every body runs and its stages return at once after done, as on a CUDA stream.
+  // conditionals: runIfChain may skip its bodies, as in a captured CUDA graph
+  // (HostDevicePolicy::launch); without, every body runs and its stages return at once after
+  // done, as on a CUDA stream.
   explicit HostExecutor(bool backwards, bool conditionals = false)
     : backwards_(backwards)
     , conditionals_(conditionals)

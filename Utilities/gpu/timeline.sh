@@ -50,8 +50,9 @@ command -v ninja >/dev/null && generator=(-G Ninja)
 if cmake -S "$root" -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DPBF_SOLVER_ONLY=ON \
     -DBUILD_TESTING=OFF -DCMAKE_CUDA_ARCHITECTURES=90 -DPBF_JSON_INCLUDE_DIR="$root/.deps/json" \
     >"$out/configure.log" 2>&1 &&
-  cmake --build "$build" --target "$([[ -n $bench_args ]] && echo pbf_bench || echo pbf_bench_mpi)" \
-    -j "$(nproc)" >"$out/build.log" 2>&1; then
+  cmake --build "$build" -j "$(nproc)" \
+    --target "$([[ -n $bench_args ]] && echo pbf_bench || echo pbf_bench_mpi)" \
+    >"$out/build.log" 2>&1; then
   echo "build: ok"
 else
   tail -n 40 "$out/configure.log" "$out/build.log"
