@@ -9,7 +9,8 @@
 #   5. the surface: GPU against this machine's CPU cores on the 1.15M and 9.2M dam breaks
 #   6. ncu: per-kernel times of one step at 1M, and the neighbour passes' sections
 # PBF_GPU_SKIP_BENCH=1, PBF_GPU_SKIP_CTEST=1, PBF_GPU_SKIP_SURFACE=1, PBF_GPU_SKIP_SANITIZERS=1
-# leave phases out; PBF_GPU_CTEST_FILTER=REGEX runs only the matching tests.
+# leave phases out; PBF_GPU_CTEST_FILTER=REGEX runs only the matching tests; PBF_GPU_PAIR_PROBE=1
+# adds Utilities/gpu/pair_once_probe.cu (the neighbour passes' structures, apart from the solver).
 # Logs and JSON go under $OUT (else output/gpu-run); a short table is printed last. Every phase
 # has a time limit inside a budget of PBF_GPU_BUDGET seconds (default 540), so the table comes
 # within the device tool's 10 minutes whatever happens.
@@ -349,6 +350,23 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
   fi
   # The device tool brings back a limited number of files: one archive of them all.
   (cd "$out" && tar czf resolution.tar.gz resolution && rm -rf resolution)
+fi
+
+if [[ ${PBF_GPU_PAIR_PROBE:-0} == 1 ]]; then
+  # Issue 21's structure, measured apart from the solver (Documentation/Performance.md, "The
+  # neighbour passes' structure, chosen by measurement"): a density-like pass as an ideal
+  # gather, with each pair once and scattered, and with the candidates from a list or row masks.
+  phase "pair_once_probe"
+  if nvcc -O3 -arch=sm_90 -o "$work/pair_once_probe" "$root/Utilities/gpu/pair_once_probe.cu" \
+      >"$work/probe_build.log" 2>&1; then
+    for edge in 100 160; do
+      timeout "$(limit 60)" "$work/pair_once_probe" "$edge" 2>&1 | tee "$work/probe_$edge.log"
+      record "pair_once_probe $edge^3: $(grep -h 'ms' "$work/probe_$edge.log" | tr '\n' ' ')"
+    done
+  else
+    tail -n 20 "$work/probe_build.log"
+    record "pair_once_probe: build FAILED"
+  fi
 fi
 
 phase "summary"
