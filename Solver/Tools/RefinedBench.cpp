@@ -12,6 +12,7 @@
 #include <fstream>
 #include <memory>
 #include <sstream>
+#include <vector>
 
 namespace pbf
 {
@@ -19,18 +20,48 @@ namespace pbf
 namespace
 {
 
-// The farthest particle along +x, plus half a spacing (the fluid's edge), from the domain's wall:
-// the surge front of a dam break.
-double front(const Simulation& simulation)
+// What a frame's CSV row says of the particles beyond the solver's statistics, from one read.
+struct FrameShape
+{
+  double front = 0;        // the farthest particle along +x, plus half a spacing (the fluid's
+                           // edge), from the domain's wall: the surge front of a dam break
+  double speedP999 = 0;    // the 99.9th and 99.99th percentiles of |v| [m/s]: how fast the
+  double speedP9999 = 0;   // fluid is, where the fastest particle is a single drop
+  double centreHeight = 0; // the particles' mean height above the floor [m]: a fluid that
+                           // expands like a gas raises it, one that melts from a lattice not
+};
+
+double percentileOf(std::vector<double>& v, double q)
+{
+  if (v.empty())
+  {
+    return 0;
+  }
+  const std::size_t k = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+FrameShape frameShape(const Simulation& simulation)
 {
   Snapshot<float> s;
   simulation.stepper().read(s);
-  double far = simulation.parameters().domain.min.x;
-  for (const Vec3<float>& x : s.position)
+  const Parameters& p = simulation.parameters();
+  FrameShape f;
+  double far = p.domain.min.x, height = 0;
+  std::vector<double> speed;
+  speed.reserve(s.velocity.size());
+  for (std::size_t i = 0; i < s.position.size(); ++i)
   {
-    far = std::max(far, double(x.x));
+    far = std::max(far, double(s.position[i].x));
+    height += double(s.position[i].y) - p.domain.min.y;
+    speed.push_back(length(Vec3d::from(s.velocity[i])));
   }
-  return far - simulation.parameters().domain.min.x + 0.5 * simulation.parameters().particleSpacing;
+  f.front = far - p.domain.min.x + 0.5 * p.particleSpacing;
+  f.centreHeight = s.position.empty() ? 0.0 : height / double(s.position.size());
+  f.speedP9999 = percentileOf(speed, 0.9999);
+  f.speedP999 = percentileOf(speed, 0.999);
+  return f;
 }
 
 double median(std::vector<double> v)
@@ -149,7 +180,7 @@ RefinedRun runRefined(const ToolOptions& options, const Scene& scene, double spa
          << toString(options.backend) << ".csv";
     csv.open(name.str());
     csv << "time,front,average_error,max_error,max_speed,average_neighbors,steps,iterations,"
-           "milliseconds,min_dt,max_dt\n";
+           "milliseconds,min_dt,max_dt,speed_p999,speed_p9999,centre_height\n";
   }
   try
   {
@@ -181,10 +212,12 @@ RefinedRun runRefined(const ToolOptions& options, const Scene& scene, double spa
       run.fastest = std::max(run.fastest, s.maxSpeed);
       if (csv)
       {
-        csv << simulation.time() << "," << front(simulation) << "," << s.averageDensityError
-            << "," << s.maxDensityError << "," << s.maxSpeed << "," << s.averageNeighbors << ","
+        const FrameShape f = frameShape(simulation);
+        csv << simulation.time() << "," << f.front << "," << s.averageDensityError << ","
+            << s.maxDensityError << "," << s.maxSpeed << "," << s.averageNeighbors << ","
             << r.steps << "," << r.iterations << "," << ms << "," << r.minTimeStep << ","
-            << r.maxTimeStep << "\n";
+            << r.maxTimeStep << "," << f.speedP999 << "," << f.speedP9999 << ","
+            << f.centreHeight << "\n";
       }
     }
   }
