@@ -62,7 +62,7 @@ TimeSeries readGaugeRecord(const std::string& csvPath)
   return series;
 }
 
-double waterHeight(const Simulation& simulation, const Gauge& gauge)
+double waterHeight(const Simulation& simulation, const Gauge& gauge, double wet)
 {
   Snapshot<double> state;
   simulation.stepper().read(state);
@@ -93,13 +93,13 @@ double waterHeight(const Simulation& simulation, const Gauge& gauge)
     }
     // The floor halves the fraction of the lowest layer (no mirror images here): count the
     // bottom s / 2 as wet whenever the layer above it is.
-    wetted += fraction > 0.5 || (y < p.domain.min.y + 0.5 * s && fraction > 0.25) ? dy : 0.0;
+    wetted += fraction > wet || (y < p.domain.min.y + 0.5 * s && fraction > 0.5 * wet) ? dy : 0.0;
   }
   return wetted;
 }
 
 MarinRun runMarin(const Parameters& parameters, Backend backend, Precision precision,
-  double until, double sampleInterval)
+  double until, double sampleInterval, double wet)
 {
   const Scene scene = presetScene("marin_dam_break");
   Simulation simulation(scene, parameters, backend, precision);
@@ -120,16 +120,16 @@ MarinRun runMarin(const Parameters& parameters, Backend backend, Precision preci
     while (!arrived && simulation.time() < t)
     {
       simulation.stepToward(t, report);
-      const double height = waterHeight(simulation, kGaugeH2);
+      const double height = waterHeight(simulation, kGaugeH2, wet);
       run.h2Steps.t.push_back(simulation.time());
       run.h2Steps.value.push_back(height);
       arrived = height > kArrivalHeight;
     }
     simulation.advanceTo(t);
     run.h2.t.push_back(t);
-    run.h2.value.push_back(waterHeight(simulation, kGaugeH2));
+    run.h2.value.push_back(waterHeight(simulation, kGaugeH2, wet));
     run.h4.t.push_back(t);
-    run.h4.value.push_back(waterHeight(simulation, kGaugeH4));
+    run.h4.value.push_back(waterHeight(simulation, kGaugeH4, wet));
   }
   return run;
 }

@@ -22,6 +22,7 @@ int main(int argc, char** argv)
     { "until", "simulated time [s] (default 6)" },
     { "sample", "gauge sampling interval [s] (default 0.01)" },
     { "csv", "write t, then H2 and H4 per spacing, to this file" },
+    { "gauge-fraction", "the fluid fraction above which a gauge's line counts as wet (default 0.5)" },
   };
   try
   {
@@ -37,6 +38,11 @@ int main(int argc, char** argv)
     const std::vector<double> spacings = toolReals(options, "spacings", 0.02);
     const double until = toolReal(options, "until", 6.0);
     const double sample = toolReal(options, "sample", 0.01);
+    const double wet = toolReal(options, "gauge-fraction", kWetFraction);
+    if (!(wet < 1.0))
+    {
+      throw InvalidInput("--gauge-fraction = " + std::to_string(wet) + ": must be below 1");
+    }
     std::vector<MarinRun> runs;
     std::printf("spacing,particles,backend,arrival_H2,arrival_H2_experiment,arrival_relative,"
                 "rms_H2,rms_H4,seconds\n");
@@ -45,7 +51,7 @@ int main(int argc, char** argv)
       Parameters p = options.parameters;
       p.particleSpacing = s;
       const auto start = std::chrono::steady_clock::now();
-      runs.push_back(runMarin(p, options.backend, options.precision, until, sample));
+      runs.push_back(runMarin(p, options.backend, options.precision, until, sample, wet));
       const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const MarinComparison c = compareMarin(runs.back(), h2, h4, &h2Arrival);
