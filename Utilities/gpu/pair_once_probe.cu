@@ -76,6 +76,32 @@ __device__ __forceinline__ float lambdaOf(const Sums& s)
   return -C / (s.g2 + s.gx * s.gx + s.gy * s.gy + s.gz * s.gz + 1e-3f);
 }
 
+// One candidate's terms, when it lies within h, added to the particle's sums; true and the
+// pair's w and g (for the scatter of the pair-once variants) when it does.
+__device__ __forceinline__ bool visit(
+  const float3& pi, const float3& pj, Sums& s, float& w, float3& g)
+{
+  const float3 r = make_float3(pi.x - pj.x, pi.y - pj.y, pi.z - pj.z);
+  const float r2 = r.x * r.x + r.y * r.y + r.z * r.z;
+  if (!(r2 < kH * kH))
+  {
+    return false;
+  }
+  pairTerms(r, r2, w, g);
+  s.rho += w;
+  s.gx += g.x;
+  s.gy += g.y;
+  s.gz += g.z;
+  s.g2 += g.x * g.x + g.y * g.y + g.z * g.z;
+  return true;
+}
+__device__ __forceinline__ void visit(const float3& pi, const float3& pj, Sums& s)
+{
+  float w;
+  float3 g;
+  visit(pi, pj, s, w, g);
+}
+
 __global__ void gather(int L, const float3* p, float* rho, float* lambda)
 {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -94,20 +120,7 @@ __global__ void gather(int L, const float3* p, float* rho, float* lambda)
     {
       continue;
     }
-    const float3 pj = p[j];
-    const float3 r = make_float3(pi.x - pj.x, pi.y - pj.y, pi.z - pj.z);
-    const float r2 = r.x * r.x + r.y * r.y + r.z * r.z;
-    if (r2 < kH * kH)
-    {
-      float w;
-      float3 g;
-      pairTerms(r, r2, w, g);
-      s.rho += w;
-      s.gx += g.x;
-      s.gy += g.y;
-      s.gz += g.z;
-      s.g2 += g.x * g.x + g.y * g.y + g.z * g.z;
-    }
+    visit(pi, p[j], s);
   }
   rho[i] = s.rho;
   lambda[i] = lambdaOf(s);
@@ -117,23 +130,6 @@ __global__ void gather(int L, const float3* p, float* rho, float* lambda)
 // them), its candidates read from a list built once (the 27 cells' particles within h + skin,
 // list[k * n + i]) or, as the CUDA backend stores them, from a 32-bit mask per row of 3 cells
 // (bit 31 - k: candidate k of the row; NeighborMasks.h).
-__device__ __forceinline__ void visit(const float3& pi, const float3& pj, Sums& s)
-{
-  const float3 r = make_float3(pi.x - pj.x, pi.y - pj.y, pi.z - pj.z);
-  const float r2 = r.x * r.x + r.y * r.y + r.z * r.z;
-  if (r2 < kH * kH)
-  {
-    float w;
-    float3 g;
-    pairTerms(r, r2, w, g);
-    s.rho += w;
-    s.gx += g.x;
-    s.gy += g.y;
-    s.gz += g.z;
-    s.g2 += g.x * g.x + g.y * g.y + g.z * g.z;
-  }
-}
-
 __global__ void gatherList(int n, const float3* p, const int* count, const int* list, float* rho,
   float* lambda)
 {
@@ -256,20 +252,11 @@ __global__ void once(int L, const float3* p, T* acc)
     {
       continue;
     }
-    const float3 pj = p[j];
-    const float3 r = make_float3(pi.x - pj.x, pi.y - pj.y, pi.z - pj.z);
-    const float r2 = r.x * r.x + r.y * r.y + r.z * r.z;
-    if (r2 < kH * kH)
+    float w;
+    float3 g;
+    if (visit(pi, p[j], s, w, g))
     {
-      float w;
-      float3 g;
-      pairTerms(r, r2, w, g);
-      s.rho += w;
-      s.gx += g.x;
-      s.gy += g.y;
-      s.gz += g.z;
       const float g2 = g.x * g.x + g.y * g.y + g.z * g.z;
-      s.g2 += g2;
       // j sees -r: the same w and g2, the gradient reversed.
       add(&acc[5 * j + 0], w);
       add(&acc[5 * j + 1], -g.x);
