@@ -223,6 +223,95 @@ __global__ void gatherStaged(int n, const float3* p, const int* rowBegin, const 
   lambda[i] = lambdaOf(s);
 }
 
+// The staged walk again, in two variants of how a candidate's position reaches the lane (issue
+// 21's lever "positions in 16 bytes", and a software pipeline):
+//   P = float4: the positions padded to 16 bytes, one 128-bit load a visit instead of three;
+//   Prefetch:   the next candidate is found and its position loaded before this one's terms are
+//               computed, so the load's latency overlaps the arithmetic.
+__device__ __forceinline__ float3 position(const float3* p, unsigned j)
+{
+  return p[j];
+}
+__device__ __forceinline__ float3 position(const float4* p, unsigned j)
+{
+  const float4 q = p[j];
+  return make_float3(q.x, q.y, q.z);
+}
+
+template <class P, bool Prefetch>
+__global__ void gatherStagedAs(int n, const P* p, const int* rowBegin, const unsigned* masks,
+  float* rho, float* lambda)
+{
+  __shared__ uint2 words[9][128];
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n)
+  {
+    return;
+  }
+  uint2* word = &words[0][threadIdx.x];
+  int count = 0;
+#pragma unroll
+  for (int r = 0; r < 9; ++r)
+  {
+    const unsigned mask = masks[r * n + i];
+    if (mask != 0)
+    {
+      word[count * 128] = make_uint2(rowBegin[r * n + i], mask);
+      ++count;
+    }
+  }
+  const float3 pi = position(p, i);
+  Sums s{ 0, 0, 0, 0, 0 };
+  const uint2* const last = word + count * 128;
+  unsigned mask = 0, base = 0;
+  // The next candidate, false when there is none.
+  const auto next = [&](unsigned& j) {
+    if (mask == 0)
+    {
+      if (word == last)
+      {
+        return false;
+      }
+      const uint2 w = *word;
+      word += 128;
+      base = w.x;
+      mask = w.y;
+    }
+    const int k = __clz(static_cast<int>(mask));
+    mask &= 0x7fffffffu >> k;
+    j = base + k;
+    return true;
+  };
+  unsigned j = 0;
+  if (!Prefetch)
+  {
+    while (next(j))
+    {
+      visit(pi, position(p, j), s);
+    }
+  }
+  else if (next(j))
+  {
+    float3 pj = position(p, j);
+    for (;;)
+    {
+      const float3 current = pj;
+      const bool more = next(j);
+      if (more)
+      {
+        pj = position(p, j);
+      }
+      visit(pi, current, s);
+      if (!more)
+      {
+        break;
+      }
+    }
+  }
+  rho[i] = s.rho;
+  lambda[i] = lambdaOf(s);
+}
+
 __device__ __forceinline__ void add(unsigned long long* a, float v)
 {
   atomicAdd(a, static_cast<unsigned long long>(__float2ll_rn(v * kFix)));
@@ -476,12 +565,35 @@ int main(int argc, char** argv)
   CHECK(cudaMemcpy(l.data(), rhoL, sizeof(float) * n, cudaMemcpyDeviceToHost));
   CHECK(cudaMemcpy(mk.data(), rhoM, sizeof(float) * n, cudaMemcpyDeviceToHost));
   double worstSorted = 0;
+  const auto compare = [&](const std::vector<float>& sortedRho) {
+    for (int k = 0; k < n; ++k)
+    {
+      const double ref = a[order[k]];
+      worstSorted = std::max(worstSorted, std::fabs(ref - sortedRho[k]) / std::fabs(ref));
+    }
+  };
+  compare(l);
+  compare(mk);
+  // The staged walk with positions in 16 bytes and/or the next position loaded ahead.
+  std::vector<float4> padded(n);
   for (int k = 0; k < n; ++k)
-  {
-    const double ref = a[order[k]];
-    worstSorted = std::max({ worstSorted, std::fabs(ref - l[k]) / std::fabs(ref),
-      std::fabs(ref - mk[k]) / std::fabs(ref) });
-  }
+    padded[k] = make_float4(sorted[k].x, sorted[k].y, sorted[k].z, 0.0f);
+  float4* ps4;
+  CHECK(cudaMalloc(&ps4, sizeof(float4) * n));
+  CHECK(cudaMemcpy(ps4, padded.data(), sizeof(float4) * n, cudaMemcpyHostToDevice));
+  const auto timeVariant = [&](auto&& launch) {
+    const float ms = timeIt(launch);
+    std::vector<float> r(n);
+    CHECK(cudaMemcpy(r.data(), rhoM, sizeof(float) * n, cudaMemcpyDeviceToHost));
+    compare(r);
+    return ms;
+  };
+  const float prefetchMs = timeVariant(
+    [&] { gatherStagedAs<float3, true><<<grid, block>>>(n, ps, dRowBegin, dMasks, rhoM, lamB); });
+  const float wideMs = timeVariant(
+    [&] { gatherStagedAs<float4, false><<<grid, block>>>(n, ps4, dRowBegin, dMasks, rhoM, lamB); });
+  const float wideAheadMs = timeVariant(
+    [&] { gatherStagedAs<float4, true><<<grid, block>>>(n, ps4, dRowBegin, dMasks, rhoM, lamB); });
   double worst = 0;
   bool same = true;
   for (int i = 0; i < n; ++i)
@@ -509,5 +621,9 @@ int main(int argc, char** argv)
               "(%+.1f %%), row masks staged as the solver's %.4f (%+.1f %%)\n",
     listMs, 100.0 * (listMs / gatherMs - 1.0), maskMs, 100.0 * (maskMs / gatherMs - 1.0), stagedMs,
     100.0 * (stagedMs / gatherMs - 1.0));
+  std::printf("pair_once_probe ms, staged: next position loaded ahead %.4f (%+.1f %% against "
+              "staged), positions in 16 bytes %.4f (%+.1f %%), both %.4f (%+.1f %%)\n",
+    prefetchMs, 100.0 * (prefetchMs / stagedMs - 1.0), wideMs, 100.0 * (wideMs / stagedMs - 1.0),
+    wideAheadMs, 100.0 * (wideAheadMs / stagedMs - 1.0));
   return worst < 1e-4 && worstSorted < 1e-4 && same && lost == 0 ? 0 : 1;
 }
