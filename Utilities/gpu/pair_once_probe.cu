@@ -177,16 +177,10 @@ __global__ void gatherMasks(int n, const float3* p, const int* rowBegin, const u
 // The row masks walked as the solver walks them (NeighborMasks.h, forEachNeighbor): each lane
 // first stages its non-empty rows as (base, mask) words in its own column of shared memory, then
 // runs one loop over all of them, so a lane that finishes a row moves on to the next.
-__global__ void gatherStaged(int n, const float3* p, const int* rowBegin, const unsigned* masks,
-  float* rho, float* lambda)
+// stageRows writes lane i's words to its column (stride 128) and returns how many.
+__device__ __forceinline__ int stageRows(
+  int n, int i, const int* rowBegin, const unsigned* masks, uint2* word)
 {
-  __shared__ uint2 words[9][128];
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n)
-  {
-    return;
-  }
-  uint2* word = &words[0][threadIdx.x];
   int count = 0;
 #pragma unroll
   for (int r = 0; r < 9; ++r)
@@ -198,33 +192,12 @@ __global__ void gatherStaged(int n, const float3* p, const int* rowBegin, const 
       ++count;
     }
   }
-  const float3 pi = p[i];
-  Sums s{ 0, 0, 0, 0, 0 };
-  const uint2* const last = word + count * 128;
-  unsigned mask = 0, base = 0;
-  for (;;)
-  {
-    if (mask == 0)
-    {
-      if (word == last)
-      {
-        break;
-      }
-      const uint2 w = *word;
-      word += 128;
-      base = w.x;
-      mask = w.y;
-    }
-    const int k = __clz(static_cast<int>(mask));
-    mask &= 0x7fffffffu >> k;
-    visit(pi, p[base + k], s);
-  }
-  rho[i] = s.rho;
-  lambda[i] = lambdaOf(s);
+  return count;
 }
 
-// The staged walk again, in two variants of how a candidate's position reaches the lane (issue
-// 21's lever "positions in 16 bytes", and a software pipeline):
+// The staged walk (gatherStagedAs<float3, false>: the solver's structure) and two variants of
+// how a candidate's position reaches the lane (issue 21's lever "positions in 16 bytes", and a
+// software pipeline):
 //   P = float4: the positions padded to 16 bytes, one 128-bit load a visit instead of three;
 //   Prefetch:   the next candidate is found and its position loaded before this one's terms are
 //               computed, so the load's latency overlaps the arithmetic.
@@ -249,17 +222,7 @@ __global__ void gatherStagedAs(int n, const P* p, const int* rowBegin, const uns
     return;
   }
   uint2* word = &words[0][threadIdx.x];
-  int count = 0;
-#pragma unroll
-  for (int r = 0; r < 9; ++r)
-  {
-    const unsigned mask = masks[r * n + i];
-    if (mask != 0)
-    {
-      word[count * 128] = make_uint2(rowBegin[r * n + i], mask);
-      ++count;
-    }
-  }
+  const int count = stageRows(n, i, rowBegin, masks, word);
   const float3 pi = position(p, i);
   Sums s{ 0, 0, 0, 0, 0 };
   const uint2* const last = word + count * 128;
@@ -560,7 +523,7 @@ int main(int argc, char** argv)
   const float maskMs =
     timeIt([&] { gatherMasks<<<grid, block>>>(n, ps, dRowBegin, dMasks, rhoM, lamB); });
   const float stagedMs =
-    timeIt([&] { gatherStaged<<<grid, block>>>(n, ps, dRowBegin, dMasks, rhoM, lamB); });
+    timeIt([&] { gatherStagedAs<float3, false><<<grid, block>>>(n, ps, dRowBegin, dMasks, rhoM, lamB); });
   std::vector<float> l(n), mk(n);
   CHECK(cudaMemcpy(l.data(), rhoL, sizeof(float) * n, cudaMemcpyDeviceToHost));
   CHECK(cudaMemcpy(mk.data(), rhoM, sizeof(float) * n, cudaMemcpyDeviceToHost));
