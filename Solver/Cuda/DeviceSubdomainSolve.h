@@ -111,11 +111,11 @@ void DeviceSubdomainStepper<Real, Device>::solve(Roles4 r, const CellKey* sorted
       auto edge = device_->borderExecutor();
       device_->forkBorder();
       detail::firstPassOnPositions(
-        edge, VorticityStage{}, be, after, border, f, performed, false, pass, onBorder);
+        edge, typename decltype(pass)::Stage{}, be, after, border, f, performed, false, pass, onBorder);
     }
     sendRefresh<Vec3<Real>>(x, ghostSmoothing);
     detail::firstPassOnPositions(
-      exec, VorticityStage{}, b, after, interior, f, performed, false, pass, onInterior);
+      exec, typename decltype(pass)::Stage{}, b, after, interior, f, performed, false, pass, onInterior);
   });
   device_->joinBorder();
   receiveRefresh<Vec3<Real>>(x, ghostSmoothing);

@@ -59,6 +59,9 @@ struct GatherStage {};
 template <class Real>
 struct DensityStage {};
 struct CorrectionStage {};
+// Friction: the pass that also smooths with the walls' images (VorticityPass<true>), a kernel of
+// its own with a launch bound of its own.
+template <bool Friction>
 struct VorticityStage {};
 struct ConfinementStage {};
 
@@ -369,6 +372,8 @@ struct DensityPass
 template <bool Friction>
 struct VorticityPass
 {
+  using Stage = VorticityStage<Friction>;
+
   template <class Real, class Neighbors>
   PBF_HD PBF_INLINE void operator()(std::uint32_t i, const FluidView<Real, Neighbors>& f) const
   {
@@ -607,7 +612,8 @@ Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Re
   f.omega = f.scratch;
   f.smoothing = D;
   detail::withPass<detail::VorticityPass>(k.c.wallFriction != Real(0), [&](auto pass) {
-    detail::firstPassOnPositions(exec, VorticityStage{}, b, k, n, f, k.iterations, false, pass);
+    detail::firstPassOnPositions(
+      exec, typename decltype(pass)::Stage{}, b, k, n, f, k.iterations, false, pass);
   });
   Vec3<Real>* const velocity = f.scratch;
   detail::withPass<detail::ConfinementPass>(k.c.xsphHyper, [&](auto pass) {
