@@ -91,10 +91,11 @@ struct Launch<CorrectionStage>
 };
 // With wall friction the pass also walks each near-wall neighbour's images. In double precision
 // ptxas then spilled 492 bytes of stores and 1,048 of loads under the cap of 7 blocks (72
-// registers), and none under 5 (96). Measured at 1M particles on an H100 (Documentation/
-// Performance.md, "What wall friction costs"): 5 blocks took the double-precision step with
-// friction from 4.36 to 4.03 ms and left single precision with friction unchanged. Without
-// friction the cap stays at 7: there 5 blocks cost double precision 0.15 %.
+// registers), and none under 5 (96). Measured at 1M particles on an H100
+// (Documentation/Performance.md, "What wall friction costs"): 5 blocks took the
+// double-precision step with friction from 4.36 to 4.01 ms and left single precision with
+// friction unchanged. Without friction the cap stays at 7: there 5 blocks cost double
+// precision 0.15 %.
 template <bool Friction>
 struct Launch<VorticityStage<Friction>>
 {
