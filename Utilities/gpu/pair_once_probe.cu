@@ -102,15 +102,27 @@ __device__ __forceinline__ void visit(const float3& pi, const float3& pj, Sums& 
   visit(pi, pj, s, w, g);
 }
 
+// This thread's particle i on the L^3 lattice and its site (x, y, z); false past the last one.
+__device__ __forceinline__ bool latticeSite(int L, int& i, int& x, int& y, int& z)
+{
+  i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= L * L * L)
+  {
+    return false;
+  }
+  x = i % L;
+  y = (i / L) % L;
+  z = i / (L * L);
+  return true;
+}
+
 __global__ void gather(int L, const float3* p, float* rho, float* lambda)
 {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  const int n = L * L * L;
-  if (i >= n)
+  int i, x, y, z;
+  if (!latticeSite(L, i, x, y, z))
   {
     return;
   }
-  const int x = i % L, y = (i / L) % L, z = i / (L * L);
   const float3 pi = p[i];
   Sums s{ 0, 0, 0, 0, 0 };
   for (int k = 0; k < 33; ++k)
@@ -288,13 +300,11 @@ __device__ __forceinline__ void add(float* a, float v)
 template <class T>
 __global__ void once(int L, const float3* p, T* acc)
 {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  const int n = L * L * L;
-  if (i >= n)
+  int i, x, y, z;
+  if (!latticeSite(L, i, x, y, z))
   {
     return;
   }
-  const int x = i % L, y = (i / L) % L, z = i / (L * L);
   const float3 pi = p[i];
   Sums s{ 1.0f, 0, 0, 0, 0 }; // itself: w(0) = 1, no gradient
   for (int k = 1; k <= cForward; ++k)
