@@ -99,10 +99,22 @@ double waterHeight(const Simulation& simulation, const Gauge& gauge, double wet)
 }
 
 MarinRun runMarin(const Parameters& parameters, Backend backend, Precision precision,
-  double until, double sampleInterval, double wet)
+  double until, double sampleInterval, double wet, double wallHeight)
 {
-  const Scene scene = presetScene("marin_dam_break");
-  Simulation simulation(scene, parameters, backend, precision);
+  Scene scene = presetScene("marin_dam_break");
+  Parameters p = parameters;
+  if (wallHeight > 0)
+  {
+    // Only the roof moves: the speed scale (the step's floor, XSPH's viscosity) stays the one the
+    // 1 m tank gives.
+    if (p.sceneSpeedHint == 0)
+    {
+      p.sceneSpeedHint =
+        std::sqrt(2.0 * length(p.gravity) * (scene.domain.max.y - scene.domain.min.y));
+    }
+    scene.domain.max.y = wallHeight;
+  }
+  Simulation simulation(scene, p, backend, precision);
   MarinRun run;
   run.spacing = parameters.particleSpacing;
   run.particles = simulation.stepper().size();

@@ -23,6 +23,7 @@ int main(int argc, char** argv)
     { "sample", "gauge sampling interval [s] (default 0.01)" },
     { "csv", "write t, then H2 and H4 per spacing, to this file" },
     { "gauge-fraction", "the fluid fraction above which a gauge's line counts as wet (default 0.5)" },
+    { "wall-height", "the tank's top [m] (default: the scene's 1 m roof)" },
   };
   try
   {
@@ -39,6 +40,7 @@ int main(int argc, char** argv)
     const double until = toolReal(options, "until", 6.0);
     const double sample = toolReal(options, "sample", 0.01);
     const double wet = toolReal(options, "gauge-fraction", kWetFraction);
+    const double wallHeight = toolReal(options, "wall-height", 0.0);
     if (!(wet < 1.0))
     {
       throw InvalidInput("--gauge-fraction = " + std::to_string(wet) + ": must be below 1");
@@ -51,7 +53,7 @@ int main(int argc, char** argv)
       Parameters p = options.parameters;
       p.particleSpacing = s;
       const auto start = std::chrono::steady_clock::now();
-      runs.push_back(runMarin(p, options.backend, options.precision, until, sample, wet));
+      runs.push_back(runMarin(p, options.backend, options.precision, until, sample, wet, wallHeight));
       const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const MarinComparison c = compareMarin(runs.back(), h2, h4, &h2Arrival);
