@@ -50,7 +50,8 @@ struct MarinRun
 // Runs Data/marin_dam_break.json at `parameters` (its spacing, its solver settings) to `until`
 // [s], sampling both gauges every `sampleInterval` [s] and H2 every step until the first wave.
 // `wet`: the gauges' fluid fraction (waterHeight). `wallHeight` > 0 raises the domain's top to it
-// [m]: the experiment's tank had no roof, so its walls are taken as high as the water climbs.
+// [m], above where the water climbs: the tank without its roof (Validation.md measures what the
+// roof does to the gauges).
 MarinRun runMarin(const Parameters& parameters, Backend backend, Precision precision,
   double until, double sampleInterval, double wet = kWetFraction, double wallHeight = 0);
 
