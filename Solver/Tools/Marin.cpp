@@ -107,11 +107,7 @@ MarinRun runMarin(const Parameters& parameters, Backend backend, Precision preci
   {
     // Only the roof moves: the speed scale (the step's floor, XSPH's viscosity) stays the one the
     // 1 m tank gives.
-    if (p.sceneSpeedHint == 0)
-    {
-      p.sceneSpeedHint =
-        std::sqrt(2.0 * length(p.gravity) * (scene.domain.max.y - scene.domain.min.y));
-    }
+    p.sceneSpeedHint = withSceneDomain(p, scene).sceneSpeed();
     scene.domain.max.y = wallHeight;
   }
   Simulation simulation(scene, p, backend, precision);
