@@ -193,6 +193,9 @@ vtkSmartPointer<vtkFieldData> vtkPBFOutput::FrameFieldData(
   AddValue(fieldData, "SCorrDeltaQ", p.sCorrDeltaQ);
   AddValue(fieldData, "XSPHViscosity", p.xsphViscosity);
   AddValue(fieldData, "XSPHKinematicViscosity", p.xsphNu());
+  // sqrt(v0^2 + 2 |g| L): the scale of the scene's speeds, where a display's velocity color map
+  // starts before the fluid moves (Plugin/vtkPBFDisplayDefaults.h).
+  AddValue(fieldData, "SceneSpeed", p.sceneSpeed());
   AddValue(fieldData, "XSPHHyperViscosity", p.xsphHyperViscosity);
   AddValue(fieldData, "VorticityEpsilon", p.vorticityEpsilon);
   AddInteger(fieldData, "Unilateral", p.unilateral ? 1 : 0);

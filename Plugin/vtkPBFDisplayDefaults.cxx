@@ -1,14 +1,19 @@
 #include "vtkPBFDisplayDefaults.h"
 
 #include "vtkCommand.h"
+#include "vtkDataObject.h"
 #include "vtkNew.h"
+#include "vtkPVArrayInformation.h"
+#include "vtkPVDataInformation.h"
 #include "vtkObjectFactory.h"
 #include "vtkSMPVRepresentationProxy.h"
 #include "vtkSMPropertyHelper.h"
 #include "vtkSMProxy.h"
 #include "vtkSMProxyManager.h"
 #include "vtkSMSessionProxyManager.h"
+#include "vtkSMSourceProxy.h"
 #include "vtkSMTransferFunctionManager.h"
+#include "vtkSMTransferFunctionProxy.h"
 #include "vtkSmartPointer.h"
 #include "vtkWeakPointer.h"
 
@@ -34,6 +39,31 @@ bool IsSimulation(vtkSMProxy* producer)
     std::strcmp(producer->GetVTKClassName(), "vtkPBFSimulation") == 0;
 }
 
+// The particles' data information, valid right after the producer updated (no update is asked).
+vtkPVDataInformation* ParticleInformation(vtkSMProxy* producer)
+{
+  auto* source = vtkSMSourceProxy::SafeDownCast(producer);
+  return source && source->GetNumberOfOutputPorts() > 0 ? source->GetDataInformation(0) : nullptr;
+}
+
+// The scene's speed scale sqrt(v0^2 + 2 |g| L) that the filter records in the field data
+// (SceneSpeed), or 0 where there is none (a failed run).
+double SceneSpeedOf(vtkPVDataInformation* info)
+{
+  vtkPVArrayInformation* array =
+    info ? info->GetArrayInformation("SceneSpeed", vtkDataObject::FIELD) : nullptr;
+  return array ? array->GetComponentRange(0)[1] : 0.0;
+}
+
+// Whether a color map rescales itself as data changes (the plugin's default, Grow and update
+// every timestep, or Grow and update on Apply): a range the user locked or made custom stays.
+bool Grows(vtkSMProxy* colors)
+{
+  const int mode = vtkSMPropertyHelper(colors, "AutomaticRescaleRangeMode").GetAsInt();
+  return mode == vtkSMTransferFunctionManager::GROW_ON_APPLY_AND_TIMESTEP ||
+    mode == vtkSMTransferFunctionManager::GROW_ON_APPLY;
+}
+
 // The columns of the Diagnostics table, in the filter's order; only the density errors are
 // plotted at first (the others are on other scales, one click away in the series list).
 const char* const DiagnosticsColumns[] = { "AverageDensityError", "MaxDensityError",
@@ -51,6 +81,8 @@ struct vtkPBFDisplayDefaults::vtkInternals
     vtkWeakPointer<vtkSMProxy> Producer;
     double FollowedRadius = 0;
     std::string Scene;
+    // The producer's SceneSpeed at its latest update: the velocity color map's least top.
+    double SceneSpeed = 0;
   };
   std::vector<Followed> Displays;
   // Everything observed, with the observer's tag, so that the destructor can detach from what
@@ -63,6 +95,9 @@ struct vtkPBFDisplayDefaults::vtkInternals
   };
   std::vector<Watched<vtkSMSessionProxyManager>> Sessions;
   std::vector<Watched<vtkSMProxy>> Producers;
+  std::vector<Watched<vtkSMProxy>> ColorMaps;
+  // Set while this class rescales a color map, whose own change notices must not recurse.
+  bool Widening = false;
   Watched<vtkSMProxyManager> Manager{ nullptr, 0 };
 
   template <class T>
@@ -110,6 +145,7 @@ vtkPBFDisplayDefaults::~vtkPBFDisplayDefaults()
   // Whatever still exists must not call back into a deleted object.
   vtkInternals::Detach(this->Internals->Sessions);
   vtkInternals::Detach(this->Internals->Producers);
+  vtkInternals::Detach(this->Internals->ColorMaps);
   if (this->Internals->Manager.Object)
   {
     this->Internals->Manager.Object->RemoveObserver(this->Internals->Manager.Tag);
@@ -209,6 +245,14 @@ void vtkPBFDisplayDefaults::Adopt(vtkSMProxy* display, vtkSMSessionProxyManager*
       vtkSMPropertyHelper(colors, "AutomaticRescaleRangeMode")
         .Set(vtkSMTransferFunctionManager::GROW_ON_APPLY_AND_TIMESTEP);
       colors->UpdateVTKObjects();
+      // Whoever sets its range (Show's first coloring, Apply, the animation) is followed by the
+      // floor [0, SceneSpeed]: frame 0 is at rest, and a range taken there reads 0 to 1e-38.
+      if (!vtkInternals::Has(this->Internals->ColorMaps, colors))
+      {
+        this->Internals->ColorMaps.push_back({ colors,
+          colors->AddObserver(
+            vtkCommand::PropertyModifiedEvent, this, &vtkPBFDisplayDefaults::OnColorsModified) });
+      }
     }
   }
   vtkInternals::Followed followed;
@@ -248,6 +292,8 @@ void vtkPBFDisplayDefaults::OnDataUpdated(vtkObject* caller, unsigned long, void
       display->UpdateVTKObjects();
       followed.FollowedRadius = wanted;
     }
+    vtkPVDataInformation* info = ParticleInformation(producer);
+    followed.SceneSpeed = SceneSpeedOf(info);
     const std::string scene = SceneOf(producer);
     if (scene != followed.Scene)
     {
@@ -255,7 +301,64 @@ void vtkPBFDisplayDefaults::OnDataUpdated(vtkObject* caller, unsigned long, void
       vtkSMPVRepresentationProxy::RescaleTransferFunctionToDataRange(
         display, /*extend=*/false, /*force=*/true);
     }
+    // A new time shown through the view (ViewTime) or asked of the source (UpdatePipeline(t))
+    // grows the map as an animation tick does: ParaView grows it on ticks alone.
+    vtkSMProxy* colors = display->GetProperty("LookupTable")
+      ? vtkSMPropertyHelper(display, "LookupTable", /*quiet=*/true).GetAsProxy()
+      : nullptr;
+    vtkPVArrayInformation* velocity =
+      info ? info->GetArrayInformation("velocity", vtkDataObject::POINT) : nullptr;
+    const char* colored = vtkSMPropertyHelper(display, "ColorArrayName").GetInputArrayNameToProcess();
+    if (colors && velocity && colored && std::strcmp(colored, "velocity") == 0 && Grows(colors))
+    {
+      vtkSMTransferFunctionProxy::RescaleTransferFunction(
+        colors, velocity->GetComponentRange(-1), /*extend=*/true);
+      colors->UpdateVTKObjects();
+    }
+    this->WidenToSceneSpeed(colors);
   }
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFDisplayDefaults::OnColorsModified(vtkObject* caller, unsigned long, void* callData)
+{
+  const char* name = static_cast<const char*>(callData);
+  if (!this->Internals->Widening && name && std::strcmp(name, "RGBPoints") == 0)
+  {
+    this->WidenToSceneSpeed(vtkSMProxy::SafeDownCast(caller));
+  }
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFDisplayDefaults::WidenToSceneSpeed(vtkSMProxy* colors)
+{
+  if (!colors || this->Internals->Widening || !Grows(colors))
+  {
+    return;
+  }
+  // The floor is the fastest scene among the displays this map colors.
+  this->Internals->Prune();
+  double top = 0;
+  for (const vtkInternals::Followed& followed : this->Internals->Displays)
+  {
+    vtkSMProxy* display = followed.Display;
+    if (display->GetProperty("LookupTable") &&
+      vtkSMPropertyHelper(display, "LookupTable", /*quiet=*/true).GetAsProxy() == colors)
+    {
+      top = std::max(top, followed.SceneSpeed);
+    }
+  }
+  double range[2];
+  if (top <= 0 || !vtkSMTransferFunctionProxy::GetRange(colors, range) ||
+    (range[0] <= 0 && range[1] >= top))
+  {
+    return;
+  }
+  this->Internals->Widening = true;
+  vtkSMTransferFunctionProxy::RescaleTransferFunction(
+    colors, std::min(range[0], 0.0), std::max(range[1], top));
+  colors->UpdateVTKObjects();
+  this->Internals->Widening = false;
 }
 
 //------------------------------------------------------------------------------

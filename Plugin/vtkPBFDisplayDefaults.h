@@ -7,9 +7,11 @@
  * - the Point Gaussian radius is half the ParticleSpacing, so that neighbouring particles touch
  *   and the fluid reads as a volume (the representation's own default is 0.5% of the bounds,
  *   tiny dots), and follows the spacing when it changes unless the user set a radius of their own;
- * - the "velocity" color map grows every time step, because frame 0 is at rest (all speeds 0) and
- *   a range taken then would saturate as soon as the animation plays; it starts again from the
- *   data when the scene (Preset, SceneFile) changes;
+ * - the "velocity" color map starts at [0, SceneSpeed] (the scene's speed scale sqrt(2 g H) from
+ *   the field data), because frame 0 is at rest and a range taken there reads 0 to 1e-38, and
+ *   grows with every time shown (the animation, a view's ViewTime, a source's UpdatePipeline(t));
+ *   it starts again from [0, SceneSpeed] when the scene (Preset, SceneFile) changes. A range the
+ *   user locks or sets (another AutomaticRescaleRangeMode) is left alone;
  * - the Diagnostics table (output port 1) in a Line Chart View plots the two density errors (in
  *   percent) against Time, instead of every column on one axis.
  * Displays loaded from a state file keep the properties the state gives them.
@@ -54,6 +56,9 @@ private:
   void OnActiveSessionChanged(vtkObject* caller, unsigned long event, void* callData);
   void OnRegistered(vtkObject* caller, unsigned long event, void* callData);
   void OnDataUpdated(vtkObject* producer, unsigned long event, void* callData);
+  void OnColorsModified(vtkObject* colors, unsigned long event, void* callData);
+  // Extends a growing color map to [0, SceneSpeed] of the scenes it colors.
+  void WidenToSceneSpeed(vtkSMProxy* colors);
 
   struct vtkInternals;
   std::unique_ptr<vtkInternals> Internals;

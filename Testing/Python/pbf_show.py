@@ -12,19 +12,12 @@ import numpy
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import pbf_testing as T  # noqa: E402
 from paraview import simple  # noqa: E402
-from pbf_images import corners_off_view, read_png  # noqa: E402
+from pbf_images import corners_off_view, source_pixels  # noqa: E402
 from vtkmodules.util import numpy_support  # noqa: E402
 
 T.load_plugin(globals())
 expect = T.expect
-output_dir = T.argument("--output", os.getcwd())
-os.makedirs(output_dir, exist_ok=True)
-
-
-def screenshot(view, name):
-    path = os.path.join(output_dir, name)
-    simple.SaveScreenshot(path, view, ImageResolution=[800, 450])
-    return read_png(path)
+output_dir = T.output_directory()
 
 
 # The README's script, at the spacing of the tests: 36 frames (0.6 s) of the default dam break.
@@ -56,11 +49,7 @@ expect(low <= speeds.min() + 1e-6 and high >= speeds.max() * (1 - 1e-6) and high
                                                                  speeds.max()))
 
 # Particles are the pixels that change when the fluid is hidden; several colors, not one.
-shot = screenshot(view, "pbf_show.png")
-simple.Hide(fluid, view)
-empty = screenshot(view, "pbf_show_empty.png")
-simple.Show(fluid, view)
-changed = numpy.any(shot != empty, axis=2)
+shot, changed = source_pixels(view, fluid, os.path.join(output_dir, "pbf_show.png"), [800, 450])
 fraction = changed.mean()
 colors = {tuple(c // 16) for c in shot[changed]}
 # The collapsing column and the surge cover several % of the view; under 1 % means dots.

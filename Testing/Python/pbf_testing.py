@@ -77,6 +77,13 @@ def argument(name, default=None):
     return default
 
 
+def output_directory():
+    """The folder named by --output (default: the working folder), made if missing."""
+    path = argument("--output", os.getcwd())
+    os.makedirs(path, exist_ok=True)
+    return path
+
+
 def load_plugin(namespace):
     """Loads the plugin in this process and puts its proxy constructors into namespace."""
     path = plugin_path()
