@@ -1,9 +1,13 @@
 // Behaviour of the PBF step on small scenes: rest, symmetry, stability of vorticity confinement.
+#include "CpuStepper.h"
 #include "TestScenes.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <map>
 
 using namespace pbf;
 using namespace pbf::test;
@@ -108,6 +112,80 @@ TEST(Physics, VorticityConfinementKeepsKineticEnergyBoundedInAClosedBox)
   }
   EXPECT_GT(maxKinetic, 0.1 * released); // the flow really moved
   EXPECT_LT(simulation.stepper().statistics().kineticEnergy, 0.02 * maxKinetic);
+}
+
+TEST(Physics, OneStepsConfinementIsEpsilonTimesNCrossOmegaAndLinearInEpsilon)
+{
+  // A block in the shear flow v = (a (y - y_b)^2, 0, 0), y_b below it: omega = -2 a (y - y_b) z,
+  // so |omega| grows along +y, N = y and eq. 16 gives f = epsilon (N x omega) =
+  // -2 a epsilon (y - y_b) x, an acceleration. One step at several epsilon from the same state,
+  // without gravity or XSPH: the projections and the rest do not depend on epsilon, so the
+  // difference of the new velocities from epsilon = 0 is the confinement's dt f alone.
+  Parameters p;
+  p.gravity = { 0, 0, 0 };
+  p.xsphViscosity = 0;
+  p.xsphHyperViscosity = 0;
+  p.timeStepping = TimeStepping::Fixed;
+  p.densityErrorTolerance = 0; // a fixed count of projections: the same work at every epsilon
+  p.solverIterations = 4;
+  const double s = p.particleSpacing, a = 2.0, yb = 0.3 - 4 * s;
+  p.domain = { { 0, 0, 0 }, { 1, 1, 1 } };
+  Scene scene;
+  scene.domain = p.domain;
+  scene.boxes.push_back({ { 0.3, 0.3, 0.3 }, { 0.3 + 16 * s, 0.3 + 16 * s, 0.3 + 16 * s },
+    { 0, 0, 0 } });
+  ParticleBatch block = fillScene(scene, p);
+  for (std::size_t i = 0; i < block.position.size(); ++i)
+  {
+    const double y = block.position[i].y - yb;
+    block.velocity[i] = { a * y * y, 0, 0 };
+  }
+  auto velocities = [&](double epsilon) {
+    Parameters q = p;
+    q.vorticityEpsilon = epsilon;
+    CpuStepper<double> stepper(false, q, block);
+    stepper.step();
+    Snapshot<double> state;
+    stepper.read(state);
+    std::map<std::int64_t, std::pair<Vec3d, Vec3d>> byId; // id -> (position, velocity)
+    for (std::size_t i = 0; i < state.id.size(); ++i)
+    {
+      byId[state.id[i]] = { state.position[i], state.velocity[i] };
+    }
+    return byId;
+  };
+  const double epsilon = 0.5; // m/s
+  const auto none = velocities(0.0), once = velocities(epsilon), twice = velocities(2 * epsilon);
+  const double h = p.smoothingLength();
+  double worst = 0, worstLinear = 0;
+  std::size_t checked = 0;
+  for (const auto& [id, state] : none)
+  {
+    const Vec3d& x = state.first;
+    // The bulk: 2 h from every face of the block, where eta (a sum over h of omega, itself a sum
+    // over h) sees full neighbourhoods; within 2 h of a face the error reaches 28 %.
+    if (std::min({ x.x, x.y, x.z }) < 0.3 + 2 * h ||
+      std::max({ x.x, x.y, x.z }) > 0.3 + 16 * s - 2 * h)
+    {
+      continue;
+    }
+    const Vec3d confinement = once.at(id).second - state.second;
+    const Vec3d expected{ -2 * a * (x.y - yb) * epsilon * p.timeStep, 0, 0 };
+    worst = std::max(worst, length(confinement - expected) / length(expected));
+    const Vec3d doubled = twice.at(id).second - state.second;
+    worstLinear = std::max(worstLinear, length(doubled - confinement * 2.0) / length(expected));
+    ++checked;
+  }
+  std::printf("confinement of %zu bulk particles: worst error %.3g of eps (N x omega) dt, "
+              "linearity %.3g\n", checked, worst, worstLinear);
+  EXPECT_GT(checked, 500u);
+  // The SPH curl and gradient of a quadratic field on the lattice: within 10 % of the exact
+  // (measured 5.3 %: the spiky gradient's moment on the calibrated lattice is not exactly the
+  // identity); a doubled or halved confinement is 100 % or 50 % off.
+  EXPECT_LT(worst, 0.1);
+  // Linear in epsilon: the velocity is v + eps dt (N x omega), rounding of doubles on velocities
+  // 1e4 times the difference apart (1e-16 x 1e4).
+  EXPECT_LT(worstLinear, 1e-9);
 }
 
 TEST(Physics, ParticlesStayInsideTheDomain)
