@@ -19,6 +19,7 @@
 #include "vtkTable.h"
 #include "vtkTypeInt64Array.h"
 
+#include "ParameterTable.h"
 #include "Parameters.h"
 #include "Playback.h"
 #include "Scene.h"
@@ -178,34 +179,32 @@ vtkSmartPointer<vtkFieldData> vtkPBFOutput::FrameFieldData(
   const pbf::Parameters& p = simulation.parameters();
   auto fieldData = vtkSmartPointer<vtkFieldData>::New();
   AddValue(fieldData, "SmoothingLength", p.smoothingLength());
-  AddValue(fieldData, "RestDensity", p.restDensity);
   AddValue(fieldData, "ParticleMass", pbf::calibratedParticleMass(p));
-  AddValue(fieldData, "ParticleSpacing", p.particleSpacing);
-  AddValue(fieldData, "SmoothingRatio", p.smoothingRatio);
-  AddInteger(fieldData, "SolverIterations", p.solverIterations);
+  // Every parameter of the table under its property name (a switch or a count as an integer).
+  for (const pbf::ParameterSpec& spec : pbf::parameterTable())
+  {
+    if (spec.type == pbf::ParameterType::Vector)
+    {
+      vtkNew<vtkDoubleArray> vector;
+      vector->SetName(spec.property);
+      vector->SetNumberOfComponents(3);
+      vector->InsertNextTuple3(spec.get(p, 0), spec.get(p, 1), spec.get(p, 2));
+      fieldData->AddArray(vector);
+    }
+    else if (spec.type == pbf::ParameterType::Real)
+    {
+      AddValue(fieldData, spec.property, spec.get(p, 0));
+    }
+    else
+    {
+      AddInteger(fieldData, spec.property, static_cast<vtkIdType>(spec.get(p, 0)));
+    }
+  }
   AddInteger(fieldData, "AdaptiveIterations", p.densityErrorTolerance > 0 ? 1 : 0);
-  AddValue(fieldData, "DensityErrorTolerance", p.densityErrorTolerance);
-  AddValue(fieldData, "MaxDensityErrorTolerance", p.maxDensityErrorTolerance);
-  AddValue(fieldData, "RelaxationEpsilon", p.relaxation);
-  AddValue(fieldData, "ChebyshevRho", p.chebyshevRho);
-  AddValue(fieldData, "SCorrK", p.sCorrK);
-  AddValue(fieldData, "SCorrN", p.sCorrN);
-  AddValue(fieldData, "SCorrDeltaQ", p.sCorrDeltaQ);
-  AddValue(fieldData, "XSPHViscosity", p.xsphViscosity);
   AddValue(fieldData, "XSPHKinematicViscosity", p.xsphNu());
   // sqrt(v0^2 + 2 |g| L): the scale of the scene's speeds, where a display's velocity color map
   // starts before the fluid moves (Plugin/vtkPBFDisplayDefaults.h).
   AddValue(fieldData, "SceneSpeed", p.sceneSpeed());
-  AddValue(fieldData, "XSPHHyperViscosity", p.xsphHyperViscosity);
-  AddValue(fieldData, "VorticityEpsilon", p.vorticityEpsilon);
-  AddInteger(fieldData, "Unilateral", p.unilateral ? 1 : 0);
-  AddInteger(fieldData, "MirrorWalls", p.mirrorWalls ? 1 : 0);
-  AddValue(fieldData, "WallFriction", p.wallFriction);
-  vtkNew<vtkDoubleArray> gravity;
-  gravity->SetName("Gravity");
-  gravity->SetNumberOfComponents(3);
-  gravity->InsertNextTuple3(p.gravity.x, p.gravity.y, p.gravity.z);
-  fieldData->AddArray(gravity);
   vtkNew<vtkDoubleArray> domain;
   domain->SetName("Domain");
   domain->SetNumberOfComponents(6);
@@ -216,8 +215,6 @@ vtkSmartPointer<vtkFieldData> vtkPBFOutput::FrameFieldData(
   const bool automatic = p.timeStepping == pbf::TimeStepping::Automatic;
   AddText(fieldData, "TimeStepping", automatic ? "Automatic" : "Fixed");
   AddValue(fieldData, "TimeStep", automatic ? simulation.stepper().timeStep() : p.timeStep);
-  AddValue(fieldData, "MaxTimeStep", p.timeStep);
-  AddValue(fieldData, "CFLNumber", p.cflNumber);
   AddValue(fieldData, "FrameInterval", frameInterval);
   AddInteger(fieldData, "SubstepsPerFrame", substeps);
   AddInteger(fieldData, "Frame", frame);

@@ -14,6 +14,7 @@
 
 #include "vtkPBFOutput.h"
 
+#include "ParameterTable.h"
 #include "Parameters.h"
 #include "Playback.h"
 #include "SurfaceExtraction.h"
@@ -39,25 +40,11 @@ vtkStandardNewMacro(vtkPBFSimulation);
 vtkPBFSimulation::vtkPBFSimulation()
   : Internals(new vtkInternals)
 {
-  // The physics defaults are the solver's, so the two cannot drift.
+  // The physics parameters live in the internals (vtkInternals::Physics) with the solver's
+  // defaults, so the two cannot drift.
   const pbf::Parameters defaults;
   this->Preset = PRESET_DAM_BREAK;
   this->SceneFile = nullptr;
-  this->RestDensity = defaults.restDensity;
-  this->ParticleSpacing = defaults.particleSpacing;
-  this->SmoothingRatio = defaults.smoothingRatio;
-  this->SolverIterations = defaults.solverIterations;
-  this->RelaxationEpsilon = defaults.relaxation;
-  this->ChebyshevRho = defaults.chebyshevRho;
-  this->SCorrK = defaults.sCorrK;
-  this->SCorrN = defaults.sCorrN;
-  this->SCorrDeltaQ = defaults.sCorrDeltaQ;
-  this->XSPHViscosity = defaults.xsphViscosity;
-  this->XSPHHyperViscosity = defaults.xsphHyperViscosity;
-  this->VorticityEpsilon = defaults.vorticityEpsilon;
-  this->Unilateral = defaults.unilateral;
-  this->MirrorWalls = defaults.mirrorWalls;
-  this->WallFriction = defaults.wallFriction;
   const pbf::SurfaceOptions surface;
   this->SurfaceResolution = surface.resolution;
   this->SurfaceIsoValue = surface.isoValue;
@@ -65,20 +52,12 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->SurfaceAnisotropic = surface.anisotropic;
   this->GenerateSurface = false;
   this->ObstacleThickness = 0.0;
-  this->Gravity[0] = defaults.gravity.x;
-  this->Gravity[1] = defaults.gravity.y;
-  this->Gravity[2] = defaults.gravity.z;
   // The solver's default is adaptive (its tolerance, with SolverIterations as the cap).
   this->AdaptiveIterations = defaults.densityErrorTolerance > 0;
-  this->DensityErrorTolerance =
-    defaults.densityErrorTolerance > 0 ? defaults.densityErrorTolerance : 0.2;
-  this->MaxDensityErrorTolerance = defaults.maxDensityErrorTolerance;
   this->FrameInterval = 1.0 / 60.0;
   this->SubstepsPerFrame = 4;
   this->TimeStepping =
     defaults.timeStepping == pbf::TimeStepping::Automatic ? TIME_STEPPING_AUTOMATIC : TIME_STEPPING_FIXED;
-  this->CFLNumber = defaults.cflNumber;
-  this->MaxTimeStep = defaults.timeStep;
   this->NumberOfFrames = 120;
   this->CheckpointInterval = 10;
   this->CheckpointMemoryMB = 1024.0;
@@ -409,10 +388,72 @@ int vtkPBFSimulation::RequestSurface(vtkInformationVector* outputVector)
 }
 
 //------------------------------------------------------------------------------
+void vtkPBFSimulation::SetParameter(const char* name, double value)
+{
+  this->SetParameterComponents(name, 1, &value);
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::SetParameter(const char* name, int value)
+{
+  const double real = value;
+  this->SetParameterComponents(name, 1, &real);
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::SetParameter(const char* name, double x, double y, double z)
+{
+  const double values[3] = { x, y, z };
+  this->SetParameterComponents(name, 3, values);
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::SetParameterComponents(const char* name, int count, const double* values)
+{
+  const pbf::ParameterSpec* spec = pbf::findParameter(name ? name : "");
+  if (!spec || spec->components() != count)
+  {
+    vtkErrorMacro(<< "SetParameter(\"" << (name ? name : "(null)") << "\", " << count
+                  << (count == 1 ? " value" : " values") << "): "
+                  << (spec ? "it has " + std::to_string(spec->components()) + " components"
+                           : std::string("no such parameter (Solver/Physics/ParameterTable.h)")));
+    return;
+  }
+  bool changed = false;
+  for (int c = 0; c < count; ++c)
+  {
+    // Bit for bit, as the cache key compares them.
+    if (!(spec->get(this->Internals->Physics, c) == values[c]))
+    {
+      spec->set(this->Internals->Physics, c, values[c]);
+      changed = true;
+    }
+  }
+  if (changed)
+  {
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
+double vtkPBFSimulation::GetParameter(const char* name, int component)
+{
+  const pbf::ParameterSpec* spec = pbf::findParameter(name ? name : "");
+  if (!spec || component < 0 || component >= spec->components())
+  {
+    vtkErrorMacro(<< "GetParameter(\"" << (name ? name : "(null)") << "\", " << component
+                  << "): no such parameter or component");
+    return 0.0;
+  }
+  return spec->get(this->Internals->Physics, component);
+}
+
+//------------------------------------------------------------------------------
 std::string vtkPBFSimulation::InvalidTimeProperty() const
 {
   return vtkPBFInvalidTimeProperty(this->FrameInterval, this->NumberOfFrames,
-    this->TimeStepping == TIME_STEPPING_AUTOMATIC, this->SubstepsPerFrame, this->MaxTimeStep);
+    this->TimeStepping == TIME_STEPPING_AUTOMATIC, this->SubstepsPerFrame,
+    this->Internals->Physics.timeStep);
 }
 
 //------------------------------------------------------------------------------
@@ -421,38 +462,26 @@ void vtkPBFSimulation::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "Preset: " << this->Preset << " (" << this->GetPresetName() << ")\n";
   os << indent << "SceneFile: " << (this->SceneFile ? this->SceneFile : "(none)") << "\n";
-  os << indent << "RestDensity: " << this->RestDensity << "\n";
-  os << indent << "ParticleSpacing: " << this->ParticleSpacing << "\n";
-  os << indent << "SmoothingRatio: " << this->SmoothingRatio << "\n";
-  os << indent << "SolverIterations: " << this->SolverIterations << "\n";
   os << indent << "AdaptiveIterations: " << (this->AdaptiveIterations ? "On" : "Off") << "\n";
-  os << indent << "DensityErrorTolerance: " << this->DensityErrorTolerance << "\n";
-  os << indent << "MaxDensityErrorTolerance: " << this->MaxDensityErrorTolerance << "\n";
-  os << indent << "RelaxationEpsilon: " << this->RelaxationEpsilon << "\n";
-  os << indent << "ChebyshevRho: " << this->ChebyshevRho << "\n";
-  os << indent << "SCorrK: " << this->SCorrK << "\n";
-  os << indent << "SCorrN: " << this->SCorrN << "\n";
-  os << indent << "SCorrDeltaQ: " << this->SCorrDeltaQ << "\n";
-  os << indent << "XSPHViscosity: " << this->XSPHViscosity << "\n";
-  os << indent << "XSPHHyperViscosity: " << this->XSPHHyperViscosity << "\n";
-  os << indent << "VorticityEpsilon: " << this->VorticityEpsilon << "\n";
-  os << indent << "Unilateral: " << (this->Unilateral ? "On" : "Off") << "\n";
-  os << indent << "MirrorWalls: " << (this->MirrorWalls ? "On" : "Off") << "\n";
-  os << indent << "WallFriction: " << this->WallFriction << "\n";
+  for (const pbf::ParameterSpec& spec : pbf::parameterTable())
+  {
+    os << indent << spec.property << ":";
+    for (int c = 0; c < spec.components(); ++c)
+    {
+      os << " " << spec.get(this->Internals->Physics, c);
+    }
+    os << "\n";
+  }
   os << indent << "GenerateSurface: " << this->GenerateSurface << "\n";
   os << indent << "SurfaceResolution: " << this->SurfaceResolution << "\n";
   os << indent << "SurfaceIsoValue: " << this->SurfaceIsoValue << "\n";
   os << indent << "SurfaceSmoothing: " << this->SurfaceSmoothing << "\n";
   os << indent << "SurfaceAnisotropic: " << this->SurfaceAnisotropic << "\n";
   os << indent << "ObstacleThickness: " << this->ObstacleThickness << "\n";
-  os << indent << "Gravity: (" << this->Gravity[0] << ", " << this->Gravity[1] << ", "
-     << this->Gravity[2] << ")\n";
   os << indent << "FrameInterval: " << this->FrameInterval << "\n";
   os << indent << "SubstepsPerFrame: " << this->SubstepsPerFrame << "\n";
   os << indent << "TimeStepping: "
      << (this->TimeStepping == TIME_STEPPING_AUTOMATIC ? "Automatic" : "Fixed") << "\n";
-  os << indent << "CFLNumber: " << this->CFLNumber << "\n";
-  os << indent << "MaxTimeStep: " << this->MaxTimeStep << "\n";
   os << indent << "NumberOfFrames: " << this->NumberOfFrames << "\n";
   os << indent << "CheckpointInterval: " << this->CheckpointInterval << "\n";
   os << indent << "CheckpointMemoryMB: " << this->CheckpointMemoryMB << "\n";

@@ -144,59 +144,20 @@ public:
 
   ///@{
   /**
-   * Fluid: rest density rho_0 [kg/m^3], lattice spacing s of the initial fluid [m], and the
-   * ratio h / s of the smoothing length to the spacing.
+   * The physics parameters, by the property names of the parameter table
+   * (Solver/Physics/ParameterTable.h: RestDensity, ParticleSpacing, SmoothingRatio,
+   * SolverIterations, DensityErrorTolerance, ..., Gravity, CFLNumber, MaxTimeStep), from which
+   * the proxy XML is generated; their meanings, units and defaults are the table's, the
+   * defaults those of pbf::Parameters. Values are taken as given, not clamped: the solver's
+   * checks name a value out of its range when the next request runs. An unknown name, or three
+   * components for a scalar (one for Gravity), is an error and changes nothing.
+   * DensityErrorTolerance applies with AdaptiveIterations on; CFLNumber and MaxTimeStep with
+   * TimeStepping Automatic.
    */
-  vtkSetMacro(RestDensity, double);
-  vtkGetMacro(RestDensity, double);
-  vtkSetMacro(ParticleSpacing, double);
-  vtkGetMacro(ParticleSpacing, double);
-  vtkSetMacro(SmoothingRatio, double);
-  vtkGetMacro(SmoothingRatio, double);
-  ///@}
-
-  ///@{
-  /**
-   * Solver: constraint projections per step (the cap when AdaptiveIterations is on), epsilon of
-   * eq. 11 (relaxation), k (in units of standard gravity: the tensile term's push on a flat free
-   * surface), n and delta_q (a fraction of h) of the artificial pressure s_corr (eq. 13), alpha of
-   * the XSPH viscosity (eq. 17; nu = alpha h v_scene), epsilon of the vorticity confinement
-   * (eq. 16) [m/s], whether the density constraint
-   * is unilateral (C_i clamped at 0, so a free surface is not pulled together), whether the
-   * domain walls mirror the fluid near them (so that fluid at rest against a wall reads rho_0)
-   * and gravity [m/s^2]. Meanings and units are those of pbf::Parameters.
-   */
-  vtkSetMacro(SolverIterations, int);
-  vtkGetMacro(SolverIterations, int);
-  vtkSetMacro(RelaxationEpsilon, double);
-  vtkGetMacro(RelaxationEpsilon, double);
-
-  // Chebyshev acceleration of the projections: the spectral radius estimate rho in [0, 1); 0
-  // projects with plain Jacobi (pbf::Parameters::chebyshevRho).
-  vtkSetMacro(ChebyshevRho, double);
-  vtkGetMacro(ChebyshevRho, double);
-  vtkSetMacro(SCorrK, double);
-  vtkGetMacro(SCorrK, double);
-  vtkSetMacro(SCorrN, double);
-  vtkGetMacro(SCorrN, double);
-  vtkSetMacro(SCorrDeltaQ, double);
-  vtkGetMacro(SCorrDeltaQ, double);
-  vtkSetMacro(XSPHViscosity, double);
-  vtkGetMacro(XSPHViscosity, double);
-  vtkSetMacro(XSPHHyperViscosity, double);
-  vtkGetMacro(XSPHHyperViscosity, double);
-  vtkSetMacro(VorticityEpsilon, double);
-  vtkGetMacro(VorticityEpsilon, double);
-  vtkSetMacro(Unilateral, bool);
-  vtkGetMacro(Unilateral, bool);
-  vtkBooleanMacro(Unilateral, bool);
-  vtkSetMacro(MirrorWalls, bool);
-  vtkGetMacro(MirrorWalls, bool);
-  vtkBooleanMacro(MirrorWalls, bool);
-  vtkSetMacro(WallFriction, double);
-  vtkGetMacro(WallFriction, double);
-  vtkSetVector3Macro(Gravity, double);
-  vtkGetVector3Macro(Gravity, double);
+  void SetParameter(const char* name, double value);
+  void SetParameter(const char* name, int value);
+  void SetParameter(const char* name, double x, double y, double z);
+  double GetParameter(const char* name, int component = 0);
   ///@}
 
   ///@{
@@ -241,18 +202,13 @@ public:
   ///@{
   /**
    * Time: the interval between animation frames [s] (default 1/60), how the solver's step is
-   * chosen (TimeStepping: TIME_STEPPING_AUTOMATIC, the default, or TIME_STEPPING_FIXED), for
-   * Automatic the CFL number (default 0.4: the fastest particle moves at most that many spacings
-   * per step) and the largest step MaxTimeStep [s] (default 1/240), for Fixed the solver steps
+   * chosen (TimeStepping: TIME_STEPPING_AUTOMATIC, the default, or TIME_STEPPING_FIXED; for
+   * Automatic the parameters CFLNumber and MaxTimeStep apply), for Fixed the solver steps
    * per frame (default 4, so the solver's time step is FrameInterval / SubstepsPerFrame), and the
    * number of frames after the initial one (default 120).
    */
   vtkSetClampMacro(TimeStepping, int, TIME_STEPPING_FIXED, TIME_STEPPING_AUTOMATIC);
   vtkGetMacro(TimeStepping, int);
-  vtkSetMacro(CFLNumber, double);
-  vtkGetMacro(CFLNumber, double);
-  vtkSetMacro(MaxTimeStep, double);
-  vtkGetMacro(MaxTimeStep, double);
   vtkSetMacro(FrameInterval, double);
   vtkGetMacro(FrameInterval, double);
   vtkSetMacro(SubstepsPerFrame, int);
@@ -264,19 +220,14 @@ public:
   ///@{
   /**
    * Adaptive iterations: when on, a solver step stops projecting the density constraint as soon
-   * as the mean compression max(rho_i / rho_0 - 1, 0) is at or below DensityErrorTolerance
-   * [percent] (default 0.2) after the first projection, and SolverIterations becomes the most it
-   * may take. On by default; off: always SolverIterations projections per step.
+   * as the mean compression max(rho_i / rho_0 - 1, 0) is at or below the parameter
+   * DensityErrorTolerance [percent] after the first projection (and no particle is compressed by
+   * more than MaxDensityErrorTolerance), and SolverIterations becomes the most it may take. On by
+   * default; off: always SolverIterations projections per step.
    */
   vtkSetMacro(AdaptiveIterations, bool);
   vtkGetMacro(AdaptiveIterations, bool);
   vtkBooleanMacro(AdaptiveIterations, bool);
-  vtkSetMacro(DensityErrorTolerance, double);
-  vtkGetMacro(DensityErrorTolerance, double);
-  // ... and while any particle is compressed by more than this [percent] (default 5; 0: the mean
-  // alone decides).
-  vtkSetMacro(MaxDensityErrorTolerance, double);
-  vtkGetMacro(MaxDensityErrorTolerance, double);
   ///@}
 
   ///@{
@@ -362,6 +313,8 @@ protected:
   // The surface of the particles on port 0 (port 3) when GenerateSurface is on. Returns 0 after
   // an error (the previous surface stays).
   int RequestSurface(vtkInformationVector* outputVector);
+  // SetParameter's work: `count` components of the named parameter.
+  void SetParameterComponents(const char* name, int count, const double* values);
   // What is wrong with FrameInterval, NumberOfFrames, SubstepsPerFrame or MaxTimeStep, in the
   // GUI's words and the value typed; empty when nothing is.
   std::string InvalidTimeProperty() const;
@@ -374,38 +327,17 @@ protected:
   int Preset;
   char* SceneFile;
 
-  double RestDensity;
-  double ParticleSpacing;
-  double SmoothingRatio;
-
-  int SolverIterations;
-  double RelaxationEpsilon;
-  double ChebyshevRho;
-  double SCorrK;
-  double SCorrN;
-  double SCorrDeltaQ;
-  double XSPHViscosity;
-  double XSPHHyperViscosity;
-  double VorticityEpsilon;
-  bool Unilateral;
-  bool MirrorWalls;
-  double WallFriction;
   double ObstacleThickness;
   bool GenerateSurface;
   double SurfaceResolution;
   double SurfaceIsoValue;
   int SurfaceSmoothing;
   bool SurfaceAnisotropic;
-  double Gravity[3];
   bool AdaptiveIterations;
-  double DensityErrorTolerance;
-  double MaxDensityErrorTolerance;
 
   double FrameInterval;
   int SubstepsPerFrame;
   int TimeStepping;
-  double CFLNumber;
-  double MaxTimeStep;
   int NumberOfFrames;
 
   int CheckpointInterval;

@@ -111,31 +111,22 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
     this->MeshFilesOf = key.scene;
   }
   key.scene += vtkPBFFileVersions(this->MeshFiles);
+  // The table's parameters as set; the filter's own properties decide what a run uses of them.
   pbf::Parameters& p = key.parameters;
-  p.restDensity = self->RestDensity;
-  p.particleSpacing = self->ParticleSpacing;
-  p.smoothingRatio = self->SmoothingRatio;
-  p.solverIterations = self->SolverIterations;
-  p.densityErrorTolerance = self->AdaptiveIterations ? self->DensityErrorTolerance : 0.0;
-  p.maxDensityErrorTolerance = self->MaxDensityErrorTolerance;
-  p.relaxation = self->RelaxationEpsilon;
-  p.chebyshevRho = self->ChebyshevRho;
-  p.sCorrK = self->SCorrK;
-  p.sCorrN = self->SCorrN;
-  p.sCorrDeltaQ = self->SCorrDeltaQ;
-  p.xsphViscosity = self->XSPHViscosity;
-  p.xsphHyperViscosity = self->XSPHHyperViscosity;
-  p.vorticityEpsilon = self->VorticityEpsilon;
-  p.unilateral = self->Unilateral;
-  p.mirrorWalls = self->MirrorWalls;
-  p.wallFriction = self->WallFriction;
-  p.gravity = pbf::Vec3d{ self->Gravity[0], self->Gravity[1], self->Gravity[2] };
+  p = this->Physics;
+  if (!self->AdaptiveIterations)
+  {
+    p.densityErrorTolerance = 0.0;
+  }
   // Fixed: SubstepsPerFrame equal steps per frame. Automatic: steps chosen from the state, at
   // most MaxTimeStep, landing on every frame; SubstepsPerFrame then changes nothing.
   const bool automatic = self->TimeStepping == TIME_STEPPING_AUTOMATIC;
   p.timeStepping = automatic ? pbf::TimeStepping::Automatic : pbf::TimeStepping::Fixed;
-  p.timeStep = automatic ? self->MaxTimeStep : self->FrameInterval / self->SubstepsPerFrame;
-  p.cflNumber = automatic ? self->CFLNumber : pbf::Parameters().cflNumber;
+  if (!automatic)
+  {
+    p.timeStep = self->FrameInterval / self->SubstepsPerFrame;
+    p.cflNumber = pbf::Parameters().cflNumber;
+  }
   key.frameInterval = self->FrameInterval;
   key.substeps = automatic ? 0 : self->SubstepsPerFrame;
   key.precision =

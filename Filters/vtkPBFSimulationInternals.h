@@ -45,6 +45,8 @@ class vtkPBFSimulation::vtkInternals
 {
 public:
   pbf::Playback Playback;
+  // The physics parameters as set (vtkPBFSimulation::SetParameter), with the solver's defaults.
+  pbf::Parameters Physics;
 
   // What the last successful request produced (a failed or aborted request hands it out again)
   // and, when it is a frame of the playback's key, which one (-1 otherwise).

@@ -4,14 +4,17 @@
 #include "vtkPointData.h"
 #include "vtkPointSet.h"
 
+#include "ParameterTable.h"
 #include "Parameters.h"
 
 #include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <strings.h>
 #include <sstream>
 #include <utility>
+#include <vector>
 
 namespace
 {
@@ -95,24 +98,17 @@ std::string vtkPBFInUserTerms(std::string text)
       text.replace(at, std::strlen(phrase.first), phrase.second);
     }
   }
-  const std::pair<const char*, const char*> fields[] = {
-    { "maxDensityErrorTolerance", "Max Density Error Tolerance" },
-    { "densityErrorTolerance", "Density Error Tolerance" },
-    { "particleSpacing", "Particle Spacing" },
-    { "smoothingRatio", "Smoothing Ratio" },
-    { "solverIterations", "Solver Iterations" },
-    { "restDensity", "Rest Density" },
-    { "cflNumber", "CFL Number" },
-    { "xsphViscosity", "XSPH Viscosity" },
-    { "xsphHyperViscosity", "XSPH Hyper Viscosity" },
-    { "vorticityEpsilon", "Vorticity Epsilon" },
-    { "wallFriction", "Wall Friction" },
-    { "chebyshevRho", "Chebyshev Rho" },
-    { "sCorrDeltaQ", "S Corr Delta Q" },
-    { "sCorrK", "S Corr K" },
-    { "sCorrN", "S Corr N" },
-    { "timeStep", "the time step" },
-  };
+  // The solver's field names, as the GUI labels them (the parameter table's rows); the time
+  // step of a message is the one the run used, MaxTimeStep only when automatic.
+  std::vector<std::pair<const char*, const char*>> fields = { { "timeStep", "the time step" } };
+  for (const pbf::ParameterSpec& spec : pbf::parameterTable())
+  {
+    // A label that is the field's own word capitalised (gravity, unilateral) says nothing more.
+    if (std::strcmp(spec.field, "timeStep") != 0 && strcasecmp(spec.field, spec.label) != 0)
+    {
+      fields.emplace_back(spec.field, spec.label);
+    }
+  }
   auto isWordCharacter = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
   for (const auto& field : fields)
   {

@@ -1,6 +1,7 @@
 #include "Parameters.h"
 
 #include "Kernels.h"
+#include "ParameterTable.h"
 
 #include <algorithm>
 #include <cmath>
@@ -25,15 +26,6 @@ void requireFinite(const std::string& field, double value)
   if (!std::isfinite(value))
   {
     reject(field, value, "must be a finite number");
-  }
-}
-
-void requirePositive(const std::string& field, double value)
-{
-  requireFinite(field, value);
-  if (value <= 0.0)
-  {
-    reject(field, value, "must be > 0");
   }
 }
 
@@ -172,75 +164,12 @@ double Parameters::sceneSpeed() const
 
 void Parameters::validate() const
 {
-  requirePositive("restDensity", restDensity);
-  requirePositive("particleSpacing", particleSpacing);
-  requireFinite("smoothingRatio", smoothingRatio);
-  if (smoothingRatio <= 1.0 || smoothingRatio > 4.0)
-  {
-    // At 1 the nearest lattice neighbours sit exactly at h, outside the kernels' support (r < h):
-    // every particle would be alone and the constraint has no gradient.
-    reject("smoothingRatio", smoothingRatio,
-      "h / spacing must lie in (1, 4]: at 1 or less a particle has no neighbour within h");
-  }
-  if (solverIterations < 1 || solverIterations > 1000)
-  {
-    reject("solverIterations", solverIterations, "must lie in [1, 1000]");
-  }
-  requireNonNegative("densityErrorTolerance", densityErrorTolerance);
-  requireNonNegative("maxDensityErrorTolerance", maxDensityErrorTolerance);
-  requirePositive("relaxation", relaxation);
-  requireNonNegative("chebyshevRho", chebyshevRho);
-  if (chebyshevRho >= 1.0)
-  {
-    // At 1 the weights approach 2 and no pattern shrinks: the projections never converge.
-    reject("chebyshevRho", chebyshevRho,
-      "must lie in [0, 1) (the spectral radius estimate of a Jacobi projection; 0: plain Jacobi)");
-  }
-  requireNonNegative("sCorrK", sCorrK);
-  requirePositive("sCorrN", sCorrN);
-  if (sCorrN > 16.0)
-  {
-    // Beyond that, float rounding of W / W(delta_q) near 1 is raised to inf (and 0 x inf = NaN
-    // for coincident particles).
-    reject("sCorrN", sCorrN, "must lie in (0, 16] (paper: 4)");
-  }
-  requireFinite("sCorrDeltaQ", sCorrDeltaQ);
-  if (sCorrDeltaQ <= 0.0 || sCorrDeltaQ >= 1.0)
-  {
-    reject("sCorrDeltaQ", sCorrDeltaQ, "must lie in (0, 1) (a fraction of h)");
-  }
-  requireNonNegative("xsphViscosity", xsphViscosity);
-  if (xsphViscosity > 1.0)
-  {
-    reject("xsphViscosity", xsphViscosity,
-      "must lie in [0, 1] (the artificial viscosity alpha of nu = alpha h v_scene)");
-  }
-  requireNonNegative("xsphHyperViscosity", xsphHyperViscosity);
-  if (xsphHyperViscosity > 1.0)
-  {
-    reject("xsphHyperViscosity", xsphHyperViscosity,
-      "must lie in [0, 1] (alpha_4 of nu_4 = alpha_4 h v_scene)");
-  }
-  requireNonNegative("wallFriction", wallFriction);
-  if (wallFriction > 1.0)
-  {
-    reject("wallFriction", wallFriction, "must lie in [0, 1] (0 free-slip, 1 no-slip)");
-  }
+  // The user-facing parameters, each against its row's range (ParameterTable.h).
+  validateTableParameters(*this);
   requireNonNegative("sceneSpeedHint", sceneSpeedHint);
-  requireNonNegative("vorticityEpsilon", vorticityEpsilon);
-  requireFinite("gravity.x", gravity.x);
-  requireFinite("gravity.y", gravity.y);
-  requireFinite("gravity.z", gravity.z);
-  requirePositive("timeStep", timeStep);
   if (timeStepping != TimeStepping::Fixed && timeStepping != TimeStepping::Automatic)
   {
     reject("timeStepping", static_cast<double>(timeStepping), "must be Fixed (0) or Automatic (1)");
-  }
-  requireFinite("cflNumber", cflNumber);
-  if (cflNumber <= 0.0 || cflNumber > 1.0)
-  {
-    reject("cflNumber", cflNumber,
-      "must lie in (0, 1]: a particle may move at most that fraction of a spacing per step");
   }
   const char* axis[3] = { "x", "y", "z" };
   const double lo[3] = { domain.min.x, domain.min.y, domain.min.z };
@@ -286,21 +215,27 @@ void validatePrecision(const Parameters& p)
     std::pow(kernels.poly6(0.0) / wDeltaQ, p.sCorrN), true);
   requireFits<Real>("sCorrK", p.sCorrK, "k g0 over the tensile term's surface push",
     p.sCorrK * kStandardGravity / lattice.tensileSurfacePush, true);
-  requireFits<Real>("xsphViscosity", p.xsphViscosity, "xsphViscosity", p.xsphViscosity, true);
-  requireFits<Real>("xsphHyperViscosity", p.xsphHyperViscosity, "xsphHyperViscosity",
-    p.xsphHyperViscosity, true);
-  requireFits<Real>("vorticityEpsilon", p.vorticityEpsilon, "vorticityEpsilon",
-    p.vorticityEpsilon, true);
-  requireFits<Real>("timeStep", p.timeStep, "timeStep", p.timeStep);
+  // Every real parameter reaches the kernels as a Real (ParameterTable.h).
+  for (const ParameterSpec& spec : parameterTable())
+  {
+    if (spec.type == ParameterType::Real || spec.type == ParameterType::Vector)
+    {
+      for (int c = 0; c < spec.components(); ++c)
+      {
+        const std::string name = std::string(spec.field) +
+          (spec.type == ParameterType::Vector ? std::string(".") + "xyz"[c] : std::string());
+        const double value = spec.get(p, c);
+        requireFits<Real>(name, value, spec.field, value, true);
+      }
+    }
+  }
   requireFits<Real>("timeStep", p.timeStep, "1 / timeStep", 1.0 / p.timeStep);
   const char* axis[3] = { "x", "y", "z" };
-  const double g[3] = { p.gravity.x, p.gravity.y, p.gravity.z };
   const double lo[3] = { p.domain.min.x, p.domain.min.y, p.domain.min.z };
   const double hi[3] = { p.domain.max.x, p.domain.max.y, p.domain.max.z };
   double farthest = 0.0;
   for (int a = 0; a < 3; ++a)
   {
-    requireFits<Real>(std::string("gravity.") + axis[a], g[a], "gravity", g[a], true);
     requireFits<Real>(std::string("domain.min.") + axis[a], lo[a], "the coordinate", lo[a], true);
     requireFits<Real>(std::string("domain.max.") + axis[a], hi[a], "the coordinate", hi[a], true);
     farthest = std::max(farthest, std::max(std::abs(lo[a]), std::abs(hi[a])));
@@ -370,22 +305,20 @@ LatticeCalibration calibrateLattice(const Parameters& p)
 
 std::string describe(const Parameters& p)
 {
+  // Every row of the table by its field name, then what the run derives from them.
   std::ostringstream out;
-  out << "rho0=" << p.restDensity << " s=" << p.particleSpacing << " h=" << p.smoothingLength()
-      << " m=" << calibratedParticleMass(p) << " iterations=" << p.solverIterations
-      << (p.densityErrorTolerance > 0 ? " (adaptive to " + std::to_string(p.densityErrorTolerance) +
-                 "% mean, " + std::to_string(p.maxDensityErrorTolerance) + "% max)"
-                                       : "")
-      << (p.chebyshevRho > 0 ? " chebyshevRho=" + std::to_string(p.chebyshevRho) : "")
-      << " epsilon=" << p.relaxation << " k=" << p.sCorrK << " n=" << p.sCorrN
-      << " dq=" << p.sCorrDeltaQ << " xsph=" << p.xsphViscosity << " (nu " << p.xsphNu() << ")"
-      << (p.xsphHyperViscosity > 0 ? " xsphHyper=" + std::to_string(p.xsphHyperViscosity) : "")
-      << " vorticity=" << p.vorticityEpsilon
-      << (p.wallFriction > 0 ? " wallFriction=" + std::to_string(p.wallFriction) : "")
-      << (p.timeStepping == TimeStepping::Automatic
-             ? " dt=auto (CFL " + std::to_string(p.cflNumber) + ", at most " +
-               std::to_string(p.timeStep) + ")"
-             : " dt=" + std::to_string(p.timeStep));
+  for (const ParameterSpec& spec : parameterTable())
+  {
+    out << spec.field << "=";
+    for (int c = 0; c < spec.components(); ++c)
+    {
+      out << (c ? "," : "") << spec.get(p, c);
+    }
+    out << " ";
+  }
+  out << "h=" << p.smoothingLength() << " m=" << calibratedParticleMass(p)
+      << " xsphNu=" << p.xsphNu() << " dt="
+      << (p.timeStepping == TimeStepping::Automatic ? "automatic" : "fixed");
   return out.str();
 }
 

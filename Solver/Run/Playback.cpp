@@ -1,6 +1,7 @@
 #include "Playback.h"
 
 #include "Distributed/Communicator.h"
+#include "ParameterTable.h"
 
 #include <algorithm>
 #include <chrono>
@@ -31,18 +32,8 @@ const double NaN = std::numeric_limits<double>::quiet_NaN();
 
 bool sameParameters(const Parameters& a, const Parameters& b)
 {
-  return a.restDensity == b.restDensity && a.particleSpacing == b.particleSpacing &&
-    a.smoothingRatio == b.smoothingRatio && a.solverIterations == b.solverIterations &&
-    a.densityErrorTolerance == b.densityErrorTolerance &&
-    a.maxDensityErrorTolerance == b.maxDensityErrorTolerance && a.relaxation == b.relaxation &&
-    a.chebyshevRho == b.chebyshevRho &&
-    a.sCorrK == b.sCorrK && a.sCorrN == b.sCorrN && a.sCorrDeltaQ == b.sCorrDeltaQ &&
-    a.xsphViscosity == b.xsphViscosity && a.xsphHyperViscosity == b.xsphHyperViscosity &&
-    a.vorticityEpsilon == b.vorticityEpsilon &&
-    a.unilateral == b.unilateral && a.mirrorWalls == b.mirrorWalls &&
-    a.wallFriction == b.wallFriction && a.gravity.x == b.gravity.x &&
-    a.gravity.y == b.gravity.y && a.gravity.z == b.gravity.z && a.timeStep == b.timeStep &&
-    a.timeStepping == b.timeStepping && a.cflNumber == b.cflNumber &&
+  // The table's rows, then what the scene and the filter derive (ParameterTable.h).
+  return sameTableParameters(a, b) && a.timeStepping == b.timeStepping &&
     a.sceneSpeedHint == b.sceneSpeedHint && sameBox(a.domain, b.domain);
 }
 

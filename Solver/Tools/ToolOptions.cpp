@@ -1,5 +1,7 @@
 #include "ToolOptions.h"
 
+#include "ParameterTable.h"
+
 #include <cmath>
 #include <functional>
 #include <sstream>
@@ -31,87 +33,68 @@ double toNumber(const std::string& text)
 
 using Setter = std::function<void(ToolOptions&, const std::string&)>;
 
+// "--option value" for a row of the parameter table: a number (a whole one for a count, 0 or 1
+// for a switch), or x,y,z for a vector.
+Setter tableSetter(const ParameterSpec& spec)
+{
+  return [&spec](ToolOptions& o, const std::string& v) {
+    std::vector<double> values;
+    std::stringstream in(v);
+    for (std::string item; std::getline(in, item, ',');)
+    {
+      values.push_back(toNumber(item));
+    }
+    if (static_cast<int>(values.size()) != spec.components())
+    {
+      throw InvalidInput(spec.components() == 3 ? "must be three numbers x,y,z" : "not a number");
+    }
+    if (spec.type == ParameterType::Integer &&
+      (values[0] != std::floor(values[0]) || std::abs(values[0]) > 1e9))
+    {
+      // Converting beyond int is undefined.
+      throw InvalidInput("not a whole number in " + spec.valid.rule().substr(8));
+    }
+    for (int c = 0; c < spec.components(); ++c)
+    {
+      spec.set(o.parameters, c, values[static_cast<std::size_t>(c)]);
+    }
+  };
+}
+
 std::map<std::string, std::pair<std::string, Setter>> parameterSetters()
 {
-  auto real = [](double Parameters::*field) {
-    return [field](ToolOptions& o, const std::string& v) { o.parameters.*field = toNumber(v); };
-  };
-  return {
-    { "rest-density", { "rho_0 [kg/m^3]", real(&Parameters::restDensity) } },
-    { "spacing", { "particle spacing s [m]", real(&Parameters::particleSpacing) } },
-    { "smoothing-ratio", { "h / s", real(&Parameters::smoothingRatio) } },
-    { "iterations",
-      { "solver iterations",
-        [](ToolOptions& o, const std::string& v) {
-          const double n = toNumber(v);
-          if (n != std::floor(n) || std::abs(n) > 1e9) // converting beyond int is undefined
-          {
-            throw InvalidInput("not a whole number in [1, 1000]");
-          }
-          o.parameters.solverIterations = static_cast<int>(n);
-        } } },
-    { "epsilon", { "relaxation epsilon (bulk denominator units)", real(&Parameters::relaxation) } },
-    { "chebyshev",
-      { "Chebyshev acceleration of the projections: spectral radius estimate rho in [0, 1) "
-        "(0: plain Jacobi)",
-        real(&Parameters::chebyshevRho) } },
-    { "tolerance",
-      { "adaptive iterations: mean compression target [%] (0: fixed count)",
-        real(&Parameters::densityErrorTolerance) } },
-    { "max-tolerance",
-      { "adaptive iterations: largest compression allowed [%] (0: the mean alone decides)",
-        real(&Parameters::maxDensityErrorTolerance) } },
-    { "scorr-k", { "s_corr k in units of g0", real(&Parameters::sCorrK) } },
-    { "scorr-n", { "s_corr n", real(&Parameters::sCorrN) } },
-    { "scorr-dq", { "s_corr delta_q / h", real(&Parameters::sCorrDeltaQ) } },
-    { "xsph",
-      { "XSPH artificial viscosity alpha (nu = alpha h v_scene)",
-        real(&Parameters::xsphViscosity) } },
-    { "xsph-hyper",
-      { "XSPH's bi-Laplacian alpha_4 (nu_4 = alpha_4 h v_scene; 0: off)",
-        real(&Parameters::xsphHyperViscosity) } },
-    { "vorticity", { "vorticity epsilon [m/s]", real(&Parameters::vorticityEpsilon) } },
-    { "dt", { "time step [s]: every step's when fixed, the largest when automatic",
-              real(&Parameters::timeStep) } },
-    { "cfl", { "CFL number of the automatic time step", real(&Parameters::cflNumber) } },
-    { "time-stepping",
-      { "auto | fixed",
-        [](ToolOptions& o, const std::string& v) {
-          if (v != "auto" && v != "fixed")
-          {
-            throw InvalidInput("must be auto or fixed");
-          }
-          o.parameters.timeStepping = v == "auto" ? TimeStepping::Automatic : TimeStepping::Fixed;
-        } } },
-    { "unilateral",
-      { "0 or 1: clamp C_i at 0",
-        [](ToolOptions& o, const std::string& v) {
-          o.parameters.unilateral = toNumber(v) != 0.0;
-        } } },
-    { "walls",
-      { "0 or 1: walls mirror the fluid",
-        [](ToolOptions& o, const std::string& v) {
-          o.parameters.mirrorWalls = toNumber(v) != 0.0;
-        } } },
-    { "friction",
-      { "wall friction in [0, 1]: 0 free-slip, 1 no-slip",
-        [](ToolOptions& o, const std::string& v) { o.parameters.wallFriction = toNumber(v); } } },
-    { "scene",
-      { "preset name or .json path",
-        [](ToolOptions& o, const std::string& v) { o.scene = v; } } },
-    { "backend",
-      { "serial | openmp | cuda",
-        [](ToolOptions& o, const std::string& v) { o.backend = parseBackend(v); } } },
-    { "precision",
-      { "single | double",
-        [](ToolOptions& o, const std::string& v) {
-          if (v != "single" && v != "double")
-          {
-            throw InvalidInput("--precision = \"" + v + "\": must be single or double");
-          }
-          o.precision = v == "single" ? Precision::Single : Precision::Double;
-        } } },
-  };
+  std::map<std::string, std::pair<std::string, Setter>> setters;
+  for (const ParameterSpec& spec : parameterTable())
+  {
+    std::string help = spec.label;
+    if (spec.unit[0] != '\0')
+    {
+      help += std::string(" [") + spec.unit + "]";
+    }
+    help += std::string(" (") + spec.field + "; " + spec.valid.rule() + ")";
+    setters[spec.option] = { help, tableSetter(spec) };
+  }
+  setters["time-stepping"] = { "auto | fixed", [](ToolOptions& o, const std::string& v) {
+                                if (v != "auto" && v != "fixed")
+                                {
+                                  throw InvalidInput("must be auto or fixed");
+                                }
+                                o.parameters.timeStepping =
+                                  v == "auto" ? TimeStepping::Automatic : TimeStepping::Fixed;
+                              } };
+  setters["scene"] = { "preset name or .json path",
+    [](ToolOptions& o, const std::string& v) { o.scene = v; } };
+  setters["backend"] = { "serial | openmp | cuda",
+    [](ToolOptions& o, const std::string& v) { o.backend = parseBackend(v); } };
+  setters["precision"] = { "single | double", [](ToolOptions& o, const std::string& v) {
+                            if (v != "single" && v != "double")
+                            {
+                              throw InvalidInput(
+                                "--precision = \"" + v + "\": must be single or double");
+                            }
+                            o.precision = v == "single" ? Precision::Single : Precision::Double;
+                          } };
+  return setters;
 }
 
 } // namespace

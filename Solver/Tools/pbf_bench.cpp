@@ -381,10 +381,8 @@ int main(int argc, char** argv)
       throw InvalidInput("--steps must be >= 1 and --warmup >= 0");
     }
 
-    std::printf("pbf_bench: dam break widened to N particles, spacing %g m, %d solver iterations, "
-                "XSPH alpha %g, vorticity %g, %d warm-up + %d timed steps\n",
-      options.parameters.particleSpacing, options.parameters.solverIterations,
-      options.parameters.xsphViscosity, options.parameters.vorticityEpsilon, warmup, steps);
+    std::printf("pbf_bench: dam break widened to N particles, %d warm-up + %d timed steps; %s\n",
+      warmup, steps, describe(options.parameters).c_str());
     std::printf("%-7s %-6s %-5s %10s %6s %10s %10s %10s %9s %7s %8s %8s %7s %6s\n", "backend",
       "prec", "nbrs", "particles", "steps", "median_ms", "p10_ms", "p90_ms", "steps/s",
       "nbrs", "avgErr%", "maxErr%", "B/part", "builds");

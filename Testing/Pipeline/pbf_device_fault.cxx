@@ -115,7 +115,7 @@ int main(int argc, char* argv[])
     vtkNew<vtkPBFSimulation> probe;
     vtkNew<MessageLog> quiet;
     probe->AddObserver(vtkCommand::ErrorEvent, quiet);
-    probe->SetParticleSpacing(0.1);
+    probe->SetParameter("ParticleSpacing", 0.1);
     probe->SetBackend(vtkPBFSimulation::BACKEND_CUDA);
     if (!probe->UpdateTimeStep(0.0))
     {
@@ -147,7 +147,7 @@ int main(int argc, char* argv[])
   simulation->AddObserver(vtkCommand::ErrorEvent, log);
   simulation->AddObserver(vtkCommand::WarningEvent, log);
   simulation->SetPreset(vtkPBFSimulation::PRESET_DAM_BREAK);
-  simulation->SetParticleSpacing(0.04);
+  simulation->SetParameter("ParticleSpacing", 0.04);
   simulation->SetSubstepsPerFrame(4);
   simulation->SetCheckpointInterval(2);
   simulation->SetNumberOfFrames(20);

@@ -248,7 +248,7 @@ int main(int argc, char* argv[])
 
   vtkNew<vtkPBFSimulation> simulation;
   simulation->SetSceneFile(scene.c_str());
-  simulation->SetParticleSpacing(o.spacing);
+  simulation->SetParameter("ParticleSpacing", o.spacing);
   simulation->SetSubstepsPerFrame(o.substeps);
   simulation->SetNumberOfFrames(o.frames + o.comparePageable + 1);
   simulation->SetCheckpointInterval(o.checkpointInterval);

@@ -1,4 +1,6 @@
-// Bad parameters are rejected with a message naming the field and the value.
+// Bad parameters are rejected with a message naming the field and the value; the parameter
+// table's rows are consistent.
+#include "ParameterTable.h"
 #include "Parameters.h"
 
 #include <gtest/gtest.h>
@@ -6,9 +8,16 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <set>
+#include <string>
 
+using pbf::findParameter;
 using pbf::InvalidInput;
+using pbf::ParameterSpec;
+using pbf::ParameterType;
 using pbf::Parameters;
+using pbf::parameterTable;
+using pbf::sameTableParameters;
 
 namespace
 {
@@ -73,4 +82,53 @@ TEST(Parameters, CalibratedMassMakesTheLatticeReadRestDensity)
   const double calibrated = pbf::calibratedParticleMass(p);
   EXPECT_LT(calibrated, naive);
   EXPECT_GT(calibrated, 0.95 * naive);
+}
+
+TEST(ParameterTable, RowsAreUniqueTheirDefaultsValidAndTheirSlidersInRange)
+{
+  // Every name a row gives is used by one row only (a property, a field-data array and an
+  // option each name one parameter); the default and both slider ends lie in the valid range,
+  // so the GUI never offers a value the solver refuses; get and set address the same member.
+  std::set<std::string> fields, properties, options;
+  for (const ParameterSpec& spec : parameterTable())
+  {
+    EXPECT_TRUE(fields.insert(spec.field).second) << spec.field;
+    EXPECT_TRUE(properties.insert(spec.property).second) << spec.property;
+    EXPECT_TRUE(options.insert(spec.option).second) << spec.option;
+    EXPECT_EQ(findParameter(spec.field), &spec);
+    EXPECT_EQ(findParameter(spec.property), &spec);
+    EXPECT_GT(std::string(spec.help).size(), 20u) << spec.property;
+    for (int c = 0; c < spec.components(); ++c)
+    {
+      EXPECT_TRUE(spec.valid.contains(spec.defaultValue(c))) << spec.property;
+      EXPECT_TRUE(spec.valid.contains(spec.sliderMin)) << spec.property << " " << spec.sliderMin;
+      EXPECT_TRUE(spec.valid.contains(spec.sliderMax)) << spec.property << " " << spec.sliderMax;
+      Parameters p;
+      const double other = spec.type == ParameterType::Boolean
+        ? 1.0 - spec.defaultValue(c)
+        : spec.sliderMin + 0.25 * (spec.sliderMax - spec.sliderMin);
+      spec.set(p, c, other);
+      EXPECT_EQ(spec.get(p, c), spec.type == ParameterType::Integer ? std::trunc(other) : other)
+        << spec.property;
+      EXPECT_FALSE(sameTableParameters(p, Parameters())) << spec.property;
+    }
+  }
+  EXPECT_EQ(findParameter("noSuchParameter"), nullptr);
+}
+
+TEST(ParameterTable, AValueOutsideItsRangeNamesTheFieldTheValueAndTheRange)
+{
+  Parameters p;
+  p.smoothingRatio = 1.0;
+  try
+  {
+    p.validate();
+    FAIL() << "smoothingRatio = 1 was accepted";
+  }
+  catch (const InvalidInput& error)
+  {
+    EXPECT_EQ(std::string(error.what()),
+      "smoothingRatio = 1: must lie in (1, 4] (h / spacing at 1 or less leaves a particle no "
+      "neighbour within h)");
+  }
 }
