@@ -57,26 +57,21 @@ inline void check(cudaError_t error, const char* what)
 }
 
 // Launch shapes per stage: the neighbour passes take their block size from Options::block (128 by
-// default; 64, 128 and 256 measured the same on the H200), the others run 128 threads a block.
-// A launch bound of 256 made ptxas cap the correction pass at 48 registers and spill.
+// default; 64, 128 and 256 run alike), the others run 128 threads a block.
 //
 // minBlocks: blocks of kMaxBlock threads that each multiprocessor must hold, which caps the
-// registers a thread (65536 / (minBlocks * 128), rounded down to 8). The caps below bind in
-// double precision (and the density pass's in single, see there), where ptxas otherwise took 78 (density), 98 (correction), 74 (vorticity) and
-// 72 (confinement) registers, and the correction pass ran at 4 blocks. Measured at 1M particles
-// on the H200 (Utilities/gpu/probe.sh variants, one session): 5.09 -> 4.54 ms a step in double, single
-// unchanged (2.858 / 2.851 ms: its kernels take 45-55 registers, under every cap). A cap of 7
-// blocks for the correction pass (72 registers, 164 bytes of spills) gave 4.77 ms, 8 for the
-// others 4.79; in single precision 12 blocks (40 registers) gained nothing (Documentation/Performance.md).
+// registers a thread (65536 / (minBlocks * 128), rounded down to 8). The caps bind in double
+// precision, where the passes otherwise take 72-98 registers and run at 4 blocks; single
+// precision's kernels stay under every cap. Each cap is the fastest without spills that matter
+// (Documentation/Performance.md, "Why the kernels are built this way").
 template <class Stage>
 struct Launch
 {
   static constexpr bool neighborPass = false;
   static constexpr int minBlocks = 1;
 };
-// In single precision the density pass took 48 registers (10 blocks) until the moving solids'
-// rotation (Boundary.h), seldom taken, made ptxas allocate 56 (9 blocks, 1 % of a step without any
-// solid); the cap keeps it at 48.
+// The moving solids' rotation (Boundary.h), seldom taken, would make ptxas give the density pass
+// 56 registers in single precision (9 blocks instead of 10); the cap keeps it at 48.
 template <class Real>
 struct Launch<DensityStage<Real>>
 {
@@ -89,13 +84,9 @@ struct Launch<CorrectionStage>
   static constexpr bool neighborPass = true;
   static constexpr int minBlocks = 6; // <= 80 registers (88 bytes of spills in double)
 };
-// With wall friction the pass also walks each near-wall neighbour's images. In double precision
-// ptxas then spilled 492 bytes of stores and 1,048 of loads under the cap of 7 blocks (72
-// registers), and none under 5 (96). Measured at 1M particles on an H100
-// (Documentation/Performance.md, "What wall friction costs"): 5 blocks took the
-// double-precision step with friction from 4.36 to 4.01 ms and left single precision with
-// friction unchanged. Without friction the cap stays at 7: there 5 blocks cost double
-// precision 0.15 %.
+// With wall friction the pass also walks each near-wall neighbour's images, and in double
+// precision spills under 7 blocks (72 registers) but not under 5 (96); without friction 7 is
+// faster.
 template <bool Friction>
 struct Launch<VorticityStage<Friction>>
 {

@@ -1,5 +1,5 @@
 // The pieces of the surface extraction that the CPU (SurfaceExtraction.cpp) and the GPU
-// (Cuda/DeviceSurface.cu) share: the sampling grid and its blocks, the colour function at a node,
+// (Cuda/CudaSurface.cu) share: the sampling grid and its blocks, the colour function at a node,
 // the cut of a cell into triangles, and the fields at a vertex. Written once, and compiled on the
 // GPU without fused multiply-adds, so that both give the same mesh bit for bit.
 //

@@ -25,8 +25,8 @@ struct ToolOptions
 };
 
 // The kernel benchmarks and soaks time a step of the paper's fixed 4 projections (comparable
-// across sessions and with the speed targets), not the adaptive default, unless --iterations or
-// --tolerance was given.
+// from one measurement to the next and with the speed targets), not the adaptive default, unless
+// --iterations or --tolerance was given.
 void usePaperIterationsUnlessGiven(ToolOptions& options);
 
 // Parses argv; keys not in `toolKeys` nor a Parameters field throw InvalidInput naming them.
