@@ -31,11 +31,11 @@ constexpr ValidRange boolean{ 0, 1, false, false };
       (c == 0 ? p.member.x : (c == 1 ? p.member.y : p.member.z)) = value;                      \
     }
 
-std::vector<ParameterSpec> makeTable()
+using T = ParameterType;
+
+std::vector<ParameterSpec> fluidRows()
 {
-  using T = ParameterType;
   return {
-    // Fluid
     { "restDensity", "RestDensity", "rest-density", "Rest Density", "Fluid", "kg/m^3", T::Real,
       positive, 1.0, 100000.0, false, nullptr, "",
       "Rest density rho_0 of the fluid [kg/m^3]; 1000 is water. The particle mass is calibrated "
@@ -52,7 +52,13 @@ std::vector<ParameterSpec> makeTable()
       "Ratio h / s of the kernel support radius h (poly6 and spiky) to the particle spacing. 2 "
       "gives about 30 neighbours.",
       PBF_SCALAR(smoothingRatio) },
-    // Solver
+  };
+}
+
+// The projections and what acts on the fluid besides them.
+std::vector<ParameterSpec> solverRows()
+{
+  return {
     { "solverIterations", "SolverIterations", "iterations", "Solver Iterations", "Solver", "",
       T::Integer, { 1, 1000, false, false }, 1, 200, false, nullptr, "",
       "With Adaptive Iterations on (the default), the most density constraint projections a "
@@ -158,8 +164,14 @@ std::vector<ParameterSpec> makeTable()
       100.0, false, nullptr, "",
       "Gravitational acceleration [m/s^2]; the shipped scenes have their floor at y = 0.",
       PBF_VECTOR(gravity) },
-    // Time (the filter's Frame Interval, Time Stepping and Substeps Per Frame decide which of
-    // these a run uses)
+  };
+}
+
+// The automatic step's bounds; the filter's Frame Interval, Time Stepping and Substeps Per Frame
+// decide which of these a run uses.
+std::vector<ParameterSpec> timeRows()
+{
+  return {
     { "cflNumber", "CFLNumber", "cfl", "CFL Number", "Time", "", T::Real, { 0, 1, true, false },
       0.05, 1.0, false, "visibility TimeStepping 1",
       "a particle may move at most that fraction of a spacing per step",
@@ -171,6 +183,18 @@ std::vector<ParameterSpec> makeTable()
       "With automatic time stepping: the largest solver step [s] (1/240 by default).",
       PBF_SCALAR(timeStep) },
   };
+}
+
+// The groups in the GUI's order.
+std::vector<ParameterSpec> makeTable()
+{
+  std::vector<ParameterSpec> table;
+  for (auto rows : { fluidRows, solverRows, timeRows })
+  {
+    const std::vector<ParameterSpec> group = rows();
+    table.insert(table.end(), group.begin(), group.end());
+  }
+  return table;
 }
 
 #undef PBF_SCALAR
