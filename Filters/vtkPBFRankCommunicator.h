@@ -1,9 +1,9 @@
-// The solver's Communicator (Solver/Distributed/Communicator.h) over ParaView's parallel engine:
+// The solver's Communicator (Solver/Stepper/Communicator.h) over ParaView's parallel engine:
 // the ranks of `mpiexec -n N pvbatch` or of a pvserver, through their vtkMultiProcessController.
 #ifndef vtkPBFRankCommunicator_h
 #define vtkPBFRankCommunicator_h
 
-#include "Distributed/Communicator.h"
+#include "Communicator.h"
 
 #include <memory>
 

@@ -38,9 +38,9 @@ vtkStandardNewMacro(vtkPBFSimulation);
 
 //------------------------------------------------------------------------------
 vtkPBFSimulation::vtkPBFSimulation()
-  : Internals(new vtkInternals)
+  : Internals(new vtkPBFSimulationInternals)
 {
-  // The physics parameters live in the internals (vtkInternals::Physics) with the solver's
+  // The physics parameters live in the internals (vtkPBFSimulationInternals::Physics) with the solver's
   // defaults, so the two cannot drift.
   const pbf::Parameters defaults;
   this->Preset = PRESET_DAM_BREAK;
@@ -156,12 +156,47 @@ int vtkPBFSimulation::FillOutputPortInformation(int port, vtkInformation* info)
 //------------------------------------------------------------------------------
 int vtkPBFSimulation::FrameForTime(double time) const
 {
-  if (!std::isfinite(time) || time <= 0.0 || !this->InvalidTimeProperty().empty())
+  return this->Settings().FrameForTime(time);
+}
+
+//------------------------------------------------------------------------------
+vtkPBFSettings vtkPBFSimulation::Settings() const
+{
+  // GetNumberOfOutputPorts is not const in VTK; nothing here changes the algorithm.
+  auto* self = const_cast<vtkPBFSimulation*>(this);
+  vtkPBFSettings s;
+  s.Owner = self;
+  s.SceneFile = this->SceneFile ? this->SceneFile : "";
+  s.PresetName = this->GetPresetName();
+  s.OutputPorts = self->GetNumberOfOutputPorts();
+  s.FrameInterval = this->FrameInterval;
+  s.NumberOfFrames = this->NumberOfFrames;
+  s.SubstepsPerFrame = this->SubstepsPerFrame;
+  s.Automatic = this->TimeStepping == TIME_STEPPING_AUTOMATIC;
+  s.AdaptiveIterations = this->AdaptiveIterations;
+  s.Precision =
+    this->Precision == PRECISION_DOUBLE ? pbf::Precision::Double : pbf::Precision::Single;
+  switch (this->Backend)
   {
-    return 0;
+    case BACKEND_CUDA:
+      s.Backend = pbf::BackendRequest::CUDA;
+      break;
+    case BACKEND_OPENMP:
+      s.Backend = pbf::BackendRequest::OpenMP;
+      break;
+    case BACKEND_SERIAL:
+      s.Backend = pbf::BackendRequest::Serial;
+      break;
+    default:
+      s.Backend = pbf::BackendRequest::Auto;
   }
-  const double frame = std::round(time / this->FrameInterval);
-  return static_cast<int>(std::min(frame, static_cast<double>(this->NumberOfFrames)));
+  s.ObstacleThickness = this->ObstacleThickness;
+  s.DecomposeAcrossRanks = this->DecomposeAcrossRanks;
+  s.CheckpointInterval = this->CheckpointInterval;
+  s.CheckpointMemoryMB = this->CheckpointMemoryMB;
+  s.PageLockedOutput = this->PageLockedOutput;
+  s.InvalidTime = this->InvalidTimeProperty();
+  return s;
 }
 
 //------------------------------------------------------------------------------
@@ -243,10 +278,11 @@ int vtkPBFSimulation::RequestFrame(
 {
   vtkPolyData* output = vtkPolyData::GetData(outputVector, 0);
   vtkTable* table = vtkTable::GetData(outputVector, 1);
-  vtkInternals& internals = *this->Internals;
+  vtkPBFSimulationInternals& internals = *this->Internals;
   internals.Costs = pbf::FrameReached();
   internals.DeliveryMilliseconds = 0;
-  const FrameRequest r = internals.ParseRequest(this, request, outputVector);
+  const vtkPBFSettings settings = this->Settings();
+  const FrameRequest r = internals.ParseRequest(settings, request, outputVector);
   // Piece 0 holds the whole fluid outside a decomposed run (see the class documentation); after
   // an upstream abort the executive empties the outputs and marks them aborted.
   if ((r.Piece > 0 && !r.Decomposed) || this->GetAbortOutput())
@@ -268,7 +304,7 @@ int vtkPBFSimulation::RequestFrame(
   pbf::Playback& playback = internals.Playback;
   try
   {
-    internals.Adopt(this, internals.MakeKey(this, input, obstacles, r));
+    internals.Adopt(settings, internals.MakeKey(settings, input, obstacles, r));
     internals.UpdateObstacleMotion(obstacles.size());
     if (internals.LastFrame == r.Frame)
     {
@@ -282,7 +318,7 @@ int vtkPBFSimulation::RequestFrame(
       try
       {
         const pbf::FrameReached reached = playback.reach(
-          r.Frame, [&]() { return internals.Build(this, playback.key(), input, obstacles); },
+          r.Frame, [&]() { return internals.Build(settings, playback.key(), input, obstacles); },
           [this](double fraction) {
             this->UpdateProgress(fraction);
             // AbortExecute stays set, as VTK has it: whoever set it clears it.
@@ -291,16 +327,16 @@ int vtkPBFSimulation::RequestFrame(
         internals.Costs = reached;
         if (reached.aborted)
         {
-          internals.ReportAbort(this, r);
+          internals.ReportAbort(settings, r);
           internals.DeliverPrevious(output, table);
           return 1;
         }
-        internals.Deliver(this, r, reached, output, table);
+        internals.Deliver(settings, r, reached, output, table);
         return 1;
       }
       catch (const pbf::DeviceFault& fault)
       {
-        internals.OnDeviceFault(this, fault, r.Frame);
+        internals.OnDeviceFault(settings, fault, r.Frame);
       }
     }
   }
@@ -310,7 +346,7 @@ int vtkPBFSimulation::RequestFrame(
   }
   catch (const std::exception& error)
   {
-    vtkErrorMacro(<< internals.InUserTerms(this, error));
+    vtkErrorMacro(<< internals.InUserTerms(settings, error));
   }
   // A failed request may have stopped a simulation half way through a step: never step on from
   // it. Checkpoints and rows are of whole frames and stay.
@@ -323,7 +359,7 @@ int vtkPBFSimulation::RequestFrame(
 //------------------------------------------------------------------------------
 void vtkPBFSimulation::RequestDomain(vtkInformationVector* outputVector)
 {
-  vtkInternals& internals = *this->Internals;
+  vtkPBFSimulationInternals& internals = *this->Internals;
   vtkPolyData* domain = vtkPolyData::GetData(outputVector, 2);
   vtkPolyData* particles = vtkPolyData::GetData(outputVector, 0);
   const pbf::Simulation* live = internals.Playback.live();

@@ -81,6 +81,9 @@
 #include <memory> // For std::unique_ptr
 #include <string> // For std::string
 
+class vtkPBFSimulationInternals;
+struct vtkPBFSettings;
+
 class PBFFILTERS_EXPORT vtkPBFSimulation : public vtkPolyDataAlgorithm
 {
 public:
@@ -352,10 +355,12 @@ private:
   vtkPBFSimulation(const vtkPBFSimulation&) = delete;
   void operator=(const vtkPBFSimulation&) = delete;
 
+  // What the internals need of this algorithm's properties, made at each request.
+  vtkPBFSettings Settings() const;
+
   // The live simulation, its checkpoints and diagnostics and the last good output; solver types
   // stay in the .cxx.
-  class vtkInternals;
-  std::unique_ptr<vtkInternals> Internals;
+  std::unique_ptr<vtkPBFSimulationInternals> Internals;
 };
 
 #endif

@@ -12,6 +12,7 @@
 #include "vtkInformationVector.h"
 #include "vtkMultiProcessController.h"
 #include "vtkNew.h"
+#include "vtkObject.h"
 #include "vtkOutputWindow.h"
 #include "vtkPointData.h"
 #include "vtkPoints.h"
@@ -30,6 +31,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <iterator>
@@ -56,23 +58,34 @@ double Milliseconds(std::chrono::steady_clock::time_point since)
 } // namespace
 
 //------------------------------------------------------------------------------
-FrameRequest vtkPBFSimulation::vtkInternals::ParseRequest(
-  vtkPBFSimulation* self, vtkInformation* request, vtkInformationVector* outputVector) const
+int vtkPBFSettings::FrameForTime(double time) const
+{
+  if (!std::isfinite(time) || time <= 0.0 || !this->InvalidTime.empty())
+  {
+    return 0;
+  }
+  const double frame = std::round(time / this->FrameInterval);
+  return static_cast<int>(std::min(frame, static_cast<double>(this->NumberOfFrames)));
+}
+
+//------------------------------------------------------------------------------
+FrameRequest vtkPBFSimulationInternals::ParseRequest(
+  const vtkPBFSettings& settings, vtkInformation* request, vtkInformationVector* outputVector) const
 {
   // The request may come through any port; all carry the same time.
   int port = request->Has(vtkDemandDrivenPipeline::FROM_OUTPUT_PORT())
     ? request->Get(vtkDemandDrivenPipeline::FROM_OUTPUT_PORT())
     : 0;
-  if (port < 0 || port >= self->GetNumberOfOutputPorts())
+  if (port < 0 || port >= settings.OutputPorts)
   {
     port = 0;
   }
   vtkInformation* info = outputVector->GetInformationObject(port);
   FrameRequest r;
-  r.Frame = self->FrameForTime(info->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
+  r.Frame = settings.FrameForTime(info->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
       ? info->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
       : 0.0);
-  r.Time = static_cast<double>(r.Frame) * self->FrameInterval;
+  r.Time = static_cast<double>(r.Frame) * settings.FrameInterval;
   if (info->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()))
   {
     r.Piece = info->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER());
@@ -85,23 +98,23 @@ FrameRequest vtkPBFSimulation::vtkInternals::ParseRequest(
   // rank takes part in every request. Any other split (streaming pieces in one process) gets the
   // whole fluid on piece 0.
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
-  r.Decomposed = self->DecomposeAcrossRanks && r.Pieces > 1 && controller &&
+  r.Decomposed = settings.DecomposeAcrossRanks && r.Pieces > 1 && controller &&
     controller->GetNumberOfProcesses() == r.Pieces && controller->GetLocalProcessId() == r.Piece;
   return r;
 }
 
 //------------------------------------------------------------------------------
-pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
+pbf::PlaybackKey vtkPBFSimulationInternals::MakeKey(const vtkPBFSettings& settings,
   vtkPointSet* input, const std::vector<vtkDataSet*>& obstacles, const FrameRequest& r)
 {
-  const std::string invalidTime = self->InvalidTimeProperty();
+  const std::string invalidTime = settings.InvalidTime;
   if (!invalidTime.empty())
   {
     throw pbf::InvalidInput(invalidTime);
   }
   pbf::PlaybackKey key;
-  const std::string sceneFile = self->SceneFile ? self->SceneFile : "";
-  key.scene = sceneFile.empty() ? std::string("preset ") + self->GetPresetName()
+  const std::string& sceneFile = settings.SceneFile;
+  key.scene = sceneFile.empty() ? std::string("preset ") + settings.PresetName
                                 : "file " + sceneFile + "\n" + ReadWholeFile(sceneFile);
   // The scene is parsed for its mesh files only when its path or text changed, not at every
   // request; the files themselves are looked at every time (an STL rewritten in place).
@@ -114,38 +127,37 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
   // The table's parameters as set; the filter's own properties decide what a run uses of them.
   pbf::Parameters& p = key.parameters;
   p = this->Physics;
-  if (!self->AdaptiveIterations)
+  if (!settings.AdaptiveIterations)
   {
     p.densityErrorTolerance = 0.0;
   }
   // Fixed: SubstepsPerFrame equal steps per frame. Automatic: steps chosen from the state, at
   // most MaxTimeStep, landing on every frame; SubstepsPerFrame then changes nothing.
-  const bool automatic = self->TimeStepping == TIME_STEPPING_AUTOMATIC;
+  const bool automatic = settings.Automatic;
   p.timeStepping = automatic ? pbf::TimeStepping::Automatic : pbf::TimeStepping::Fixed;
   if (!automatic)
   {
-    p.timeStep = self->FrameInterval / self->SubstepsPerFrame;
+    p.timeStep = settings.FrameInterval / settings.SubstepsPerFrame;
     p.cflNumber = pbf::Parameters().cflNumber;
   }
-  key.frameInterval = self->FrameInterval;
-  key.substeps = automatic ? 0 : self->SubstepsPerFrame;
-  key.precision =
-    self->Precision == PRECISION_DOUBLE ? pbf::Precision::Double : pbf::Precision::Single;
+  key.frameInterval = settings.FrameInterval;
+  key.substeps = automatic ? 0 : settings.SubstepsPerFrame;
+  key.precision = settings.Precision;
   key.hasInput = input != nullptr;
   key.inputVersion = input ? input->GetMTime() : 0;
   // The obstacles as read at this frame's time: a rigid motion since they were first seen
   // extends their motion; a new obstacle, a new shape, a change of the motion before its end or
   // another thickness is another run; none: empty.
   const std::string warning =
-    this->ObstacleMotion.Observe(obstacles, r.Frame * self->FrameInterval);
+    this->ObstacleMotion.Observe(obstacles, r.Frame * settings.FrameInterval);
   if (!warning.empty() && (!r.Decomposed || r.Piece == 0))
   {
-    vtkWarningWithObjectMacro(self, << warning);
+    vtkWarningWithObjectMacro(settings.Owner, << warning);
   }
   if (!obstacles.empty())
   {
     std::ostringstream solids;
-    solids << obstacles.size() << " thickness " << self->ObstacleThickness
+    solids << obstacles.size() << " thickness " << settings.ObstacleThickness
            << this->ObstacleMotion.Key();
     key.obstacles = solids.str();
   }
@@ -164,16 +176,14 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
   }
   this->Playback.setRanks(ranks);
   key.ranks = r.Decomposed ? r.Pieces : 1;
-  const pbf::BackendRequest requested[] = { pbf::BackendRequest::Auto, pbf::BackendRequest::CUDA,
-    pbf::BackendRequest::OpenMP, pbf::BackendRequest::Serial };
   const pbf::BackendChoice choice =
-    pbf::chooseBackend(requested[self->Backend], this->HasCuda(), this->CudaAbsence, ranks);
+    pbf::chooseBackend(settings.Backend, this->HasCuda(), this->CudaAbsence, ranks);
   key.backend = choice.backend;
   if (!choice.noCuda.empty() && !this->FallbackReported)
   {
     this->FallbackReported = true;
     std::ostringstream text;
-    text << self->GetClassName() << " (" << self << "): Backend Auto: no CUDA (" << choice.noCuda
+    text << settings.Owner->GetClassName() << " (" << settings.Owner << "): Backend Auto: no CUDA (" << choice.noCuda
          << "); falling back to CPU (OpenMP).\n";
     vtkOutputWindowDisplayText(text.str().c_str());
   }
@@ -181,24 +191,24 @@ pbf::PlaybackKey vtkPBFSimulation::vtkInternals::MakeKey(vtkPBFSimulation* self,
 }
 
 //------------------------------------------------------------------------------
-void vtkPBFSimulation::vtkInternals::Adopt(vtkPBFSimulation* self, const pbf::PlaybackKey& key)
+void vtkPBFSimulationInternals::Adopt(const vtkPBFSettings& settings, const pbf::PlaybackKey& key)
 {
   if (this->Playback.adopt(key) && !this->Playback.deviceFaulted())
   {
     this->LastFrame = -1; // another run: nothing delivered belongs to it
     this->DeviceFaultText.clear();
   }
-  this->Playback.configureCheckpoints(self->CheckpointInterval,
-    static_cast<std::size_t>(std::min(self->CheckpointMemoryMB * 1048576.0, 1e18)));
+  this->Playback.configureCheckpoints(settings.CheckpointInterval,
+    static_cast<std::size_t>(std::min(settings.CheckpointMemoryMB * 1048576.0, 1e18)));
 }
 
 //------------------------------------------------------------------------------
-std::unique_ptr<pbf::Simulation> vtkPBFSimulation::vtkInternals::Build(vtkPBFSimulation* self,
+std::unique_ptr<pbf::Simulation> vtkPBFSimulationInternals::Build(const vtkPBFSettings& settings,
   const pbf::PlaybackKey& key, vtkPointSet* input, const std::vector<vtkDataSet*>& obstacles)
 {
-  const std::string sceneFile = self->SceneFile ? self->SceneFile : "";
+  const std::string& sceneFile = settings.SceneFile;
   pbf::Scene scene =
-    sceneFile.empty() ? pbf::presetScene(self->GetPresetName()) : pbf::loadSceneFile(sceneFile);
+    sceneFile.empty() ? pbf::presetScene(settings.PresetName) : pbf::loadSceneFile(sceneFile);
   vtkPBFReadMeshFiles(scene);
   // The Obstacles port's solids join the scene's own, named as the user can find them.
   for (std::size_t c = 0; c < obstacles.size(); ++c)
@@ -208,7 +218,7 @@ std::unique_ptr<pbf::Simulation> vtkPBFSimulation::vtkInternals::Build(vtkPBFSim
       (obstacles[c] ? obstacles[c]->GetClassName() : "no data") + ")";
     // The shape first seen, moved as it has been seen to move (vtkPBFObstacleMotion.h).
     vtkDataSet* shape = c < obstacles.size() && obstacles[c] ? this->ObstacleMotion.Reference(c) : nullptr;
-    scene.solids.push_back(vtkPBFSolidFromInput(shape, self->ObstacleThickness, name));
+    scene.solids.push_back(vtkPBFSolidFromInput(shape, settings.ObstacleThickness, name));
     scene.solids.back().motion = this->ObstacleMotion.MotionOf(c);
   }
   // Decomposed, every rank builds the whole fluid (from the whole input, which
@@ -224,7 +234,7 @@ std::unique_ptr<pbf::Simulation> vtkPBFSimulation::vtkInternals::Build(vtkPBFSim
     : std::make_unique<pbf::Simulation>(scene, key.parameters, key.backend, key.precision, ranks);
   if (simulation->seededInsideSolids() > 0 && (!ranks || ranks->rank() == 0))
   {
-    vtkWarningWithObjectMacro(self, << simulation->seededInsideSolids()
+    vtkWarningWithObjectMacro(settings.Owner, << simulation->seededInsideSolids()
                                     << " initial particles lay inside the obstacles and were "
                                        "removed before the first step.");
   }
@@ -232,7 +242,7 @@ std::unique_ptr<pbf::Simulation> vtkPBFSimulation::vtkInternals::Build(vtkPBFSim
 }
 
 //------------------------------------------------------------------------------
-void vtkPBFSimulation::vtkInternals::DeliverSurface(
+void vtkPBFSimulationInternals::DeliverSurface(
   const pbf::SurfaceOptions& options, vtkPolyData* particles, vtkPolyData* surface)
 {
   options.validate();
@@ -322,7 +332,7 @@ void vtkPBFSimulation::vtkInternals::DeliverSurface(
 
 //------------------------------------------------------------------------------
 template <class Real>
-bool vtkPBFSimulation::vtkInternals::ExtractOnGpu(const pbf::Stepper& stepper,
+bool vtkPBFSimulationInternals::ExtractOnGpu(const pbf::Stepper& stepper,
   const pbf::Vec3<Real>* x, const pbf::Vec3<Real>* v, const Real* rho, std::size_t n,
   const pbf::Parameters& p, const pbf::SurfaceOptions& options, const pbf::SurfaceSolids& solids,
   pbf::SurfaceMesh& mesh, std::string& device)
@@ -377,7 +387,7 @@ bool vtkPBFSimulation::vtkInternals::ExtractOnGpu(const pbf::Stepper& stepper,
 }
 
 //------------------------------------------------------------------------------
-void vtkPBFSimulation::vtkInternals::UpdateObstacleMotion(std::size_t connections)
+void vtkPBFSimulationInternals::UpdateObstacleMotion(std::size_t connections)
 {
   pbf::Simulation* live = this->Playback.live();
   if (!live || connections == 0)
@@ -393,8 +403,8 @@ void vtkPBFSimulation::vtkInternals::UpdateObstacleMotion(std::size_t connection
 }
 
 //------------------------------------------------------------------------------
-void vtkPBFSimulation::vtkInternals::OnDeviceFault(
-  vtkPBFSimulation* self, const pbf::DeviceFault& fault, int frame)
+void vtkPBFSimulationInternals::OnDeviceFault(
+  const vtkPBFSettings& settings, const pbf::DeviceFault& fault, int frame)
 {
   // The GPU failed (a lost device, a kernel that faulted): its copy of the state is gone, while
   // the checkpoints and the diagnostics rows are host copies of whole frames and stay. CUDA is
@@ -402,7 +412,7 @@ void vtkPBFSimulation::vtkInternals::OnDeviceFault(
   // the CPU; Backend CUDA stops with an error that says how to go on.
   const std::uint64_t failedAt = this->Playback.live() ? this->Playback.live()->stepCount() : 0;
   const bool fallBack =
-    self->Backend == BACKEND_AUTO && this->Playback.key().backend == pbf::Backend::CUDA;
+    settings.Backend == pbf::BackendRequest::Auto && this->Playback.key().backend == pbf::Backend::CUDA;
   const std::string resumable = this->Playback.afterDeviceFault(frame, fallBack);
   this->CudaProbed = true;
   this->CudaPresent = false;
@@ -422,21 +432,21 @@ void vtkPBFSimulation::vtkInternals::OnDeviceFault(
        << "; the frames from there on are computed on the CPU (they agree with the GPU's to "
           "rounding, not bit for bit).";
   this->DeviceFaultText = text.str();
-  vtkWarningWithObjectMacro(self, << this->DeviceFaultText);
+  vtkWarningWithObjectMacro(settings.Owner, << this->DeviceFaultText);
 }
 
 //------------------------------------------------------------------------------
-void vtkPBFSimulation::vtkInternals::Deliver(vtkPBFSimulation* self, const FrameRequest& r,
+void vtkPBFSimulationInternals::Deliver(const vtkPBFSettings& settings, const FrameRequest& r,
   const pbf::FrameReached& reached, vtkPolyData* output, vtkTable* table)
 {
   const auto start = std::chrono::steady_clock::now();
   const pbf::Simulation& simulation = *this->Playback.live();
   vtkNew<vtkPolyData> result;
   vtkPBFOutput::FillParticles(simulation.stepper(),
-    self->PageLockedOutput && simulation.stepper().backend() == pbf::Backend::CUDA,
+    settings.PageLockedOutput && simulation.stepper().backend() == pbf::Backend::CUDA,
     this->Vertices, result);
   vtkSmartPointer<vtkFieldData> fieldData = vtkPBFOutput::FrameFieldData(
-    simulation, r.Frame, self->FrameInterval, self->SubstepsPerFrame);
+    simulation, r.Frame, settings.FrameInterval, settings.SubstepsPerFrame);
   vtkPBFOutput::AddInteger(fieldData, "RequestSteps", static_cast<vtkIdType>(reached.steps));
   vtkPBFOutput::AddText(fieldData, "ResumedFrom", reached.resumedFrom);
   if (this->Playback.key().ranks > 1)
@@ -480,18 +490,18 @@ void vtkPBFSimulation::vtkInternals::Deliver(vtkPBFSimulation* self, const Frame
 }
 
 //------------------------------------------------------------------------------
-void vtkPBFSimulation::vtkInternals::ReportAbort(vtkPBFSimulation* self, const FrameRequest& r)
+void vtkPBFSimulationInternals::ReportAbort(const vtkPBFSettings& settings, const FrameRequest& r)
 {
   const pbf::Simulation& simulation = *this->Playback.live();
   std::ostringstream text;
-  text << self->GetClassName() << " (" << self << "): aborted at step " << simulation.stepCount()
+  text << settings.Owner->GetClassName() << " (" << settings.Owner << "): aborted at step " << simulation.stepCount()
        << " (t = " << simulation.time() << " s) on the way to frame " << r.Frame
        << " (t = " << r.Time << " s); the previous output stays.\n";
   vtkOutputWindowDisplayText(text.str().c_str());
 }
 
 //------------------------------------------------------------------------------
-void vtkPBFSimulation::vtkInternals::DeliverAgain(
+void vtkPBFSimulationInternals::DeliverAgain(
   const FrameRequest& r, vtkPolyData* output, vtkTable* table)
 {
   // The frame just delivered: handed out again, arrays shared, nothing stepped or copied.
@@ -510,7 +520,7 @@ void vtkPBFSimulation::vtkInternals::DeliverAgain(
 }
 
 //------------------------------------------------------------------------------
-void vtkPBFSimulation::vtkInternals::DeliverPrevious(vtkPolyData* output, vtkTable* table)
+void vtkPBFSimulationInternals::DeliverPrevious(vtkPolyData* output, vtkTable* table)
 {
   // The last good output (with its own time) and the diagnostics known so far.
   output->ShallowCopy(this->LastOutput);
@@ -525,7 +535,7 @@ void vtkPBFSimulation::vtkInternals::DeliverPrevious(vtkPolyData* output, vtkTab
 }
 
 //------------------------------------------------------------------------------
-vtkTable* vtkPBFSimulation::vtkInternals::DiagnosticsTable()
+vtkTable* vtkPBFSimulationInternals::DiagnosticsTable()
 {
   const pbf::Playback& playback = this->Playback;
   // A decomposed run's rows are reduced over the ranks and the same on each: rank 0 shows them.
@@ -543,16 +553,16 @@ vtkTable* vtkPBFSimulation::vtkInternals::DiagnosticsTable()
 }
 
 //------------------------------------------------------------------------------
-std::string vtkPBFSimulation::vtkInternals::InUserTerms(
-  vtkPBFSimulation* self, const std::exception& error) const
+std::string vtkPBFSimulationInternals::InUserTerms(
+  const vtkPBFSettings& settings, const std::exception& error) const
 {
   std::string text = vtkPBFInUserTerms(error.what());
   if (dynamic_cast<const pbf::InvalidInput*>(&error) && text.find("domain") != std::string::npos)
   {
     // The user set no domain: say where it comes from and what changes it.
-    const bool file = self->SceneFile && *self->SceneFile;
-    text += file ? std::string(". The domain is the one of Scene File \"") + self->SceneFile + "\""
-                 : std::string(". The domain is the tank of Preset \"") + self->GetPresetName() +
+    const bool file = !settings.SceneFile.empty();
+    text += file ? std::string(". The domain is the one of Scene File \"") + settings.SceneFile + "\""
+                 : std::string(". The domain is the tank of Preset \"") + settings.PresetName +
         "\"; a Scene File with its own \"domain\" changes it";
   }
   return text;

@@ -1,10 +1,10 @@
 // vtkPBFSimulation's state between requests and the steps of a request, apart from the
 // pipeline methods (vtkPBFSimulation.cxx): the playback core (live simulation, checkpoints,
-// diagnostics rows) and what the VTK side keeps of its results. Private to the filter.
+// diagnostics rows) and what the VTK side keeps of its results. Private to the filter. It reads
+// the filter's properties from the vtkPBFSettings the filter hands each call, never the filter
+// itself, so the filter includes this header and not the other way round.
 #ifndef vtkPBFSimulationInternals_h
 #define vtkPBFSimulationInternals_h
-
-#include "vtkPBFSimulation.h"
 
 #include "vtkPBFObstacleMotion.h"
 
@@ -14,8 +14,9 @@
 #include "vtkTable.h"
 
 #include "BackendChoice.h"
+#include "Backends.h"
+#include "Communicator.h"
 #include "DeviceFault.h"
-#include "Distributed/Communicator.h"
 #include "Playback.h"
 #include "Simulation.h"
 #include "SurfaceExtraction.h"
@@ -27,7 +28,35 @@
 class vtkDataSet;
 class vtkInformation;
 class vtkInformationVector;
+class vtkObject;
 class vtkPointSet;
+
+// What a request needs of the filter's own properties (the physics parameters are kept here, in
+// vtkPBFSimulationInternals::Physics): the filter makes one at each request.
+struct vtkPBFSettings
+{
+  vtkObject* Owner = nullptr; // the filter, for warnings and messages that name it
+  std::string SceneFile;      // empty: the preset
+  std::string PresetName;
+  int OutputPorts = 0;
+  double FrameInterval = 1.0 / 60.0;
+  int NumberOfFrames = 0;
+  int SubstepsPerFrame = 1;
+  bool Automatic = true; // TimeStepping Automatic
+  bool AdaptiveIterations = true;
+  pbf::Precision Precision = pbf::Precision::Single;
+  pbf::BackendRequest Backend = pbf::BackendRequest::Auto;
+  double ObstacleThickness = 0.0;
+  bool DecomposeAcrossRanks = true;
+  int CheckpointInterval = 0;
+  double CheckpointMemoryMB = 0.0;
+  bool PageLockedOutput = true;
+  // What is wrong with the time properties, in the GUI's words; empty when nothing is.
+  std::string InvalidTime;
+
+  // The frame answering a requested time: the nearest one, clamped to 0..NumberOfFrames.
+  int FrameForTime(double time) const;
+};
 
 // Which piece of which frame a request asks for.
 struct FrameRequest
@@ -41,7 +70,7 @@ struct FrameRequest
 
 // The algorithm's state between requests: the playback core (live simulation, checkpoints,
 // diagnostics rows) and what the VTK side keeps of its results.
-class vtkPBFSimulation::vtkInternals
+class vtkPBFSimulationInternals
 {
 public:
   pbf::Playback Playback;
@@ -107,22 +136,22 @@ public:
     return this->CudaPresent;
   }
 
-  FrameRequest ParseRequest(vtkPBFSimulation* self, vtkInformation* request,
+  FrameRequest ParseRequest(const vtkPBFSettings& settings, vtkInformation* request,
     vtkInformationVector* outputVector) const;
-  pbf::PlaybackKey MakeKey(vtkPBFSimulation* self, vtkPointSet* input,
+  pbf::PlaybackKey MakeKey(const vtkPBFSettings& settings, vtkPointSet* input,
     const std::vector<vtkDataSet*>& obstacles, const FrameRequest& r);
   // Makes `key` the playback's and applies the checkpoint settings.
-  void Adopt(vtkPBFSimulation* self, const pbf::PlaybackKey& key);
-  std::unique_ptr<pbf::Simulation> Build(vtkPBFSimulation* self, const pbf::PlaybackKey& key,
+  void Adopt(const vtkPBFSettings& settings, const pbf::PlaybackKey& key);
+  std::unique_ptr<pbf::Simulation> Build(const vtkPBFSettings& settings, const pbf::PlaybackKey& key,
     vtkPointSet* input, const std::vector<vtkDataSet*>& obstacles);
   // Hands the live simulation the Obstacles port's motion as seen up to this request (keyframes
   // past every frame it computed).
   void UpdateObstacleMotion(std::size_t connections);
-  void OnDeviceFault(vtkPBFSimulation* self, const pbf::DeviceFault& fault, int frame);
+  void OnDeviceFault(const vtkPBFSettings& settings, const pbf::DeviceFault& fault, int frame);
   // The frame's particles and field data on port 0, the diagnostics on port 1.
-  void Deliver(vtkPBFSimulation* self, const FrameRequest& r, const pbf::FrameReached& reached,
+  void Deliver(const vtkPBFSettings& settings, const FrameRequest& r, const pbf::FrameReached& reached,
     vtkPolyData* output, vtkTable* table);
-  void ReportAbort(vtkPBFSimulation* self, const FrameRequest& r);
+  void ReportAbort(const vtkPBFSettings& settings, const FrameRequest& r);
   // The surface of `particles` (port 0's output) into `surface` (port 3). Throws InvalidInput
   // for bad options.
   void DeliverSurface(
@@ -136,7 +165,7 @@ public:
   void DeliverAgain(const FrameRequest& r, vtkPolyData* output, vtkTable* table);
   void DeliverPrevious(vtkPolyData* output, vtkTable* table);
   vtkTable* DiagnosticsTable();
-  std::string InUserTerms(vtkPBFSimulation* self, const std::exception& error) const;
+  std::string InUserTerms(const vtkPBFSettings& settings, const std::exception& error) const;
 };
 
 #endif

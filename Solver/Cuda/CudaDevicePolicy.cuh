@@ -14,7 +14,6 @@
 
 #include "CudaReductions.cuh"
 #include "CudaRuntime.cuh"
-#include "CudaSubdomain.h"
 #include "DeviceStepper.h"
 #include "DeviceSubdomainStepper.h"
 

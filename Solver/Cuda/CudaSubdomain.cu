@@ -1,4 +1,6 @@
 // Entry points of the decomposed CUDA stepper: the precision switch and the device count.
+#include "CudaSubdomain.h"
+
 #include "CudaDevicePolicy.cuh"
 
 #include <cuda_runtime.h>

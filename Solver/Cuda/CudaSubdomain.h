@@ -3,7 +3,7 @@
 #pragma once
 
 #include "CudaBackend.h"
-#include "Distributed/Communicator.h"
+#include "Communicator.h"
 #include "Distributed/SubdomainStepper.h"
 
 #include <memory>

@@ -1,10 +1,9 @@
 // DeviceStepper's memory: the particles' arrays in the store (DeviceParticleStore.h), grown by half
 // again when particles are added, the fixed arrays beside them, and the copies of the state in
 // and out.
-// Included at the end of DeviceStepper.h; not a header of its own.
+// Included at the end of DeviceStepper.h; not a header of its own (it does
+// not include it: the class whose members it defines comes from there).
 #pragma once
-
-#include "DeviceStepper.h"
 
 namespace pbf
 {

@@ -2,8 +2,6 @@
 // its solid obstacles. Included at the end of DeviceStepper.h; not a header of its own.
 #pragma once
 
-#include "DeviceStepper.h"
-
 namespace pbf
 {
 namespace cuda

@@ -1,10 +1,9 @@
 // The cut and the migration plan of DeviceSubdomainStepper (its step 1 and 2): the column
 // histograms and the balanced slabs, the owners of the particles, the movers packed, exchanged with
 // the ranks that send or receive, and unpacked behind the kept ones.
-// Included at the end of DeviceSubdomainStepper.h; not a header of its own.
+// Included at the end of DeviceSubdomainStepper.h; not a header of its own (it does
+// not include it: the class whose members it defines comes from there).
 #pragma once
-
-#include "DeviceSubdomainStepper.h"
 
 namespace pbf::cuda
 {

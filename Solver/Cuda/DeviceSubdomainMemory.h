@@ -4,8 +4,6 @@
 // Included at the end of DeviceSubdomainStepper.h; not a header of its own.
 #pragma once
 
-#include "DeviceSubdomainStepper.h"
-
 namespace pbf::cuda
 {
 

@@ -7,7 +7,6 @@
 #pragma once
 
 #include "DeviceSolids.h"
-#include "DeviceSubdomainStepper.h"
 
 namespace pbf::cuda
 {

@@ -55,7 +55,7 @@
 // after the same projection.
 #pragma once
 
-#include "Distributed/Communicator.h"
+#include "Communicator.h"
 #include "Distributed/RankFailure.h"
 #include "Distributed/RankReductions.h"
 #include "Distributed/Slabs.h"

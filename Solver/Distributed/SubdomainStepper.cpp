@@ -5,7 +5,6 @@
 #include "CellSort.h"
 #include "HostParticles.h"
 #include "ParticleChecks.h"
-#include "LocalRank.h"
 #include "RankReductions.h"
 
 #include <algorithm>
@@ -16,10 +15,6 @@
 #include <memory>
 #include <stdexcept>
 #include <type_traits>
-
-#ifdef PBF_WITH_CUDA
-#include "Cuda/CudaSubdomain.h"
-#endif
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -478,64 +473,6 @@ template <class Real>
 Statistics SubdomainStepper<Real>::statistics() const
 {
   return reduceStatistics(communicator_, fluid_.parameters, fluid_.particles());
-}
-
-std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backend backend,
-  Precision precision, const Parameters& parameters, const ParticleBatch& everything)
-{
-  if (backend == Backend::CUDA)
-  {
-#ifdef PBF_WITH_CUDA
-    // Collective: every rank asks for CUDA, and they agree on whether all have a device before
-    // any constructs, so that a rank without one does not leave the others waiting for it in
-    // the first exchange: then every rank throws.
-    const int local = localRank(communicator);
-    const int devices = cuda::cudaDeviceCount();
-    std::string why;
-    const bool mine = devices > 0 && cudaAvailable(&why);
-    if (!everyRankHasAGpu(communicator))
-    {
-      throw std::runtime_error("CUDA backend unavailable on " +
-        (mine ? std::string("another rank") :
-                "rank " + std::to_string(communicator.rank()) + ": " +
-              (why.empty() ? "no CUDA device" : why)) +
-        "; a decomposed run needs a GPU on every rank for Backend = CUDA (Auto falls back to "
-        "the CPU on every rank)");
-    }
-    return cuda::makeCudaSubdomainStepper(
-      communicator, precision, parameters, everything, local % devices);
-#else
-    throw std::runtime_error("Backend = CUDA: this build has no CUDA backend (CUDA compiler not "
-                             "found at configure time); choose CPU (OpenMP) or Serial");
-#endif
-  }
-  const bool parallel = backend == Backend::OpenMP;
-  if (precision == Precision::Single)
-  {
-    return std::make_unique<SubdomainStepper<float>>(communicator, parallel, parameters, everything);
-  }
-  return std::make_unique<SubdomainStepper<double>>(communicator, parallel, parameters, everything);
-}
-
-bool everyRankHasAGpu(Communicator& communicator)
-{
-  double mine = 0;
-#ifdef PBF_WITH_CUDA
-  mine = cudaAvailable() && cuda::cudaDeviceCount() > 0 ? 1.0 : 0.0;
-#endif
-  bool all = true;
-  for (const std::vector<double>& r : allGather(communicator, { mine }))
-  {
-    all = all && r[0] != 0;
-  }
-  return all;
-}
-
-std::unique_ptr<Stepper> makeSubdomainStepperAuto(Communicator& communicator, Precision precision,
-  const Parameters& parameters, const ParticleBatch& everything, Backend cpu)
-{
-  const Backend backend = everyRankHasAGpu(communicator) ? Backend::CUDA : cpu;
-  return makeSubdomainStepper(communicator, backend, precision, parameters, everything);
 }
 
 template class SubdomainStepper<float>;

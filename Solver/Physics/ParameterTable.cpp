@@ -55,7 +55,7 @@ std::vector<ParameterSpec> fluidRows()
   };
 }
 
-// The projections and what acts on the fluid besides them.
+// The constraint projections.
 std::vector<ParameterSpec> solverRows()
 {
   return {
@@ -116,6 +116,13 @@ std::vector<ParameterSpec> solverRows()
       "delta_q of the artificial pressure s_corr (eq. 13) as a fraction of h; the paper uses 0.1 "
       "to 0.3.",
       PBF_SCALAR(sCorrDeltaQ) },
+  };
+}
+
+// What acts on the fluid besides the projections (the GUI's Solver group too).
+std::vector<ParameterSpec> forceRows()
+{
+  return {
     { "xsphViscosity", "XSPHViscosity", "xsph", "XSPH Viscosity", "Solver", "", T::Real,
       unitInterval, 0.0, 1.0, false, nullptr,
       "the artificial viscosity alpha of nu = alpha h v_scene",
@@ -189,7 +196,7 @@ std::vector<ParameterSpec> timeRows()
 std::vector<ParameterSpec> makeTable()
 {
   std::vector<ParameterSpec> table;
-  for (auto rows : { fluidRows, solverRows, timeRows })
+  for (auto rows : { fluidRows, solverRows, forceRows, timeRows })
   {
     const std::vector<ParameterSpec> group = rows();
     table.insert(table.end(), group.begin(), group.end());

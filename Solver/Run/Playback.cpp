@@ -1,6 +1,6 @@
 #include "Playback.h"
 
-#include "Distributed/Communicator.h"
+#include "Communicator.h"
 #include "ParameterTable.h"
 
 #include <algorithm>

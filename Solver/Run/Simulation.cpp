@@ -1,5 +1,6 @@
 #include "Simulation.h"
 
+#include "Backends.h"
 #include "ParticleChecks.h"
 
 #include "Distributed/SubdomainStepper.h"
@@ -120,43 +121,49 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   lastGoodSpeed_ = start.maxSpeed;
   if (automatic)
   {
-    // The scene's own speed and gravity bound the automatic step from the start: a step too
-    // small to represent is an input error, named by the term that forces it.
-    const double s = parameters_.particleSpacing;
-    const double c = parameters_.cflNumber;
-    // Gravity is named by its largest component (its length may overflow).
-    const Vec3d& gv = parameters_.gravity;
-    const int axis = std::abs(gv.x) >= std::abs(gv.y)
-      ? (std::abs(gv.x) >= std::abs(gv.z) ? 0 : 2)
-      : (std::abs(gv.y) >= std::abs(gv.z) ? 1 : 2);
-    const std::string gravityName = std::string("gravity.") + "xyz"[axis];
-    const double gravityValue = axis == 0 ? gv.x : (axis == 1 ? gv.y : gv.z);
-    const struct
-    {
-      double dt;
-      std::string field;
-      double value;
-    } bounds[] = {
-      { c * s / sceneSpeed, g > 0 ? gravityName : "the initial or emitted speed",
-        g > 0 ? gravityValue : v0 },
-      { g > 0 ? c * std::sqrt(s / g) : parameters_.timeStep, gravityName, gravityValue },
-      { xsphStepLimit_,
-        parameters_.xsphHyperViscosity > parameters_.xsphViscosity ? "xsphHyperViscosity"
-                                                                   : "xsphViscosity",
-        std::max(parameters_.xsphViscosity, parameters_.xsphHyperViscosity) },
-    };
-    for (const auto& b : bounds)
-    {
-      if (!(b.dt >= kSmallestTimeStep))
-      {
-        throw InvalidInput(b.field + " = " + number(b.value) +
-          ": the automatic time step it allows, " + number(b.dt) + " s, is below " +
-          number(kSmallestTimeStep) + " s (cflNumber " + number(c) + ", particleSpacing " +
-          number(s) + ")");
-      }
-    }
+    checkAutomaticStep(sceneSpeed, v0);
   }
   emit();
+}
+
+// The scene's own speed and gravity bound the automatic step from the start: a step too small to
+// represent is an input error, named by the term that forces it.
+void Simulation::checkAutomaticStep(double sceneSpeed, double v0) const
+{
+  const double g = length(parameters_.gravity);
+  const double s = parameters_.particleSpacing;
+  const double c = parameters_.cflNumber;
+  // Gravity is named by its largest component (its length may overflow).
+  const Vec3d& gv = parameters_.gravity;
+  const int axis = std::abs(gv.x) >= std::abs(gv.y)
+    ? (std::abs(gv.x) >= std::abs(gv.z) ? 0 : 2)
+    : (std::abs(gv.y) >= std::abs(gv.z) ? 1 : 2);
+  const std::string gravityName = std::string("gravity.") + "xyz"[axis];
+  const double gravityValue = axis == 0 ? gv.x : (axis == 1 ? gv.y : gv.z);
+  const struct
+  {
+    double dt;
+    std::string field;
+    double value;
+  } bounds[] = {
+    { c * s / sceneSpeed, g > 0 ? gravityName : "the initial or emitted speed",
+      g > 0 ? gravityValue : v0 },
+    { g > 0 ? c * std::sqrt(s / g) : parameters_.timeStep, gravityName, gravityValue },
+    { xsphStepLimit_,
+      parameters_.xsphHyperViscosity > parameters_.xsphViscosity ? "xsphHyperViscosity"
+                                                                 : "xsphViscosity",
+      std::max(parameters_.xsphViscosity, parameters_.xsphHyperViscosity) },
+  };
+  for (const auto& b : bounds)
+  {
+    if (!(b.dt >= kSmallestTimeStep))
+    {
+      throw InvalidInput(b.field + " = " + number(b.value) +
+        ": the automatic time step it allows, " + number(b.dt) + " s, is below " +
+        number(kSmallestTimeStep) + " s (cflNumber " + number(c) + ", particleSpacing " +
+        number(s) + ")");
+    }
+  }
 }
 
 // Emitted layers must land inside the domain and their number must fit, whatever the initial

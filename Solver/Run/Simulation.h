@@ -182,6 +182,9 @@ private:
   double checkedTimeStep() const; // nextTimeStep(), or SimulationDiverged below the smallest
   void emit();
   void checkEmitters(std::size_t initialParticles) const;
+  // Throws InvalidInput when the scene's speed, gravity or XSPH force an automatic step below
+  // the smallest one (the constructor's check).
+  void checkAutomaticStep(double sceneSpeed, double v0) const;
   std::string likelyCause() const;
 
   Scene scene_;

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "Parameters.h"
-#include "Stepper.h"
+#include "Particles.h"
 
 #include <string>
 

@@ -234,39 +234,9 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
   return solids;
 }
 
-Scene parse(const json& root)
+// The fluid regions of a scene file's "fluid" array, into scene (whose domain is read).
+void parseFluidRegions(const json& fluid, Scene& scene)
 {
-  requireKeys(root, "", { "name", "description", "domain", "fluid", "emitters", "obstacles" },
-    { "domain", "fluid" });
-  Scene scene;
-  if (root.contains("name"))
-  {
-    if (!root["name"].is_string())
-    {
-      reject(".name", root["name"], "must be a string");
-    }
-    scene.name = root["name"].get<std::string>();
-  }
-  if (root.contains("description"))
-  {
-    if (!root["description"].is_string())
-    {
-      reject(".description", root["description"], "must be a string");
-    }
-    scene.description = root["description"].get<std::string>();
-  }
-
-  const json& domain = root["domain"];
-  requireKeys(domain, ".domain", { "min", "max" }, { "min", "max" });
-  scene.domain.min = vector3(domain, ".domain", "min");
-  scene.domain.max = vector3(domain, ".domain", "max");
-  requireOrdered(scene.domain.min, scene.domain.max, ".domain", domain["max"]);
-
-  const json& fluid = root["fluid"];
-  if (!fluid.is_array())
-  {
-    reject(".fluid", fluid, "must be an array of regions");
-  }
   for (std::size_t r = 0; r < fluid.size(); ++r)
   {
     const std::string path = ".fluid[" + std::to_string(r) + "]";
@@ -307,6 +277,86 @@ Scene parse(const json& root)
     }
   }
 
+}
+
+// The emitters of a scene file's "emitters" array, into scene (whose domain is read).
+void parseEmitters(const json& emitters, Scene& scene)
+{
+  for (std::size_t e = 0; e < emitters.size(); ++e)
+  {
+    const std::string path = ".emitters[" + std::to_string(e) + "]";
+    const json& item = emitters[e];
+    requireKeys(item, path, { "center", "direction", "radius", "speed", "start", "stop" },
+      { "center", "direction", "radius", "speed", "stop" });
+    Emitter emitter;
+    emitter.center = vector3(item, path, "center");
+    emitter.direction = vector3(item, path, "direction");
+    // Scaled by the largest component first: |d| of [1e200, 0, 0] overflows and that of
+    // [1e-200, 0, 0] underflows, yet both are the x axis.
+    const Vec3d& d = emitter.direction;
+    const double largest = std::max({ std::abs(d.x), std::abs(d.y), std::abs(d.z) });
+    if (largest <= 0)
+    {
+      reject(path + ".direction", item["direction"], "must not be zero");
+    }
+    emitter.direction = { d.x / largest, d.y / largest, d.z / largest }; // not * (1 / x): 1 / 5e-324 overflows
+    emitter.direction *= 1.0 / length(emitter.direction);
+    emitter.radius = positive(item, path, "radius");
+    emitter.speed = positive(item, path, "speed");
+    emitter.start = item.contains("start") ? number(item, path, "start") : 0.0;
+    emitter.stop = number(item, path, "stop");
+    if (emitter.start < 0)
+    {
+      reject(path + ".start", item["start"], "must be >= 0");
+    }
+    if (emitter.stop <= emitter.start)
+    {
+      reject(path + ".stop", item["stop"], "must be later than start");
+    }
+    const Vec3d r{ emitter.radius, emitter.radius, emitter.radius };
+    if (!inside(emitter.center - r, scene.domain) || !inside(emitter.center + r, scene.domain))
+    {
+      reject(path, item, "the nozzle must lie inside the domain");
+    }
+    scene.emitters.push_back(emitter);
+  }
+}
+
+Scene parse(const json& root)
+{
+  requireKeys(root, "", { "name", "description", "domain", "fluid", "emitters", "obstacles" },
+    { "domain", "fluid" });
+  Scene scene;
+  if (root.contains("name"))
+  {
+    if (!root["name"].is_string())
+    {
+      reject(".name", root["name"], "must be a string");
+    }
+    scene.name = root["name"].get<std::string>();
+  }
+  if (root.contains("description"))
+  {
+    if (!root["description"].is_string())
+    {
+      reject(".description", root["description"], "must be a string");
+    }
+    scene.description = root["description"].get<std::string>();
+  }
+
+  const json& domain = root["domain"];
+  requireKeys(domain, ".domain", { "min", "max" }, { "min", "max" });
+  scene.domain.min = vector3(domain, ".domain", "min");
+  scene.domain.max = vector3(domain, ".domain", "max");
+  requireOrdered(scene.domain.min, scene.domain.max, ".domain", domain["max"]);
+
+  const json& fluid = root["fluid"];
+  if (!fluid.is_array())
+  {
+    reject(".fluid", fluid, "must be an array of regions");
+  }
+  parseFluidRegions(fluid, scene);
+
   if (root.contains("emitters"))
   {
     const json& emitters = root["emitters"];
@@ -314,44 +364,7 @@ Scene parse(const json& root)
     {
       reject(".emitters", emitters, "must be an array");
     }
-    for (std::size_t e = 0; e < emitters.size(); ++e)
-    {
-      const std::string path = ".emitters[" + std::to_string(e) + "]";
-      const json& item = emitters[e];
-      requireKeys(item, path, { "center", "direction", "radius", "speed", "start", "stop" },
-        { "center", "direction", "radius", "speed", "stop" });
-      Emitter emitter;
-      emitter.center = vector3(item, path, "center");
-      emitter.direction = vector3(item, path, "direction");
-      // Scaled by the largest component first: |d| of [1e200, 0, 0] overflows and that of
-      // [1e-200, 0, 0] underflows, yet both are the x axis.
-      const Vec3d& d = emitter.direction;
-      const double largest = std::max({ std::abs(d.x), std::abs(d.y), std::abs(d.z) });
-      if (largest <= 0)
-      {
-        reject(path + ".direction", item["direction"], "must not be zero");
-      }
-      emitter.direction = { d.x / largest, d.y / largest, d.z / largest }; // not * (1 / x): 1 / 5e-324 overflows
-      emitter.direction *= 1.0 / length(emitter.direction);
-      emitter.radius = positive(item, path, "radius");
-      emitter.speed = positive(item, path, "speed");
-      emitter.start = item.contains("start") ? number(item, path, "start") : 0.0;
-      emitter.stop = number(item, path, "stop");
-      if (emitter.start < 0)
-      {
-        reject(path + ".start", item["start"], "must be >= 0");
-      }
-      if (emitter.stop <= emitter.start)
-      {
-        reject(path + ".stop", item["stop"], "must be later than start");
-      }
-      const Vec3d r{ emitter.radius, emitter.radius, emitter.radius };
-      if (!inside(emitter.center - r, scene.domain) || !inside(emitter.center + r, scene.domain))
-      {
-        reject(path, item, "the nozzle must lie inside the domain");
-      }
-      scene.emitters.push_back(emitter);
-    }
+    parseEmitters(emitters, scene);
   }
   if (scene.boxes.empty() && scene.spheres.empty() && scene.emitters.empty())
   {

@@ -5,7 +5,7 @@
 
 #include "Parameters.h"
 #include "Solids.h"
-#include "Stepper.h"
+#include "Particles.h"
 #include "Vec3.h"
 
 #include <string>

@@ -205,4 +205,13 @@ void SolidMotion::validate(const std::string& what) const
   }
 }
 
+void checkPoseCount(std::size_t poses, std::size_t solids)
+{
+  if (poses != 0 && poses != solids)
+  {
+    throw InvalidInput("obstacle poses = " + std::to_string(poses) + ": there are " +
+      std::to_string(solids) + " solid(s), one pose each");
+  }
+}
+
 } // namespace pbf

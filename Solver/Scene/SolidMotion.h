@@ -64,4 +64,7 @@ struct SolidMotion
   void validate(const std::string& what) const;
 };
 
+// Throws InvalidInput unless there is one pose per solid (or none).
+void checkPoseCount(std::size_t poses, std::size_t solids);
+
 } // namespace pbf

@@ -6,7 +6,7 @@
 #include "Parameters.h"
 #include "SignedDistance.h"
 #include "SolidMotion.h"
-#include "Stepper.h"
+#include "Particles.h"
 
 #include <string>
 #include <vector>

@@ -13,7 +13,7 @@
 #include "Grid.h"
 #include "HostDevice.h"
 #include "Kernels.h"
-#include "SurfaceExtraction.h"
+#include "SurfaceTypes.h"
 #include "Vec3.h"
 
 #include <cmath>

@@ -187,6 +187,173 @@ private:
   const SurfaceSolids& solids_;
 };
 
+// The particles in cells of h over the node grid's region (Green 2008, as the solver's grid).
+// With anisotropic kernels, each particle's centre and metric from its neighbours within h, then
+// the particles sorted again, by their centres, into cells as wide as the kernels reach; the
+// metrics go into `metric`, which the result points into.
+SortedParticles sortParticles(const std::vector<Vec3d>& positions, const surface::NodeGrid& grid,
+  const Parameters& p, const SurfaceOptions& options, bool parallel, std::vector<double>& metric)
+{
+  const double h = p.smoothingLength();
+  const std::size_t n = positions.size();
+  SortedParticles sorted = sortedIntoCells(positions, surface::particleCells(grid, p, h));
+  if (!options.anisotropic)
+  {
+    return sorted;
+  }
+  const double fullCount = 4.0 / 3.0 * 3.14159265358979323846 * std::pow(p.smoothingRatio, 3);
+  std::vector<surface::Anisotropy> shape(n);
+  const auto count = static_cast<std::int64_t>(n);
+  const surface::CellParticles around = sorted.view();
+#pragma omp parallel for schedule(static) if (parallel)
+  for (std::int64_t k = 0; k < count; ++k)
+  {
+    shape[static_cast<std::size_t>(k)] =
+      surface::anisotropyOf(around, static_cast<std::uint32_t>(k), h, fullCount);
+  }
+  std::vector<Vec3d> centres(n);
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    centres[k] = shape[k].centre;
+  }
+  const double reach = surface::reachFactor(options) * h;
+  SortedParticles bySorted = sortedIntoCells(centres, surface::particleCells(grid, p, reach));
+  metric.resize(6 * n);
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    const std::uint32_t was = bySorted.order[k];
+    std::copy(shape[was].m, shape[was].m + 6, metric.begin() + 6 * static_cast<std::ptrdiff_t>(k));
+    bySorted.order[k] = sorted.order[was]; // to the input's index
+  }
+  bySorted.m = metric.data();
+  return bySorted;
+}
+
+// The keys of the blocks within `reach` of a particle (a node within reach of one belongs to
+// every block it is in), this share's only (those whose lower x lies in its range), sorted.
+std::vector<std::uint64_t> blocksNear(const SortedParticles& sorted, const surface::NodeGrid& grid,
+  double reach, const SurfaceShare& share)
+{
+  std::vector<std::uint64_t> blockKeys;
+  blockKeys.reserve(sorted.x.size() * 2);
+  for (const Vec3d& q : sorted.x)
+  {
+    std::int64_t first[3], last[3];
+    surface::blocksNear(grid, reach, q, first, last);
+    for (std::int64_t z = first[2]; z <= last[2]; ++z)
+    {
+      for (std::int64_t y = first[1]; y <= last[1]; ++y)
+      {
+        for (std::int64_t b = first[0]; b <= last[0]; ++b)
+        {
+          const double blockX = grid.origin.x + static_cast<double>(b * kBlock) * grid.cell;
+          if (blockX >= share.xMin && blockX < share.xMax)
+          {
+            blockKeys.push_back(grid.blockKey(b, y, z));
+          }
+        }
+      }
+    }
+  }
+  std::sort(blockKeys.begin(), blockKeys.end());
+  blockKeys.erase(std::unique(blockKeys.begin(), blockKeys.end()), blockKeys.end());
+  return blockKeys;
+}
+
+// The blocks' results joined into the mesh's triangles, with vertices in key order shared wherever
+// their edge is; returns the vertices' positions and fills the mesh's counts and peak memory.
+std::vector<Vec3d> joinBlocks(std::vector<BlockResult>& results, const SortedParticles& sorted,
+  std::size_t blocks, SurfaceMesh& mesh)
+{
+  std::vector<KeyedVertex> vertices;
+  std::size_t triangleCount = 0;
+  for (const BlockResult& r : results)
+  {
+    vertices.insert(vertices.end(), r.vertices.begin(), r.vertices.end());
+    triangleCount += r.triangles.size();
+    mesh.sampledBlocks += r.sampled ? 1 : 0;
+    mesh.keptBlocks += r.triangles.empty() ? 0 : 1;
+  }
+  mesh.sampledNodes = mesh.sampledBlocks * surface::kBlockNodes;
+  // The working memory at its largest, here: the sorted particles, the block list, every block's
+  // vertices (each edge's as often as cells share it) and triangles.
+  const std::size_t n = sorted.x.size();
+  mesh.peakBytes = n * (sizeof(Vec3d) + sizeof(CellKey) + 2 * sizeof(std::uint32_t)) +
+    sorted.offsets.size() * sizeof(std::uint32_t) + blocks * sizeof(std::uint64_t) +
+    results.size() * sizeof(BlockResult) + 2 * vertices.size() * sizeof(KeyedVertex) +
+    triangleCount * sizeof(std::array<std::uint64_t, 3>);
+  std::stable_sort(vertices.begin(), vertices.end(),
+    [](const KeyedVertex& a, const KeyedVertex& b) { return a.key < b.key; });
+  vertices.erase(std::unique(vertices.begin(), vertices.end(),
+                   [](const KeyedVertex& a, const KeyedVertex& b) { return a.key == b.key; }),
+    vertices.end());
+  auto indexOf = [&](std::uint64_t key) {
+    const auto it = std::lower_bound(vertices.begin(), vertices.end(), key,
+      [](const KeyedVertex& a, std::uint64_t k) { return a.key < k; });
+    return static_cast<std::uint32_t>(it - vertices.begin());
+  };
+  mesh.triangles.reserve(triangleCount);
+  for (const BlockResult& r : results)
+  {
+    for (const auto& t : r.triangles)
+    {
+      mesh.triangles.push_back({ indexOf(t[0]), indexOf(t[1]), indexOf(t[2]) });
+    }
+  }
+  results.clear();
+  results.shrink_to_fit();
+  std::vector<Vec3d> position(vertices.size());
+  for (std::size_t i = 0; i < vertices.size(); ++i)
+  {
+    position[i] = vertices[i].position;
+  }
+  return position;
+}
+
+// Laplacian smoothing: each vertex halfway to the mean of its neighbours, all at once, `passes`
+// times.
+void smoothVertices(std::vector<Vec3d>& position,
+  const std::vector<std::array<std::uint32_t, 3>>& triangles, int passes)
+{
+  if (passes <= 0)
+  {
+    return;
+  }
+  std::vector<std::uint64_t> edges;
+  edges.reserve(triangles.size() * 6);
+  for (const auto& t : triangles)
+  {
+    for (int e = 0; e < 3; ++e)
+    {
+      const std::uint64_t a = t[e], b = t[(e + 1) % 3];
+      edges.push_back(a << 32 | b);
+      edges.push_back(b << 32 | a);
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  std::vector<std::size_t> first(position.size() + 1, 0);
+  for (const std::uint64_t e : edges)
+  {
+    ++first[(e >> 32) + 1];
+  }
+  for (std::size_t i = 0; i < position.size(); ++i)
+  {
+    first[i + 1] += first[i];
+  }
+  std::vector<Vec3d> next(position.size());
+  for (int pass = 0; pass < passes; ++pass)
+  {
+    for (std::size_t i = 0; i < position.size(); ++i)
+    {
+      const std::uint64_t* around = edges.data() + first[i];
+      next[i] = surface::smoothedPosition(position[i], static_cast<int>(first[i + 1] - first[i]),
+        [&](int e) { return position[around[e] & 0xffffffffu]; });
+    }
+    position.swap(next);
+  }
+}
+
 } // namespace
 
 surface::NodeGrid surface::makeNodeGrid(const Parameters& p, const SurfaceOptions& options)
@@ -261,86 +428,23 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
   {
     return mesh;
   }
-  const double h = p.smoothingLength();
-  const Kernels<double> kernels = Kernels<double>::make(h);
-  const double volume = calibratedParticleMass(p) / p.restDensity;
-
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    const Vec3d q = Vec3d::from(x[i]);
-    if (!std::isfinite(q.x + q.y + q.z))
-    {
-      throw InvalidInput("surface: particle " + std::to_string(i) + " has a non-finite position");
-    }
-  }
-  const surface::NodeGrid grid = surface::makeNodeGrid(p, options);
-
-  // The particles in cells of h over the same region (Green 2008, as the solver's grid).
   std::vector<Vec3d> positions(n);
   for (std::size_t i = 0; i < n; ++i)
   {
     positions[i] = Vec3d::from(x[i]);
-  }
-  SortedParticles sorted = sortedIntoCells(positions, surface::particleCells(grid, p, h));
-  // Anisotropic kernels: each particle's centre and metric from its neighbours within h, then the
-  // particles sorted again, by their centres, into cells as wide as the kernels reach.
-  const double reach = surface::reachFactor(options) * h;
-  std::vector<double> metric;
-  if (options.anisotropic)
-  {
-    const double fullCount = 4.0 / 3.0 * 3.14159265358979323846 * std::pow(p.smoothingRatio, 3);
-    std::vector<surface::Anisotropy> shape(n);
-    const auto count = static_cast<std::int64_t>(n);
-    const surface::CellParticles around = sorted.view();
-#pragma omp parallel for schedule(static) if (parallel)
-    for (std::int64_t k = 0; k < count; ++k)
+    if (!std::isfinite(positions[i].x + positions[i].y + positions[i].z))
     {
-      shape[static_cast<std::size_t>(k)] =
-        surface::anisotropyOf(around, static_cast<std::uint32_t>(k), h, fullCount);
-    }
-    std::vector<Vec3d> centres(n);
-    for (std::size_t k = 0; k < n; ++k)
-    {
-      centres[k] = shape[k].centre;
-    }
-    SortedParticles bySorted = sortedIntoCells(centres, surface::particleCells(grid, p, reach));
-    metric.resize(6 * n);
-    for (std::size_t k = 0; k < n; ++k)
-    {
-      const std::uint32_t was = bySorted.order[k];
-      std::copy(shape[was].m, shape[was].m + 6, metric.begin() + 6 * static_cast<std::ptrdiff_t>(k));
-      bySorted.order[k] = sorted.order[was]; // to the input's index
-    }
-    sorted = std::move(bySorted);
-    sorted.m = metric.data();
-  }
-
-  // The blocks within h of a particle: a node within h of one belongs to every block it is in.
-  std::vector<std::uint64_t> blockKeys;
-  blockKeys.reserve(n * 2);
-  for (std::size_t k = 0; k < n; ++k)
-  {
-    std::int64_t first[3], last[3];
-    surface::blocksNear(grid, reach, sorted.x[k], first, last);
-    for (std::int64_t z = first[2]; z <= last[2]; ++z)
-    {
-      for (std::int64_t y = first[1]; y <= last[1]; ++y)
-      {
-        for (std::int64_t b = first[0]; b <= last[0]; ++b)
-        {
-          // Only this share's blocks: those whose lower x lies in its range.
-          const double blockX = grid.origin.x + static_cast<double>(b * kBlock) * grid.cell;
-          if (!(blockX >= share.xMin && blockX < share.xMax))
-          {
-            continue;
-          }
-          blockKeys.push_back(grid.blockKey(b, y, z));
-        }
-      }
+      throw InvalidInput("surface: particle " + std::to_string(i) + " has a non-finite position");
     }
   }
-  std::sort(blockKeys.begin(), blockKeys.end());
-  blockKeys.erase(std::unique(blockKeys.begin(), blockKeys.end()), blockKeys.end());
+  const double h = p.smoothingLength();
+  const Kernels<double> kernels = Kernels<double>::make(h);
+  const double volume = calibratedParticleMass(p) / p.restDensity;
+  const surface::NodeGrid grid = surface::makeNodeGrid(p, options);
+  std::vector<double> metric; // the anisotropic kernels' metrics, which `sorted` points into
+  const SortedParticles sorted = sortParticles(positions, grid, p, options, parallel, metric);
+  const std::vector<std::uint64_t> blockKeys =
+    blocksNear(sorted, grid, surface::reachFactor(options) * h, share);
 
   const Extractor extractor(grid, sorted, kernels, volume, options.isoValue, solids);
   std::vector<BlockResult> results(blockKeys.size());
@@ -352,100 +456,15 @@ SurfaceMesh extractSurface(const Vec3<Real>* x, const Vec3<Real>* v, const Real*
     grid.blockOf(blockKeys[static_cast<std::size_t>(b)], at);
     extractor.run(at[0], at[1], at[2], results[static_cast<std::size_t>(b)]);
   }
-
-  // Vertices in key order, shared wherever their edge is.
-  std::vector<KeyedVertex> vertices;
-  std::size_t triangleCount = 0;
-  for (const BlockResult& r : results)
-  {
-    vertices.insert(vertices.end(), r.vertices.begin(), r.vertices.end());
-    triangleCount += r.triangles.size();
-    mesh.sampledBlocks += r.sampled ? 1 : 0;
-    mesh.keptBlocks += r.triangles.empty() ? 0 : 1;
-  }
-  mesh.sampledNodes = mesh.sampledBlocks * surface::kBlockNodes;
-  // The working memory at its largest, here: the sorted particles, the block list, every block's
-  // vertices (each edge's as often as cells share it) and triangles.
-  mesh.peakBytes = n * (sizeof(Vec3d) + sizeof(CellKey) + 2 * sizeof(std::uint32_t)) +
-    sorted.offsets.size() * sizeof(std::uint32_t) + blockKeys.size() * sizeof(std::uint64_t) +
-    results.size() * sizeof(BlockResult) + 2 * vertices.size() * sizeof(KeyedVertex) +
-    triangleCount * sizeof(std::array<std::uint64_t, 3>);
-  std::stable_sort(vertices.begin(), vertices.end(),
-    [](const KeyedVertex& a, const KeyedVertex& b) { return a.key < b.key; });
-  vertices.erase(std::unique(vertices.begin(), vertices.end(),
-                   [](const KeyedVertex& a, const KeyedVertex& b) { return a.key == b.key; }),
-    vertices.end());
-  auto indexOf = [&](std::uint64_t key) {
-    const auto it = std::lower_bound(vertices.begin(), vertices.end(), key,
-      [](const KeyedVertex& a, std::uint64_t k) { return a.key < k; });
-    return static_cast<std::uint32_t>(it - vertices.begin());
-  };
-  mesh.triangles.reserve(triangleCount);
-  for (const BlockResult& r : results)
-  {
-    for (const auto& t : r.triangles)
-    {
-      mesh.triangles.push_back({ indexOf(t[0]), indexOf(t[1]), indexOf(t[2]) });
-    }
-  }
-  results.clear();
-  results.shrink_to_fit();
-
-  std::vector<Vec3d> position(vertices.size());
-  for (std::size_t i = 0; i < vertices.size(); ++i)
-  {
-    position[i] = vertices[i].position;
-  }
-  // Laplacian smoothing: each vertex halfway to the mean of its neighbours, all at once.
-  if (options.smoothing > 0)
-  {
-    std::vector<std::uint64_t> edges;
-    edges.reserve(mesh.triangles.size() * 6);
-    for (const auto& t : mesh.triangles)
-    {
-      for (int e = 0; e < 3; ++e)
-      {
-        const std::uint64_t a = t[e], b = t[(e + 1) % 3];
-        edges.push_back(a << 32 | b);
-        edges.push_back(b << 32 | a);
-      }
-    }
-    std::sort(edges.begin(), edges.end());
-    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-    std::vector<std::size_t> first(position.size() + 1, 0);
-    for (const std::uint64_t e : edges)
-    {
-      ++first[(e >> 32) + 1];
-    }
-    for (std::size_t i = 0; i < position.size(); ++i)
-    {
-      first[i + 1] += first[i];
-    }
-    std::vector<Vec3d> next(position.size());
-    for (int pass = 0; pass < options.smoothing; ++pass)
-    {
-      for (std::size_t i = 0; i < position.size(); ++i)
-      {
-        const std::uint64_t* around = edges.data() + first[i];
-        next[i] = surface::smoothedPosition(position[i], static_cast<int>(first[i + 1] - first[i]),
-          [&](int e) { return position[around[e] & 0xffffffffu]; });
-      }
-      position.swap(next);
-    }
-  }
+  std::vector<Vec3d> position = joinBlocks(results, sorted, blockKeys.size(), mesh);
+  smoothVertices(position, mesh.triangles, options.smoothing);
 
   // Normals and the particles' fields at the vertices.
   const std::size_t m = position.size();
   mesh.points.resize(m);
   mesh.normals.resize(m);
-  if (v)
-  {
-    mesh.velocity.resize(m);
-  }
-  if (rho)
-  {
-    mesh.density.resize(m);
-  }
+  mesh.velocity.resize(v ? m : 0);
+  mesh.density.resize(rho ? m : 0);
   const auto vertexCount = static_cast<std::int64_t>(m);
 #pragma omp parallel for schedule(static) if (parallel)
   for (std::int64_t i = 0; i < vertexCount; ++i)

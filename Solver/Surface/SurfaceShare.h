@@ -4,7 +4,7 @@
 // crack: the same vertices, to the bit, on both sides of every slab border.
 #pragma once
 
-#include "Distributed/Communicator.h"
+#include "Communicator.h"
 #include "Distributed/Slabs.h"
 #include "SurfaceExtraction.h"
 

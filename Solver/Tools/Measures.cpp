@@ -1,3 +1,4 @@
+#include "Backends.h"
 #include "Measures.h"
 
 #include <cmath>

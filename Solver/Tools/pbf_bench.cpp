@@ -8,6 +8,7 @@
 // --refined SPACINGS times the scene users run instead: the dam_break preset (or --scene) refined
 // to those spacings, frame by frame to --until, fixed and automatic stepping side by side, in ms
 // per step and per simulated second (RefinedBench.h).
+#include "Backends.h"
 #include "RefinedBench.h"
 #include "Scene.h"
 #include "ScaledScenes.h"

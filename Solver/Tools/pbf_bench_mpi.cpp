@@ -14,6 +14,7 @@
 // (stderr and JSON; the CUDA stepper only): the medians of the step's time, of the host's wait
 // for its own device's border fields and of its wait inside the refreshes' exchanges with the
 // neighbours: the rank that waits least for its neighbours is the one that paces them.
+#include "Backends.h"
 #include "Distributed/MpiCommunicator.h"
 #include "Distributed/SubdomainStepper.h"
 #include "ScaledScenes.h"

@@ -2,6 +2,7 @@
 // runs out. Each test runs in a process of its own (gtest_discover_tests), because a trapped
 // kernel loses the CUDA context for the rest of the process, as a lost device does. Without a
 // usable CUDA device every test reports SKIPPED.
+#include "Backends.h"
 #include "DeviceFault.h"
 #include "Scene.h"
 #include "Simulation.h"

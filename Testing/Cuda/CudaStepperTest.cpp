@@ -1,5 +1,6 @@
 // The CUDA backend against the serial reference (label "gpu"). Without a usable CUDA device every
 // test reports SKIPPED, which CTest counts as skipped, not passed.
+#include "Backends.h"
 #include "Cuda/CudaBackend.h"
 #include "RequireGpu.h"
 #include "Scene.h"

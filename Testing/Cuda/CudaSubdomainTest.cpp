@@ -2,11 +2,12 @@
 // with its own stream, against the serial backend. Without a usable device every test reports
 // SKIPPED. The algorithm itself is checked on the host in DeviceSubdomainHostTest.cpp; this
 // checks the CUDA plumbing: kernels, CUB selection and sorts, transfers, growth.
+#include "Backends.h"
 #include "DecomposedRuns.h"
 #include "RequireGpu.h"
 
 #include "Cuda/CudaSubdomain.h"
-#include "Distributed/LocalRank.h"
+#include "LocalRank.h"
 #include "TestScenes.h"
 
 #include <gtest/gtest.h>

@@ -4,6 +4,7 @@
 // solver) and the GPU tests (label gpu).
 #pragma once
 
+#include "Backends.h"
 #include "Distributed/SubdomainStepper.h"
 #include "Distributed/ThreadCluster.h"
 #include "Scene.h"

@@ -3,6 +3,7 @@
 // rebuilds) and with the cell walk, with the step captured as a graph or queued stage by stage;
 // and its memory, checkpoints, scans, solids and faults behave as on the GPU. This runs
 // everywhere (label "solver"); the GPU itself is tested in CudaStepperTest.cpp.
+#include "Backends.h"
 #include "HostExecutor.h"
 
 #include "Cuda/DeviceStepper.h"

@@ -2,6 +2,7 @@
 // executor, ranks as threads: the decomposition, the migration, the ghost protocol and the mask
 // bound across ranks are checked here on any machine (label "solver"); CudaSubdomainTest.cpp
 // runs the same on a GPU.
+#include "Backends.h"
 #include "DecomposedRuns.h"
 #include "HostExecutor.h"
 

@@ -4,6 +4,7 @@
 // detection would otherwise turn every GPU test into a skip and the GPU run would stay green.
 #pragma once
 
+#include "Backends.h"
 #include "Stepper.h"
 
 #include <gtest/gtest.h>

@@ -1,6 +1,7 @@
 // Domain decomposition with the ranks as threads (Distributed/ThreadCluster.h): N ranks
 // against one rank and against the serial backend, matched by particle id.
-#include "Distributed/LocalRank.h"
+#include "Backends.h"
+#include "LocalRank.h"
 #include "Distributed/Slabs.h"
 #include "Distributed/SubdomainStepper.h"
 #include "Distributed/ThreadCluster.h"

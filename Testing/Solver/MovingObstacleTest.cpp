@@ -2,6 +2,7 @@
 // that pushes water without letting a particle into it, a moving floor that drags the fluid only
 // with friction, the same bits on Serial, OpenMP and one decomposed rank (and rounding on two),
 // resumed from a checkpoint or split into other frames, and scene errors naming the key.
+#include "Backends.h"
 #include "Distributed/ThreadCluster.h"
 #include "Scene.h"
 #include "Simulation.h"

@@ -1,6 +1,7 @@
 // Solid obstacles in the step (Physics/Boundary.h) on the host steppers: fluid at rest next to a
 // flat solid reads rho_0 as next to a mirror wall, no particle enters a solid in its way, Serial
 // and OpenMP stay bit-identical, and a backend without obstacles says so.
+#include "Backends.h"
 #include "CpuStepper.h"
 #include "Distributed/SubdomainStepper.h"
 #include "Distributed/ThreadCluster.h"

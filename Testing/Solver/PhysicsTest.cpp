@@ -1,4 +1,5 @@
 // Behaviour of the PBF step on small scenes: rest, symmetry, stability of vorticity confinement.
+#include "Backends.h"
 #include "CpuStepper.h"
 #include "TestScenes.h"
 

@@ -1,6 +1,7 @@
 // XSPH's bi-Laplacian (Parameters::xsphHyperViscosity): on the particle scale it damps a velocity
 // pattern as XSPH's own smoothing does at the same alpha, on a flow's scale far less. (OpenMP
 // against serial with it: BackendEquivalenceTest.)
+#include "Backends.h"
 #include "Scene.h"
 #include "Stepper.h"
 #include "TestScenes.h"

@@ -1,7 +1,5 @@
 #include "Stepper.h"
 
-#include "CpuStepper.h"
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -23,15 +21,6 @@ void Stepper::setObstacles(const std::vector<DistanceGrid>& obstacles, const std
 void Stepper::setObstaclePoses(const std::vector<SolidPose>& poses)
 {
   checkPoseCount(poses.size(), 0);
-}
-
-void checkPoseCount(std::size_t poses, std::size_t solids)
-{
-  if (poses != 0 && poses != solids)
-  {
-    throw InvalidInput("obstacle poses = " + std::to_string(poses) + ": there are " +
-      std::to_string(solids) + " solid(s), one pose each");
-  }
 }
 
 const char* toString(Backend backend)
@@ -102,56 +91,6 @@ Health Stepper::health() const
   h.maxSpeed = s.maxSpeed;
   h.maxDensityError = s.maxDensityError;
   return h;
-}
-
-#ifdef PBF_WITH_CUDA
-// Defined in Cuda/CudaDevice.cu; declared here so that no CUDA header reaches the CPU build.
-std::unique_ptr<Stepper> makeCudaStepper(
-  Precision precision, const Parameters& parameters, const ParticleBatch& initial);
-bool cudaDevicePresent(std::string* why);
-#endif
-
-bool cudaAvailable(std::string* why)
-{
-#ifdef PBF_WITH_CUDA
-  return cudaDevicePresent(why);
-#else
-  if (why)
-  {
-    *why = "this build has no CUDA backend (CUDA compiler not found at configure time)";
-  }
-  return false;
-#endif
-}
-
-std::unique_ptr<Stepper> makeStepper(Backend backend, Precision precision,
-  const Parameters& parameters, const ParticleBatch& initial)
-{
-  switch (backend)
-  {
-    case Backend::Serial:
-    case Backend::OpenMP:
-    {
-      const bool parallel = backend == Backend::OpenMP;
-      if (precision == Precision::Single)
-      {
-        return std::make_unique<CpuStepper<float>>(parallel, parameters, initial);
-      }
-      return std::make_unique<CpuStepper<double>>(parallel, parameters, initial);
-    }
-    case Backend::CUDA:
-    {
-      std::string why;
-      if (!cudaAvailable(&why))
-      {
-        throw std::runtime_error("CUDA backend unavailable: " + why);
-      }
-#ifdef PBF_WITH_CUDA
-      return makeCudaStepper(precision, parameters, initial);
-#endif
-    }
-  }
-  throw std::runtime_error("unknown backend");
 }
 
 } // namespace pbf

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "Parameters.h"
+#include "Particles.h"
 #include "SignedDistance.h"
 #include "Vec3.h"
 
@@ -29,38 +30,6 @@ enum class Precision
 
 const char* toString(Backend backend);
 const char* toString(Precision precision);
-
-// Particles as the host sees them, in the stepper's current (cell-sorted) order: follow a
-// particle across steps by its id, not by its index.
-template <class Real>
-struct Snapshot
-{
-  std::vector<Vec3<Real>> position;
-  std::vector<Vec3<Real>> velocity;
-  std::vector<Real> density; // rho_i from the last constraint evaluation [kg/m^3]
-  std::vector<Real> lambda;  // lambda_i from the last constraint evaluation
-  std::vector<std::int64_t> id;
-};
-
-// Caller-owned host arrays of size() particles laid out as a Snapshot's (a Vec3 is three packed
-// reals, as VTK's interleaved arrays are), for Stepper::readInto. A null pointer skips the array.
-template <class Real>
-struct SnapshotView
-{
-  Vec3<Real>* position = nullptr;
-  Vec3<Real>* velocity = nullptr;
-  Real* density = nullptr;
-  Real* lambda = nullptr;
-  std::int64_t* id = nullptr;
-};
-
-// New particles (emitters); ids are given by the caller so they stay unique across backends.
-struct ParticleBatch
-{
-  std::vector<Vec3d> position;
-  std::vector<Vec3d> velocity;
-  std::vector<std::int64_t> id;
-};
 
 // Measured on the current state; never feeds back into the simulation.
 struct Statistics
@@ -167,18 +136,7 @@ public:
   virtual void setObstaclePoses(const std::vector<SolidPose>& poses);
 };
 
-// Throws InvalidInput unless there is one pose per solid (or none).
-void checkPoseCount(std::size_t poses, std::size_t solids);
-
 // Throws InvalidInput naming the step when dt is not a positive finite number.
 void checkTimeStep(double dt);
-
-// Throws InvalidInput for bad parameters or positions, std::runtime_error when the backend is
-// not available (no CUDA device, or built without CUDA).
-std::unique_ptr<Stepper> makeStepper(Backend backend, Precision precision,
-  const Parameters& parameters, const ParticleBatch& initial);
-
-// True when this build has the CUDA backend and a CUDA device is present.
-bool cudaAvailable(std::string* why = nullptr);
 
 } // namespace pbf

@@ -1,6 +1,6 @@
 #include "BackendChoice.h"
 
-#include "Distributed/Communicator.h"
+#include "Communicator.h"
 
 #include <stdexcept>
 #include <vector>

@@ -1,0 +1,47 @@
+// Particles as plain data: what a scene hands a stepper (ParticleBatch) and what a stepper hands
+// back (Snapshot, or the caller's arrays through a SnapshotView). Below the stepper interface, so
+// that scenes and steppers share them without depending on each other.
+#pragma once
+
+#include "Vec3.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace pbf
+{
+
+// Particles as the host sees them, in the stepper's current (cell-sorted) order: follow a
+// particle across steps by its id, not by its index.
+template <class Real>
+struct Snapshot
+{
+  std::vector<Vec3<Real>> position;
+  std::vector<Vec3<Real>> velocity;
+  std::vector<Real> density; // rho_i from the last constraint evaluation [kg/m^3]
+  std::vector<Real> lambda;  // lambda_i from the last constraint evaluation
+  std::vector<std::int64_t> id;
+};
+
+// Caller-owned host arrays of size() particles laid out as a Snapshot's (a Vec3 is three packed
+// reals, as VTK's interleaved arrays are), for Stepper::readInto. A null pointer skips the array.
+template <class Real>
+struct SnapshotView
+{
+  Vec3<Real>* position = nullptr;
+  Vec3<Real>* velocity = nullptr;
+  Real* density = nullptr;
+  Real* lambda = nullptr;
+  std::int64_t* id = nullptr;
+};
+
+// New particles (emitters); ids are given by the caller so they stay unique across backends.
+struct ParticleBatch
+{
+  std::vector<Vec3d> position;
+  std::vector<Vec3d> velocity;
+  std::vector<std::int64_t> id;
+};
+
+
+} // namespace pbf
