@@ -66,6 +66,65 @@ double percentile(std::vector<double> v, double q)
   return v[lo] + (at - static_cast<double>(lo)) * (v[hi] - v[lo]);
 }
 
+// The run's step times and final state into its result: median and spread, the state's
+// neighbours and compression.
+void summarize(const std::vector<double>& ms, const Stepper& stepper, Result& r)
+{
+  r.medianMs = percentile(ms, 0.5);
+  r.p10Ms = percentile(ms, 0.1);
+  r.p90Ms = percentile(ms, 0.9);
+  r.stepsPerSecond = r.medianMs > 0 ? 1000.0 / r.medianMs : 0.0;
+  const Statistics s = stepper.statistics();
+  r.averageNeighbors = s.averageNeighbors;
+  r.averageDensityError = s.averageDensityError;
+  r.maxDensityError = s.maxDensityError;
+  r.finite = s.finite;
+}
+
+// The benchmark's solid, set on the stepper: 1 a sphere standing on the floor in the surge's way,
+// a fifth of the tank's height across (what one solid costs a step: its distance lookups in every
+// pass near it); 3 the same sphere rolling towards the column at 1 m/s, turning at 1 rad/s (what
+// a moving solid adds: the rotation into its frame at every lookup, its pose's upload before each
+// step); 2 the MARIN box (Data/marin_dam_break.json) in the same proportions of the tank,
+// mirrored in x because this column stands at the -x end. Returns the rolling sphere's motion.
+SolidMotion setBenchmarkSolid(Stepper& stepperRef, const Parameters& parameters, int solid)
+{
+  Stepper* stepper = &stepperRef;
+  SolidMotion rolling;
+  if (solid == 1 || solid == 3)
+  {
+    const Box& d = parameters.domain;
+    SolidRegion sphere;
+    sphere.kind = SolidRegion::Kind::Sphere;
+    sphere.radius = 0.2 * (d.max.y - d.min.y);
+    sphere.center = { d.min.x + 0.6 * (d.max.x - d.min.x), d.min.y + sphere.radius,
+      0.5 * (d.min.z + d.max.z) };
+    if (solid == 3)
+    {
+      rolling.pivot = sphere.center;
+      rolling.keyframes = { { 0.0, { 0, 0, 0 }, Rotation{} },
+        { 1.0, { -1.0, 0, 0 }, Rotation::fromDegrees({ 0, 0, 57.29577951308232 }) } };
+      sphere.motion = rolling;
+      stepper->setObstacles(solidFields({ sphere }, parameters), { rolling.at(0.0) });
+    }
+    else
+    {
+      stepper->setObstacles(solidFields({ sphere }, parameters));
+    }
+  }
+  else if (solid == 2)
+  {
+    const Box& d = parameters.domain;
+    const Vec3d size = d.max - d.min;
+    SolidRegion box;
+    box.kind = SolidRegion::Kind::Box;
+    box.box = { d.min + Vec3d{ (1.0 - 0.8245 / 3.22) * size.x, 0.0, 0.2955 * size.z },
+      d.min + Vec3d{ (1.0 - 0.6635 / 3.22) * size.x, 0.161 * size.y, 0.6985 * size.z } };
+    stepper->setObstacles(solidFields({ box }, parameters));
+  }
+  return rolling;
+}
+
 Result benchmark(const ToolOptions& options, double particles, int warmup, int steps,
   const std::string& neighbors, double skin, bool graphs, int block, int solid)
 {
@@ -110,50 +169,13 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
   r.device = stepper->description();
   // Solid 3: where the rolling sphere is at the end of step s (its pose uploaded before each
   // step, as Simulation does; that copy is part of what it costs).
-  SolidMotion rolling;
+  const SolidMotion rolling = setBenchmarkSolid(*stepper, parameters, solid);
   auto place = [&](int s) {
     if (solid == 3)
     {
       stepper->setObstaclePoses({ rolling.at((s + 1) * parameters.timeStep) });
     }
   };
-  if (solid == 1 || solid == 3)
-  {
-    // A sphere standing on the floor in the surge's way, a fifth of the tank's height across:
-    // what one solid costs a step (its distance lookups in every pass near it). Solid 3 rolls it
-    // towards the column at 1 m/s, turning at 1 rad/s: what a moving solid adds (the rotation
-    // into its frame at every lookup, its pose's upload before each step).
-    const Box& d = parameters.domain;
-    SolidRegion sphere;
-    sphere.kind = SolidRegion::Kind::Sphere;
-    sphere.radius = 0.2 * (d.max.y - d.min.y);
-    sphere.center = { d.min.x + 0.6 * (d.max.x - d.min.x), d.min.y + sphere.radius,
-      0.5 * (d.min.z + d.max.z) };
-    if (solid == 3)
-    {
-      rolling.pivot = sphere.center;
-      rolling.keyframes = { { 0.0, { 0, 0, 0 }, Rotation{} },
-        { 1.0, { -1.0, 0, 0 }, Rotation::fromDegrees({ 0, 0, 57.29577951308232 }) } };
-      sphere.motion = rolling;
-      stepper->setObstacles(solidFields({ sphere }, parameters), { rolling.at(0.0) });
-    }
-    else
-    {
-      stepper->setObstacles(solidFields({ sphere }, parameters));
-    }
-  }
-  else if (solid == 2)
-  {
-    // The MARIN box (Data/marin_dam_break.json) in the same proportions of the tank, mirrored
-    // in x because this column stands at the -x end.
-    const Box& d = parameters.domain;
-    const Vec3d size = d.max - d.min;
-    SolidRegion box;
-    box.kind = SolidRegion::Kind::Box;
-    box.box = { d.min + Vec3d{ (1.0 - 0.8245 / 3.22) * size.x, 0.0, 0.2955 * size.z },
-      d.min + Vec3d{ (1.0 - 0.6635 / 3.22) * size.x, 0.161 * size.y, 0.6985 * size.z } };
-    stepper->setObstacles(solidFields({ box }, parameters));
-  }
 
   for (int s = 0; s < warmup; ++s)
   {
@@ -198,15 +220,7 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
       ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     }
   }
-  r.medianMs = percentile(ms, 0.5);
-  r.p10Ms = percentile(ms, 0.1);
-  r.p90Ms = percentile(ms, 0.9);
-  r.stepsPerSecond = r.medianMs > 0 ? 1000.0 / r.medianMs : 0.0;
-  const Statistics s = stepper->statistics();
-  r.averageNeighbors = s.averageNeighbors;
-  r.averageDensityError = s.averageDensityError;
-  r.maxDensityError = s.maxDensityError;
-  r.finite = s.finite;
+  summarize(ms, *stepper, r);
   return r;
 }
 
@@ -295,6 +309,41 @@ std::vector<double> parseCounts(const std::string& text)
 
 } // namespace
 
+// Each benchmark's own options are refused by the other, not ignored: a measurement must not
+// silently be of something else than the command says.
+void refuseTheOtherBenchmarksOptions(const ToolOptions& options, bool refined)
+{
+  const std::vector<std::string> widenedOnly = { "particles", "sweep", "steps", "warmup",
+    "neighbors", "skin", "graphs", "block", "solid", "json", "label" };
+  const std::vector<std::string> refinedOnly = { "until", "frame", "modes", "csv" };
+  for (const std::string& key : refined ? widenedOnly : refinedOnly)
+  {
+    if (options.extra.count(key))
+    {
+      throw InvalidInput("--" + key + " applies to " +
+        (refined ? std::string("the widened dam break, not to --refined") : "--refined only") +
+        (key == "graphs" ? " (with --refined, PBF_CUDA_GRAPHS=0 launches the kernels one by one)"
+                         : ""));
+    }
+  }
+}
+
+// --refined: the scene refined to each spacing, in each mode, frame by frame; the table printed.
+int runRefinedTable(const ToolOptions& options)
+{
+  const RefinedSettings settings = refinedSettings(options);
+  const Scene scene = toolScene(options);
+  std::vector<RefinedRun> runs;
+  for (double spacing : settings.spacings)
+  {
+    for (const std::string& mode : settings.modes)
+    {
+      runs.push_back(runRefined(options, scene, spacing, mode, settings));
+    }
+  }
+  return printRefinedTable(runs, settings.frameInterval) ? 0 : 1;
+}
+
 int main(int argc, char** argv)
 {
   const std::map<std::string, std::string> keys = {
@@ -320,35 +369,11 @@ int main(int argc, char** argv)
   try
   {
     ToolOptions options = parseToolOptions(argc, argv, keys);
-    // Each benchmark's own options are refused by the other, not ignored: a measurement must not
-    // silently be of something else than the command says.
     const bool refined = options.extra.count("refined") > 0;
-    const std::vector<std::string> widenedOnly = { "particles", "sweep", "steps", "warmup",
-      "neighbors", "skin", "graphs", "block", "solid", "json", "label" };
-    const std::vector<std::string> refinedOnly = { "until", "frame", "modes", "csv" };
-    for (const std::string& key : refined ? widenedOnly : refinedOnly)
-    {
-      if (options.extra.count(key))
-      {
-        throw InvalidInput("--" + key + " applies to " +
-          (refined ? std::string("the widened dam break, not to --refined") : "--refined only") +
-          (key == "graphs" ? " (with --refined, PBF_CUDA_GRAPHS=0 launches the kernels one by one)"
-                           : ""));
-      }
-    }
+    refuseTheOtherBenchmarksOptions(options, refined);
     if (refined)
     {
-      const RefinedSettings settings = refinedSettings(options);
-      const Scene scene = toolScene(options);
-      std::vector<RefinedRun> runs;
-      for (double spacing : settings.spacings)
-      {
-        for (const std::string& mode : settings.modes)
-        {
-          runs.push_back(runRefined(options, scene, spacing, mode, settings));
-        }
-      }
-      return printRefinedTable(runs, settings.frameInterval) ? 0 : 1;
+      return runRefinedTable(options);
     }
     usePaperIterationsUnlessGiven(options);
     auto extra = [&](const std::string& key, const std::string& fallback) {

@@ -29,6 +29,51 @@ FILE* openOutput(const std::string& path, const char* option)
 
 } // namespace
 
+// The experiment's column stood at rest behind its diaphragm: the same column in a box that ends
+// at the gate, simulated for settleT (in T) until the lattice has become the solver's column at
+// rest; its particles, to be released.
+ParticleBatch settledColumn(const MartinMoyceSetup& setup, const ToolOptions& options,
+  double settleT)
+{
+  ParticleBatch released;
+  Scene gated = setup.scene;
+  gated.domain.max.x = kColumnWidth;
+  Simulation settling(gated, setup.parameters, options.backend, options.precision);
+  settling.advanceTo(settleT / setup.timeScale);
+  Snapshot<double> state;
+  settling.stepper().read(state);
+  released.position = state.position;
+  released.velocity = state.velocity;
+  released.id = state.id;
+  const Statistics st = settling.stepper().statistics();
+  std::fprintf(stderr, "martin-moyce: settled for T = %g (%llu steps): max speed %.3g m/s, mean "
+    "compression %.3f %%, max %.3f %%\n", settleT,
+    static_cast<unsigned long long>(settling.stepCount()), st.maxSpeed,
+    100 * st.averageDensityError, 100 * st.maxDensityError);
+  return released;
+}
+
+// The comparison with the record, as CSV rows on standard output.
+void printComparison(const std::vector<FrontSample>& front,
+  const std::vector<FrontSample>& experiment, long across, Simulation& simulation,
+  double timeStep)
+{
+  const FrontComparison c = compareFront(front, experiment);
+  std::printf("Z,T_experiment,T_simulated,relative\n");
+  for (std::size_t k = 0; k < experiment.size(); ++k)
+  {
+    std::printf("%.2f,%.3f,%.4f,%+.4f\n", experiment[k].Z, experiment[k].T, c.simulatedT[k],
+      (c.simulatedT[k] - experiment[k].T) / experiment[k].T);
+  }
+  const double shift = fitTimeShift(c, experiment);
+  std::printf("particles_across,%ld\nparticles,%zu\nsteps,%llu\ndt,%.6g\n"
+              "rms_relative_error,%.4f\nfitted_time_shift,%.4f\n"
+              "rms_relative_error_shifted,%.4f\n",
+    across, simulation.stepper().size(),
+    static_cast<unsigned long long>(simulation.stepCount()), timeStep,
+    c.rmsRelativeError, shift, compareFront(front, experiment, shift).rmsRelativeError);
+}
+
 int main(int argc, char** argv)
 {
   const std::map<std::string, std::string> keys = {
@@ -65,26 +110,8 @@ int main(int argc, char** argv)
     setup.parameters.timeStep *= dtFactor;
     setup.parameters.cflNumber *= dtFactor;
     const double settleT = options.extra.count("settle") ? std::stod(options.extra["settle"]) : 0.0;
-    ParticleBatch released;
-    if (settleT > 0)
-    {
-      // The experiment's column stood at rest behind its diaphragm: the same column in a box that
-      // ends at the gate, simulated until the lattice has become the solver's column at rest.
-      Scene gated = setup.scene;
-      gated.domain.max.x = kColumnWidth;
-      Simulation settling(gated, setup.parameters, options.backend, options.precision);
-      settling.advanceTo(settleT / setup.timeScale);
-      Snapshot<double> state;
-      settling.stepper().read(state);
-      released.position = state.position;
-      released.velocity = state.velocity;
-      released.id = state.id;
-      const Statistics st = settling.stepper().statistics();
-      std::fprintf(stderr, "martin-moyce: settled for T = %g (%llu steps): max speed %.3g m/s, mean "
-        "compression %.3f %%, max %.3f %%\n", settleT,
-        static_cast<unsigned long long>(settling.stepCount()), st.maxSpeed,
-        100 * st.averageDensityError, 100 * st.maxDensityError);
-    }
+    const ParticleBatch released =
+      settleT > 0 ? settledColumn(setup, options, settleT) : ParticleBatch{};
     Simulation simulation = settleT > 0
       ? Simulation(setup.scene, setup.parameters, options.backend, options.precision, released)
       : Simulation(setup.scene, setup.parameters, options.backend, options.precision);
@@ -137,20 +164,7 @@ int main(int argc, char** argv)
       }
       std::fclose(out);
     }
-    const FrontComparison c = compareFront(front, experiment);
-    std::printf("Z,T_experiment,T_simulated,relative\n");
-    for (std::size_t k = 0; k < experiment.size(); ++k)
-    {
-      std::printf("%.2f,%.3f,%.4f,%+.4f\n", experiment[k].Z, experiment[k].T, c.simulatedT[k],
-        (c.simulatedT[k] - experiment[k].T) / experiment[k].T);
-    }
-    const double shift = fitTimeShift(c, experiment);
-    std::printf("particles_across,%ld\nparticles,%zu\nsteps,%llu\ndt,%.6g\n"
-                "rms_relative_error,%.4f\nfitted_time_shift,%.4f\n"
-                "rms_relative_error_shifted,%.4f\n",
-      across, simulation.stepper().size(),
-      static_cast<unsigned long long>(simulation.stepCount()), setup.parameters.timeStep,
-      c.rmsRelativeError, shift, compareFront(front, experiment, shift).rmsRelativeError);
+    printComparison(front, experiment, across, simulation, setup.parameters.timeStep);
   }
   catch (const std::exception& error)
   {

@@ -29,6 +29,71 @@
 
 using namespace pbf;
 
+#ifdef PBF_WITH_CUDA
+struct GpuSurfaceTimes
+{
+  double extractMs = 0, downloadMs = 0, hostMs = 0, bytes = 0;
+  bool identical = false; // the same mesh as the CPU's, to the bit, from either source
+};
+
+// The GPU surface of the same frame: from the stepper's device arrays (extraction and download
+// times, medians of `repeat`) and from the host's arrays as the filter does (wall time, median of
+// up to 5), and whether both are the CPU's mesh.
+GpuSurfaceTimes timeGpuSurface(const cuda::CudaStepperInterface& gpu, const Parameters& parameters,
+  const Snapshot<float>& state, const SurfaceOptions& surface, long repeat, const SurfaceMesh& mesh)
+{
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v[v.size() / 2];
+  };
+  if (gpu.precision() != Precision::Single)
+  {
+    throw InvalidInput("pbf_surface: the GPU comparison reads single precision; drop --precision");
+  }
+  const auto at = gpu.deviceState();
+  cuda::DeviceParticles<float> device;
+  device.x = static_cast<const Vec3<float>*>(at.x);
+  device.v = static_cast<const Vec3<float>*>(at.v);
+  device.rho = static_cast<const float*>(at.density);
+  device.n = at.n;
+  cuda::SurfaceExtractor extractor;
+  SurfaceMesh onDevice = extractor.extract(device, parameters, surface, gpu.stream());
+  std::vector<double> extract, download, host;
+  bool sameSizes = true;
+  for (long k = 0; k < repeat; ++k)
+  {
+    onDevice = extractor.extract(device, parameters, surface, gpu.stream());
+    extract.push_back(extractor.lastTimes().extractMs);
+    download.push_back(extractor.lastTimes().downloadMs);
+  }
+  // From the host's arrays, as the filter does: upload, extract, download, wall time.
+  for (long k = 0; k < std::min<long>(repeat, 5); ++k)
+  {
+    const auto start = std::chrono::steady_clock::now();
+    const SurfaceMesh fromHost = extractor.extract<float>(state.position.data(),
+      state.velocity.data(), state.density.data(), state.position.size(),
+      parameters, surface);
+    host.push_back(std::chrono::duration<double, std::milli>(
+      std::chrono::steady_clock::now() - start).count());
+    sameSizes = sameSizes && fromHost.triangles.size() == onDevice.triangles.size();
+  }
+  GpuSurfaceTimes t;
+  t.extractMs = median(extract);
+  t.downloadMs = median(download);
+  t.hostMs = median(host);
+  t.bytes = static_cast<double>(extractor.deviceBytes());
+  auto same = [](const auto& a, const auto& b) {
+    return a.size() == b.size() &&
+      (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0);
+  };
+  const bool equal = same(onDevice.points, mesh.points) && same(onDevice.normals, mesh.normals) &&
+    same(onDevice.velocity, mesh.velocity) && same(onDevice.density, mesh.density) &&
+    same(onDevice.triangles, mesh.triangles);
+  t.identical = sameSizes && equal;
+  return t;
+}
+#endif
+
 int main(int argc, char** argv)
 {
   const std::map<std::string, std::string> keys = {
@@ -82,51 +147,13 @@ int main(int argc, char** argv)
 #ifdef PBF_WITH_CUDA
     if (const auto* gpu = dynamic_cast<const cuda::CudaStepperInterface*>(&simulation.stepper()))
     {
-      if (gpu->precision() != Precision::Single)
-      {
-        throw InvalidInput("pbf_surface: the GPU comparison reads single precision; drop --precision");
-      }
-      const auto at = gpu->deviceState();
-      cuda::DeviceParticles<float> device;
-      device.x = static_cast<const Vec3<float>*>(at.x);
-      device.v = static_cast<const Vec3<float>*>(at.v);
-      device.rho = static_cast<const float*>(at.density);
-      device.n = at.n;
-      cuda::SurfaceExtractor extractor;
-      SurfaceMesh onDevice = extractor.extract(device, simulation.parameters(), surface, gpu->stream());
-      std::vector<double> extract, download, host;
-      for (long k = 0; k < repeat; ++k)
-      {
-        onDevice = extractor.extract(device, simulation.parameters(), surface, gpu->stream());
-        extract.push_back(extractor.lastTimes().extractMs);
-        download.push_back(extractor.lastTimes().downloadMs);
-      }
-      // From the host's arrays, as the filter does: upload, extract, download, wall time.
-      for (long k = 0; k < std::min<long>(repeat, 5); ++k)
-      {
-        const auto start = std::chrono::steady_clock::now();
-        const SurfaceMesh fromHost = extractor.extract<float>(state.position.data(),
-          state.velocity.data(), state.density.data(), state.position.size(),
-          simulation.parameters(), surface);
-        host.push_back(std::chrono::duration<double, std::milli>(
-          std::chrono::steady_clock::now() - start).count());
-        if (fromHost.triangles.size() != onDevice.triangles.size())
-        {
-          identical = "no";
-        }
-      }
-      extractMs = median(extract);
-      downloadMs = median(download);
-      hostMs = median(host);
-      gpuBytes = static_cast<double>(extractor.deviceBytes()) / n;
-      auto same = [](const auto& a, const auto& b) {
-        return a.size() == b.size() &&
-          (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0);
-      };
-      const bool equal = same(onDevice.points, mesh.points) && same(onDevice.normals, mesh.normals) &&
-        same(onDevice.velocity, mesh.velocity) && same(onDevice.density, mesh.density) &&
-        same(onDevice.triangles, mesh.triangles);
-      identical = identical == "no" ? "no" : (equal ? "yes" : "no");
+      const GpuSurfaceTimes t = timeGpuSurface(*gpu, simulation.parameters(), state, surface,
+        repeat, mesh);
+      extractMs = t.extractMs;
+      downloadMs = t.downloadMs;
+      hostMs = t.hostMs;
+      gpuBytes = t.bytes / n;
+      identical = t.identical ? "yes" : "no";
     }
 #endif
     const double cpu = median(cpuMs);
