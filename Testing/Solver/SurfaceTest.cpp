@@ -78,6 +78,28 @@ std::size_t openEdges(const SurfaceMesh& mesh)
   return open;
 }
 
+// A 0.4 x 0.4 x 0.2 m block of lattice at rest with its top face at z = 0.5 m (a flat free
+// surface), every particle at the rest density.
+struct FlatBlock
+{
+  Parameters parameters;
+  ParticleBatch particles;
+  std::vector<double> rho;
+};
+
+FlatBlock flatBlock()
+{
+  FlatBlock b;
+  b.parameters.particleSpacing = kSpacing;
+  Scene scene;
+  scene.domain = { { 0, 0, 0 }, { 1, 1, 1 } };
+  scene.boxes.push_back({ { 0.3, 0.3, 0.3 }, { 0.7, 0.7, 0.5 }, { 0, 0, 0 } });
+  b.parameters.domain = scene.domain;
+  b.particles = fillScene(scene, b.parameters);
+  b.rho.assign(b.particles.position.size(), b.parameters.restDensity);
+  return b;
+}
+
 } // namespace
 
 TEST(Surface, ASphereOfFluidGivesAClosedSurfaceWithinHalfASpacing)
@@ -376,14 +398,10 @@ TEST(Surface, AnisotropicKernelsFlattenTheWaterAndKeepTheSphere)
   // A block of fluid at rest: its top face, a flat free surface, is flatter with anisotropic
   // kernels (the kernels of its last layer are squeezed along the normal); the sphere stays
   // within half a spacing of the true one and closed; threads change no bit.
-  Parameters p;
-  p.particleSpacing = kSpacing;
-  Scene scene;
-  scene.domain = { { 0, 0, 0 }, { 1, 1, 1 } };
-  scene.boxes.push_back({ { 0.3, 0.3, 0.3 }, { 0.7, 0.7, 0.5 }, { 0, 0, 0 } });
-  p.domain = scene.domain;
-  const ParticleBatch block = fillScene(scene, p);
-  const std::vector<double> rho(block.position.size(), p.restDensity);
+  const FlatBlock flat = flatBlock();
+  const Parameters& p = flat.parameters;
+  const ParticleBatch& block = flat.particles;
+  const std::vector<double>& rho = flat.rho;
   SurfaceOptions round, stretched;
   stretched.anisotropic = true;
   // The top face's height, over the vertices above the block's middle: its spread, the surface's
@@ -466,14 +484,10 @@ TEST(Surface, TheIsoValueMovesAFlatSurfaceByTheHalfSpacesLevel)
   // h * halfSpaceLevel(iso). The lattice's discreteness moves the mean by at most 0.03 s at
   // these levels (measured -0.011, -0.028, +0.016 s); 0.05 s is the tolerance, and a level read
   // 0.05 off (0.45 for 0.5: 0.04 h = 0.08 s) cannot pass.
-  Parameters p;
-  p.particleSpacing = kSpacing;
-  Scene scene;
-  scene.domain = { { 0, 0, 0 }, { 1, 1, 1 } };
-  scene.boxes.push_back({ { 0.3, 0.3, 0.3 }, { 0.7, 0.7, 0.5 }, { 0, 0, 0 } });
-  p.domain = scene.domain;
-  const ParticleBatch block = fillScene(scene, p);
-  const std::vector<double> rho(block.position.size(), p.restDensity);
+  const FlatBlock flat = flatBlock();
+  const Parameters& p = flat.parameters;
+  const ParticleBatch& block = flat.particles;
+  const std::vector<double>& rho = flat.rho;
   double lastLayer = 0;
   for (const Vec3d& x : block.position)
   {
