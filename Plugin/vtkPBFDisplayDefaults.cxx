@@ -55,6 +55,14 @@ double SceneSpeedOf(vtkPVDataInformation* info)
   return array ? array->GetComponentRange(0)[1] : 0.0;
 }
 
+// The color map a display colors with, or null.
+vtkSMProxy* ColorsOf(vtkSMProxy* display)
+{
+  return display->GetProperty("LookupTable")
+    ? vtkSMPropertyHelper(display, "LookupTable", /*quiet=*/true).GetAsProxy()
+    : nullptr;
+}
+
 // Whether a color map rescales itself as data changes (the plugin's default, Grow and update
 // every timestep, or Grow and update on Apply): a range the user locked or made custom stays.
 bool Grows(vtkSMProxy* colors)
@@ -303,9 +311,7 @@ void vtkPBFDisplayDefaults::OnDataUpdated(vtkObject* caller, unsigned long, void
     }
     // A new time shown through the view (ViewTime) or asked of the source (UpdatePipeline(t))
     // grows the map as an animation tick does: ParaView grows it on ticks alone.
-    vtkSMProxy* colors = display->GetProperty("LookupTable")
-      ? vtkSMPropertyHelper(display, "LookupTable", /*quiet=*/true).GetAsProxy()
-      : nullptr;
+    vtkSMProxy* colors = ColorsOf(display);
     vtkPVArrayInformation* velocity =
       info ? info->GetArrayInformation("velocity", vtkDataObject::POINT) : nullptr;
     const char* colored = vtkSMPropertyHelper(display, "ColorArrayName").GetInputArrayNameToProcess();
@@ -342,8 +348,7 @@ void vtkPBFDisplayDefaults::WidenToSceneSpeed(vtkSMProxy* colors)
   for (const vtkInternals::Followed& followed : this->Internals->Displays)
   {
     vtkSMProxy* display = followed.Display;
-    if (display->GetProperty("LookupTable") &&
-      vtkSMPropertyHelper(display, "LookupTable", /*quiet=*/true).GetAsProxy() == colors)
+    if (ColorsOf(display) == colors)
     {
       top = std::max(top, followed.SceneSpeed);
     }

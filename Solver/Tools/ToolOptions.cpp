@@ -52,7 +52,7 @@ Setter tableSetter(const ParameterSpec& spec)
       (values[0] != std::floor(values[0]) || std::abs(values[0]) > 1e9))
     {
       // Converting beyond int is undefined.
-      throw InvalidInput("not a whole number in " + spec.valid.rule().substr(8));
+      throw InvalidInput("not a whole number (" + spec.valid.rule() + ")");
     }
     for (int c = 0; c < spec.components(); ++c)
     {
