@@ -12,6 +12,8 @@
 # PBF_COMPARE_REFINED="0.005:0.5 0.0025:0.2": also the refined dam break at spacing S to time T
 # with the defaults (pbf_bench --refined S --until T --modes defaults), both trees, two rounds:
 # ms per step, per frame and per simulated second. PBF_COMPARE_ONLY_REFINED=1: nothing else.
+# PBF_COMPARE_HASHES=1: also the frames' fingerprints of both trees (Utilities/frame_hashes.sh:
+# CUDA at the scenes' spacing, serial and OpenMP at 5 cm), and whether they are the same.
 set -uo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 baseline=$(cd "${1:?usage: gpu/compare.sh BASELINE_TREE}" && pwd)
@@ -20,14 +22,14 @@ mkdir -p "$out"
 generator=()
 command -v ninja >/dev/null && generator=(-G Ninja)
 
-build() { # build TREE DIR: pbf_bench of TREE into DIR
+build() { # build TREE DIR: pbf_bench and pbf_frame_hash of TREE into DIR
   cmake -S "$1" -B "$2" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DPBF_SOLVER_ONLY=ON \
     -DCMAKE_CUDA_ARCHITECTURES=90 -DPBF_JSON_INCLUDE_DIR="$root/.deps/json" \
     -DPBF_GTEST_SOURCE_DIR="$root/.deps/googletest" >"$out/configure-$(basename "$2").log" 2>&1 &&
-    cmake --build "$2" -j "$(nproc)" --target pbf_bench >"$out/build-$(basename "$2").log" 2>&1
+    cmake --build "$2" -j "$(nproc)" --target pbf_bench pbf_frame_hash >"$out/build-$(basename "$2").log" 2>&1
 }
 this_build=${PBF_GPU_BUILD:-/tmp/pbf-gpu-build}
-[[ -x $this_build/Solver/Tools/pbf_bench ]] || build "$root" "$this_build" || { echo "this tree: build FAILED"; exit 1; }
+[[ -x $this_build/Solver/Tools/pbf_frame_hash ]] || build "$root" "$this_build" || { echo "this tree: build FAILED"; exit 1; }
 build "$baseline" /tmp/pbf-gpu-baseline || { tail -20 "$out"/build-pbf-gpu-baseline.log; echo "baseline: build FAILED"; exit 1; }
 
 configs=("64k_f32:--particles 64000 --warmup 20 --steps 100"
@@ -73,6 +75,18 @@ if ((${#refined[@]})); then
   for file in "$out"/refined-*.txt; do
     echo "$(basename "$file" .txt): $(grep -E '^[0-9.]+ +defaults' "$file")"
   done
+fi
+
+if [[ ${PBF_COMPARE_HASHES:-0} == 1 ]]; then
+  for tree in baseline this; do
+    dir=$this_build
+    [[ $tree == baseline ]] && dir=/tmp/pbf-gpu-baseline
+    { bash "$root/Utilities/frame_hashes.sh" "$dir" cuda
+      bash "$root/Utilities/frame_hashes.sh" "$dir" "serial openmp" --spacing 0.05; } >"$out/hashes-$tree.csv" 2>&1
+  done
+  echo "frame hashes: $(grep -c ',all,' "$out/hashes-this.csv") runs, $(grep -c FAILED "$out/hashes-this.csv") failed;" \
+    "$(diff -q "$out/hashes-baseline.csv" "$out/hashes-this.csv" >/dev/null && echo "every frame the same as the baseline's" || echo "DIFFERENT from the baseline:")"
+  diff "$out/hashes-baseline.csv" "$out/hashes-this.csv" | head -20
 fi
 
 python3 - "$out" "${variants[@]%%=*}" <<'PY'
