@@ -1,5 +1,6 @@
 #include "Backends.h"
 
+#include "BackendChoice.h"
 #include "CpuStepper.h"
 #include "Distributed/SubdomainStepper.h"
 #include "LocalRank.h"
@@ -71,28 +72,16 @@ std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backen
 {
   if (backend == Backend::CUDA)
   {
-#ifdef PBF_WITH_CUDA
     // Collective: every rank asks for CUDA, and they agree on whether all have a device before
-    // any constructs, so that a rank without one does not leave the others waiting for it in
-    // the first exchange: then every rank throws.
-    const int local = localRank(communicator);
-    const int devices = cuda::cudaDeviceCount();
+    // any constructs (chooseBackend), so that a rank without one does not leave the others
+    // waiting for it in the first exchange: then every rank throws.
     std::string why;
-    const bool mine = devices > 0 && cudaAvailable(&why);
-    if (!everyRankHasAGpu(communicator))
-    {
-      throw std::runtime_error("CUDA backend unavailable on " +
-        (mine ? std::string("another rank") :
-                "rank " + std::to_string(communicator.rank()) + ": " +
-              (why.empty() ? "no CUDA device" : why)) +
-        "; a decomposed run needs a GPU on every rank for Backend = CUDA (Auto falls back to "
-        "the CPU on every rank)");
-    }
-    return cuda::makeCudaSubdomainStepper(
-      communicator, precision, parameters, everything, local % devices);
+    chooseBackend(BackendRequest::CUDA, cudaAvailable(&why), why, &communicator);
+#ifdef PBF_WITH_CUDA
+    return cuda::makeCudaSubdomainStepper(communicator, precision, parameters, everything,
+      localRank(communicator) % cuda::cudaDeviceCount());
 #else
-    throw std::runtime_error("Backend = CUDA: this build has no CUDA backend (CUDA compiler not "
-                             "found at configure time); choose CPU (OpenMP) or Serial");
+    throw std::logic_error("chooseBackend let CUDA through in a build without it");
 #endif
   }
   const bool parallel = backend == Backend::OpenMP;
@@ -103,24 +92,13 @@ std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backen
   return std::make_unique<SubdomainStepper<double>>(communicator, parallel, parameters, everything);
 }
 
-bool everyRankHasAGpu(Communicator& communicator)
-{
-  double mine = 0;
-#ifdef PBF_WITH_CUDA
-  mine = cudaAvailable() && cuda::cudaDeviceCount() > 0 ? 1.0 : 0.0;
-#endif
-  bool all = true;
-  for (const std::vector<double>& r : allGather(communicator, { mine }))
-  {
-    all = all && r[0] != 0;
-  }
-  return all;
-}
-
 std::unique_ptr<Stepper> makeSubdomainStepperAuto(Communicator& communicator, Precision precision,
   const Parameters& parameters, const ParticleBatch& everything, Backend cpu)
 {
-  const Backend backend = everyRankHasAGpu(communicator) ? Backend::CUDA : cpu;
+  std::string why;
+  const BackendChoice choice =
+    chooseBackend(BackendRequest::Auto, cudaAvailable(&why), why, &communicator);
+  const Backend backend = choice.backend == Backend::CUDA ? Backend::CUDA : cpu;
   return makeSubdomainStepper(communicator, backend, precision, parameters, everything);
 }
 

@@ -28,15 +28,12 @@ namespace distributed
 // This rank's stepper for a decomposed run: SubdomainStepper of the precision, OpenMP or serial;
 // with Backend::CUDA the CUDA sub-domain stepper (Cuda/DeviceSubdomainStepper.h) on the device
 // numbered by this rank's local rank (LocalRank.h) modulo the devices it sees. Collective.
-// Throws std::runtime_error for CUDA where this build or this rank has none.
+// Throws std::runtime_error for CUDA unless every rank has a GPU (chooseBackend decides).
 std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backend backend,
   Precision precision, const Parameters& parameters, const ParticleBatch& everything);
 
-// Collective: whether every rank has a usable CUDA device.
-bool everyRankHasAGpu(Communicator& communicator);
-
-// Backend "Auto" for a decomposed run: CUDA when every rank has a usable GPU, otherwise the CPU
-// backend `cpu` on every rank. The CPU and CUDA sub-domain steppers exchange different messages
+// Backend "Auto" for a decomposed run: CUDA when every rank has a usable GPU (chooseBackend),
+// otherwise the CPU backend `cpu` on every rank. The CPU and CUDA sub-domain steppers exchange different messages
 // (the CUDA one merges rounds), so the ranks of one run must all use the same kind: a rank
 // without a GPU takes the whole run to the CPU. Collective.
 std::unique_ptr<Stepper> makeSubdomainStepperAuto(Communicator& communicator, Precision precision,

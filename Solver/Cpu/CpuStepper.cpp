@@ -73,16 +73,16 @@ void CpuStepper<Real>::step()
   {
     return;
   }
-  {
-    const FluidView<Real> f = fluid_.view();
-    forEachParticle([&](std::uint32_t i) { predictPosition(i, f); });
-  }
-  // Neighbours are found once per step, on the predicted positions (Algorithm 1, line 7).
-  sortByCell();
   report_ = StepReport{};
-  projectAndUpdate(
-    fluid_, [&](auto&& stage) { forEachParticle(stage); }, [](HostField) {},
-    [&] { return compression(); }, report_);
+  HostStepLoop<Real, CpuStepper> loop(fluid_, *this, report_);
+  runStep(loop, SolveRule::of(fluid_.parameters));
+}
+
+template <class Real>
+void CpuStepper<Real>::predict()
+{
+  const FluidView<Real> f = fluid_.view();
+  forEachParticle([&](std::uint32_t i) { predictPosition(i, f); });
 }
 
 template <class Real>

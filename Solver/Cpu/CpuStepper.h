@@ -3,6 +3,7 @@
 // are bit-identical by construction.
 #pragma once
 
+#include "HostStepLoop.h"
 #include "HostStepper.h"
 
 #include <vector>
@@ -35,6 +36,14 @@ public:
   void load(const Snapshot<double>& state) override { loadState(state); }
 
 private:
+  // The stages of a step that are this stepper's own (HostStepLoop.h).
+  friend class HostStepLoop<Real, CpuStepper>;
+  void predict();
+  void findNeighbours() { sortByCell(); }
+  template <class Stage>
+  void forEach(Stage&& stage) { forEachParticle(stage); }
+  void refresh(HostField) {} // every particle is this stepper's own
+
   template <class In>
   void loadState(const Snapshot<In>& state)
   {

@@ -6,7 +6,6 @@
 #pragma once
 
 #include "CellSort.h"
-#include "Chebyshev.h"
 #include "Equations.h"
 #include "Boundary.h"
 #include "HostParticles.h"
@@ -14,7 +13,6 @@
 #include "Stepper.h"
 
 #include <cstdint>
-#include <limits>
 #include <vector>
 
 namespace pbf
@@ -166,74 +164,5 @@ enum class HostField
   Velocity,         // after the velocity update
   Vorticity         // omega and XSPH's sum, before the confinement
 };
-
-// The constraint projections and the velocity passes of one step (Algorithm 1, lines 8-23) over
-// particles already predicted and sorted by cell, once for every host stepper:
-// forEach(stage) runs a stage over the particles the stepper owns, refresh(field) brings that
-// field of the particles it does not own up to date (nothing to do when it owns them all), and
-// compression() is the mean and largest compression of the whole fluid (for the adaptive stop).
-template <class Real, class ForEach, class Refresh, class Compress>
-void projectAndUpdate(HostFluid<Real>& fluid, ForEach&& forEach, Refresh&& refresh,
-  Compress&& compression, StepReport& report)
-{
-  const FluidView<Real> f = fluid.view();
-  const FluidView<Real> first = fluid.view(true); // the first projection adds s_corr
-  const Parameters& parameters = fluid.parameters;
-  const bool adaptive = parameters.densityErrorTolerance > 0;
-  // Chebyshev's positions two projections back (Chebyshev.h) live in omega's array, which the
-  // solve does not use: each projection leaves there the positions it started from, which the
-  // next one's blend reads as p^{k-1}.
-  Vec3<Real>* const twoBack = fluid.omega.data();
-  for (int iteration = 0; iteration < parameters.solverIterations; ++iteration)
-  {
-    forEach([&](std::uint32_t i) { densityAndLambda(i, f); });
-    refresh(HostField::DensityAndLambda);
-    if (adaptive)
-    {
-      // The constraint already holds well enough: no need to project again. The first
-      // projection always runs: it carries the step's tensile push.
-      const Compression c = compression();
-      report.densityError = c.mean;
-      if (iteration > 0 &&
-        c.within(parameters.densityErrorTolerance, parameters.maxDensityErrorTolerance))
-      {
-        break;
-      }
-    }
-    const FluidView<Real>& pass = iteration == 0 ? first : f;
-    forEach([&](std::uint32_t i) { positionCorrection(i, pass); });
-    const Real omega = static_cast<Real>(chebyshevWeight(parameters.chebyshevRho, iteration));
-    if (parameters.chebyshevRho > 0)
-    {
-      // p^k is kept for the next projection's blend, which reads it as p^{k-1}.
-      forEach([&](std::uint32_t i) {
-        const Vec3<Real> before = f.p[i];
-        applyCorrection(i, f);
-        if (iteration > 0)
-        {
-          f.p[i] = acceleratedCorrection(f.p[i], twoBack[i], omega, f);
-        }
-        twoBack[i] = before;
-      });
-    }
-    else
-    {
-      forEach([&](std::uint32_t i) { applyCorrection(i, f); });
-    }
-    refresh(HostField::Predicted);
-    ++report.iterations;
-  }
-  if (!adaptive)
-  {
-    report.densityError = std::numeric_limits<double>::quiet_NaN();
-  }
-  forEach([&](std::uint32_t i) { updateVelocity(i, f); });
-  refresh(HostField::Velocity);
-  forEach([&](std::uint32_t i) { vorticityAndXsph(i, f); });
-  refresh(HostField::Vorticity);
-  // The velocity in place: each particle reads only its own.
-  forEach([&](std::uint32_t i) { vorticityConfinement(i, f, f.v); });
-  forEach([&](std::uint32_t i) { commitPosition(i, f, fluid.x.data()); });
-}
 
 } // namespace pbf

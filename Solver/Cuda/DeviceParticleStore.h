@@ -170,6 +170,101 @@ public:
   Pointers p;
 
 private:
+  // Where each array lies in an arena of `capacity` particles: byte offsets from its start, each
+  // 256-byte aligned; 0 for an array the ParticleArrays leave out.
+  struct Layout
+  {
+    std::size_t vec[4] = {};
+    std::size_t density = 0, lambda = 0, volume = 0, omegaLength = 0;
+    std::size_t densityAlt = 0, lambdaAlt = 0, id = 0, idAlt = 0;
+    std::size_t keys[2] = {};
+    std::size_t masks = 0, moved = 0;
+    std::size_t list[kMaxParticleLists] = {};
+    std::size_t blockSums = 0;
+    std::size_t total = 0;
+  };
+
+  static Layout layoutOf(std::size_t capacity, const ParticleArrays& a)
+  {
+    Layout l;
+    std::size_t offset = 0;
+    auto place = [&offset](std::size_t bytes) {
+      const std::size_t at = offset;
+      offset += (bytes + 255) / 256 * 256;
+      return at;
+    };
+    for (std::size_t& at : l.vec)
+    {
+      at = place(capacity * sizeof(Vec3<Real>));
+    }
+    const std::size_t scalar = capacity * sizeof(Real);
+    l.density = place(scalar);
+    l.lambda = place(scalar);
+    l.volume = a.volumes ? place(scalar) : 0;
+    l.omegaLength = a.volumes ? place(scalar) : 0;
+    l.densityAlt = a.alternates ? place(scalar) : 0;
+    l.lambdaAlt = a.alternates ? place(scalar) : 0;
+    l.id = place(capacity * sizeof(std::int64_t));
+    l.idAlt = a.alternates ? place(capacity * sizeof(std::int64_t)) : 0;
+    l.keys[0] = place(capacity * sizeof(CellKey));
+    l.keys[1] = place(capacity * sizeof(CellKey));
+    l.masks = a.masks ? place(kNeighborRows * capacity * sizeof(std::uint32_t)) : 0;
+    l.moved = a.moved ? place(capacity * sizeof(float)) : 0;
+    for (int k = 0; k < a.lists; ++k)
+    {
+      l.list[k] = place(capacity * sizeof(std::uint32_t));
+    }
+    l.blockSums =
+      place(2 * ((capacity + kCompressionBlock - 1) / kCompressionBlock) * sizeof(double));
+    l.total = offset;
+    return l;
+  }
+
+  Pointers pointersInto(void* arena, const Layout& l) const
+  {
+    const ParticleArrays& a = arrays_;
+    char* base = static_cast<char*>(arena);
+    auto at = [base](std::size_t offsetOf) { return static_cast<void*>(base + offsetOf); };
+    Pointers q;
+    for (int i = 0; i < 4; ++i)
+    {
+      q.vec[i] = static_cast<Vec3<Real>*>(at(l.vec[i]));
+    }
+    q.density = static_cast<Real*>(at(l.density));
+    q.lambda = static_cast<Real*>(at(l.lambda));
+    q.volume = a.volumes ? static_cast<Real*>(at(l.volume)) : nullptr;
+    q.omegaLength = a.volumes ? static_cast<Real*>(at(l.omegaLength)) : nullptr;
+    q.densityAlt = a.alternates ? static_cast<Real*>(at(l.densityAlt)) : nullptr;
+    q.lambdaAlt = a.alternates ? static_cast<Real*>(at(l.lambdaAlt)) : nullptr;
+    q.id = static_cast<std::int64_t*>(at(l.id));
+    q.idAlt = a.alternates ? static_cast<std::int64_t*>(at(l.idAlt)) : nullptr;
+    q.keys[0] = static_cast<CellKey*>(at(l.keys[0]));
+    q.keys[1] = static_cast<CellKey*>(at(l.keys[1]));
+    q.masks = a.masks ? static_cast<std::uint32_t*>(at(l.masks)) : nullptr;
+    q.moved = a.moved ? static_cast<float*>(at(l.moved)) : nullptr;
+    for (int k = 0; k < a.lists; ++k)
+    {
+      q.list[k] = static_cast<std::uint32_t*>(at(l.list[k]));
+    }
+    q.blockSums = static_cast<double*>(at(l.blockSums));
+    return q;
+  }
+
+  // What the arena (total bytes) and the sort's scratch (temp) need against the device's free
+  // memory, as an InvalidInput naming the count when they do not fit.
+  std::string memoryNeed(std::size_t particles, std::size_t capacity, std::size_t total,
+    std::size_t temp, std::size_t reserve, std::size_t freeBytes, std::size_t totalBytes) const
+  {
+    auto mib = [](std::size_t bytes) { return std::to_string((bytes + (1u << 19)) >> 20); };
+    return "particle count = " + std::to_string(particles) + " (capacity " +
+      std::to_string(capacity) + "): the CUDA backend needs " + mib(total + temp) +
+      " MiB of GPU memory for its particles (" + std::to_string(bytesPerParticle(arrays_)) +
+      " bytes per particle, " + mib(temp) + " MiB of scratch for " + std::to_string(cells_ - 1) +
+      " grid cells) plus " + mib(reserve) + " MiB head room, but " + device_.name() + " has " +
+      mib(freeBytes) + " MiB free of " + mib(totalBytes) +
+      " MiB; use fewer particles, a larger particleSpacing, more ranks or a CPU backend";
+  }
+
   void layOut(std::size_t capacity, std::size_t particles)
   {
     if (capacity >= std::numeric_limits<std::uint32_t>::max())
@@ -177,54 +272,17 @@ private:
       throw InvalidInput("particle count = " + std::to_string(capacity) +
         ": more than 32-bit indices hold");
     }
-    std::size_t offset = 0;
-    auto place = [&offset](std::size_t bytes) {
-      const std::size_t at = offset;
-      offset += (bytes + 255) / 256 * 256;
-      return at;
-    };
-    const ParticleArrays& a = arrays_;
-    std::size_t vecAt[4];
-    for (std::size_t& at : vecAt)
-    {
-      at = place(capacity * sizeof(Vec3<Real>));
-    }
-    const std::size_t scalar = capacity * sizeof(Real);
-    const std::size_t densityAt = place(scalar), lambdaAt = place(scalar);
-    const std::size_t volumeAt = a.volumes ? place(scalar) : 0;
-    const std::size_t omegaLengthAt = a.volumes ? place(scalar) : 0;
-    const std::size_t densityAltAt = a.alternates ? place(scalar) : 0;
-    const std::size_t lambdaAltAt = a.alternates ? place(scalar) : 0;
-    const std::size_t idAt = place(capacity * sizeof(std::int64_t));
-    const std::size_t idAltAt = a.alternates ? place(capacity * sizeof(std::int64_t)) : 0;
-    const std::size_t keysAt[2] = { place(capacity * sizeof(CellKey)),
-      place(capacity * sizeof(CellKey)) };
-    const std::size_t masksAt = a.masks ? place(kNeighborRows * capacity * sizeof(std::uint32_t)) : 0;
-    const std::size_t movedAt = a.moved ? place(capacity * sizeof(float)) : 0;
-    std::size_t listAt[kMaxParticleLists] = {};
-    for (int k = 0; k < a.lists; ++k)
-    {
-      listAt[k] = place(capacity * sizeof(std::uint32_t));
-    }
-    const std::size_t blockSumsAt =
-      place(2 * ((capacity + kCompressionBlock - 1) / kCompressionBlock) * sizeof(double));
-    const std::size_t total = offset;
+    const Layout layout = layoutOf(capacity, arrays_);
+    const std::size_t total = layout.total;
     const std::size_t temp =
       device_.tempBytesFor(static_cast<std::uint32_t>(capacity), cells_, keyBits_);
-
     std::size_t freeBytes = 0, totalBytes = 0;
     device_.memoryInfo(freeBytes, totalBytes);
     // Head room for what the driver allocates beside us: the kernels' stacks, graphs, CUB's
     // per-launch state.
     const std::size_t reserve = std::size_t(128) << 20;
-    auto mib = [](std::size_t bytes) { return std::to_string((bytes + (1u << 19)) >> 20); };
-    const std::string need = "particle count = " + std::to_string(particles) + " (capacity " +
-      std::to_string(capacity) + "): the CUDA backend needs " + mib(total + temp) +
-      " MiB of GPU memory for its particles (" + std::to_string(bytesPerParticle(a)) +
-      " bytes per particle, " + mib(temp) + " MiB of scratch for " + std::to_string(cells_ - 1) +
-      " grid cells) plus " + mib(reserve) + " MiB head room, but " + device_.name() + " has " +
-      mib(freeBytes) + " MiB free of " + mib(totalBytes) +
-      " MiB; use fewer particles, a larger particleSpacing, more ranks or a CPU backend";
+    const std::string need =
+      memoryNeed(particles, capacity, total, temp, reserve, freeBytes, totalBytes);
     if (total + temp + reserve > freeBytes)
     {
       throw InvalidInput(need);
@@ -243,35 +301,11 @@ private:
       device_.release(arena);
       throw;
     }
-    char* base = static_cast<char*>(arena);
-    auto at = [base](std::size_t offsetOf) { return static_cast<void*>(base + offsetOf); };
-    Pointers q;
-    for (int i = 0; i < 4; ++i)
-    {
-      q.vec[i] = static_cast<Vec3<Real>*>(at(vecAt[i]));
-    }
-    q.density = static_cast<Real*>(at(densityAt));
-    q.lambda = static_cast<Real*>(at(lambdaAt));
-    q.volume = a.volumes ? static_cast<Real*>(at(volumeAt)) : nullptr;
-    q.omegaLength = a.volumes ? static_cast<Real*>(at(omegaLengthAt)) : nullptr;
-    q.densityAlt = a.alternates ? static_cast<Real*>(at(densityAltAt)) : nullptr;
-    q.lambdaAlt = a.alternates ? static_cast<Real*>(at(lambdaAltAt)) : nullptr;
-    q.id = static_cast<std::int64_t*>(at(idAt));
-    q.idAlt = a.alternates ? static_cast<std::int64_t*>(at(idAltAt)) : nullptr;
-    q.keys[0] = static_cast<CellKey*>(at(keysAt[0]));
-    q.keys[1] = static_cast<CellKey*>(at(keysAt[1]));
-    q.masks = a.masks ? static_cast<std::uint32_t*>(at(masksAt)) : nullptr;
-    q.moved = a.moved ? static_cast<float*>(at(movedAt)) : nullptr;
-    for (int k = 0; k < a.lists; ++k)
-    {
-      q.list[k] = static_cast<std::uint32_t*>(at(listAt[k]));
-    }
-    q.blockSums = static_cast<double*>(at(blockSumsAt));
     // Nothing reads these before writing them; zeroed all the same, so that a stale value can
     // never look like a result.
     device_.executor().fillZero(arena, total);
     arena_ = arena;
-    p = q;
+    p = pointersInto(arena, layout);
     capacity_ = capacity;
     bytes_ = total;
     tempBytes_ = temp;

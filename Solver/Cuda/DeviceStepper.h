@@ -1,5 +1,5 @@
 // The single-GPU stepper: the state lives in device memory from construction to destruction; a
-// step is the schedule of StepSchedule.h queued on the device (replayed as one captured graph
+// step is StepLoop.h run over DeviceStepLoop.h, queued on the device (replayed as one captured graph
 // when Options::graphs) and returns at once; read(), statistics(), health(), diagnostics() and, in
 // adaptive mode, lastStep() are the only copies back, and only when called.
 //
@@ -25,7 +25,7 @@
 #include "Equations.h"
 #include "ParticleChecks.h"
 #include "StatisticsScan.h"
-#include "StepSchedule.h"
+#include "DeviceStepLoop.h"
 
 #include <algorithm>
 #include <cmath>

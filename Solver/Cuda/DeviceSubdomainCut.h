@@ -97,6 +97,43 @@ void DeviceSubdomainStepper<Real, Device>::checkOwnerCounts(const std::uint32_t*
 }
 
 template <class Real, class Device>
+void DeviceSubdomainStepper<Real, Device>::exchangeMigrants(
+  const unsigned char* staging, const std::uint32_t* owners)
+{
+  using Record = subdomain::Migrant<Real>;
+  const int me = communicator_.rank();
+  const auto ranks = static_cast<std::size_t>(communicator_.size());
+  std::size_t offset = 0;
+  for (std::size_t to = 0; to < ranks; ++to)
+  {
+    out_[to].clear();
+    if (static_cast<int>(to) == me)
+    {
+      continue;
+    }
+    const std::size_t bytes = std::size_t(owners[to + 1]) * sizeof(Record);
+    out_[to].assign(staging + offset, staging + offset + bytes);
+    offset += bytes;
+  }
+  // Every rank knows what each sends it (the cut's counts): point-to-point with the ranks
+  // that send or receive, no collective over all ranks.
+  for (std::size_t from = 0; from < ranks; ++from)
+  {
+    inSizes_[from] = std::size_t(arrivingFrom_[from]) * sizeof(Record);
+  }
+  communicator_.exchangeKnownSizes(out_, in_, inSizes_);
+  for (std::size_t from = 0; from < ranks; ++from)
+  {
+    if (in_[from].size() != std::size_t(arrivingFrom_[from]) * sizeof(Record))
+    {
+      throw std::logic_error("migration from rank " + std::to_string(from) + ": " +
+        std::to_string(in_[from].size()) + " bytes, expected " +
+        std::to_string(std::size_t(arrivingFrom_[from]) * sizeof(Record)));
+    }
+  }
+}
+
+template <class Real, class Device>
 typename DeviceSubdomainStepper<Real, Device>::Roles4 DeviceSubdomainStepper<Real, Device>::migrate(
   Roles4 r)
 {
@@ -162,34 +199,7 @@ typename DeviceSubdomainStepper<Real, Device>::Roles4 DeviceSubdomainStepper<Rea
   }
   device_->waitEvent();
   checkOwnerCounts(owners.data());
-  std::size_t offset = 0;
-  for (std::size_t to = 0; to < ranks; ++to)
-  {
-    out_[to].clear();
-    if (static_cast<int>(to) == me)
-    {
-      continue;
-    }
-    const std::size_t bytes = std::size_t(owners[to + 1]) * sizeof(Record);
-    out_[to].assign(staging + offset, staging + offset + bytes);
-    offset += bytes;
-  }
-  // Every rank knows what each sends it (the cut's counts): point-to-point with the ranks
-  // that send or receive, no collective over all ranks.
-  for (std::size_t from = 0; from < ranks; ++from)
-  {
-    inSizes_[from] = std::size_t(arrivingFrom_[from]) * sizeof(Record);
-  }
-  communicator_.exchangeKnownSizes(out_, in_, inSizes_);
-  for (std::size_t from = 0; from < ranks; ++from)
-  {
-    if (in_[from].size() != std::size_t(arrivingFrom_[from]) * sizeof(Record))
-    {
-      throw std::logic_error("migration from rank " + std::to_string(from) + ": " +
-        std::to_string(in_[from].size()) + " bytes, expected " +
-        std::to_string(std::size_t(arrivingFrom_[from]) * sizeof(Record)));
-    }
-  }
+  exchangeMigrants(staging, owners.data());
   std::size_t arrivingBytes = 0;
   std::vector<std::pair<int, std::size_t>>& from = messages_;
   from.clear();

@@ -1,11 +1,87 @@
 // The memory of DeviceSubdomainStepper: the particle arrays on the device (DeviceParticleStore.h),
-// grown as the owned and ghost particles need and kept across steps, and the device and
-// page-locked host buffers of the messages.
+// grown as the owned and ghost particles need and kept across steps, the fixed-size arrays, the
+// device and page-locked host buffers of the messages, and the owned particles' state to and
+// from the host.
 // Included at the end of DeviceSubdomainStepper.h; not a header of its own.
 #pragma once
 
 namespace pbf::cuda
 {
+
+template <class Real, class Device>
+void DeviceSubdomainStepper<Real, Device>::allocateFixed()
+{
+  const auto ranks = static_cast<std::size_t>(communicator_.size());
+  cellOffsets_ = allocateFixed<std::uint32_t>(std::size_t(constants_.cellCount) + 1);
+  maxMoved_ = allocateFixed<unsigned long long>(
+    static_cast<std::size_t>(std::max(constants_.iterations, 1)));
+  maskBuilds_ = allocateFixed<unsigned long long>(1);
+  borderMaskBuilds_ = allocateFixed<unsigned long long>(1);
+  columnCounts_ = allocateFixed<std::uint32_t>(
+    2 * static_cast<std::size_t>(constants_.geometry.nx) * subdomain::kCounterCopies);
+  ownerCounts_ = allocateFixed<std::uint32_t>((ranks + 1) * subdomain::kCounterCopies);
+  slabFirst_ = allocateFixed<int>(ranks + 1);
+  selected_ = allocateFixed<std::uint32_t>(8);
+  deviceTime_ = allocateFixed<StepTime<Real>>(1);
+  constants_.time = deviceTime_;
+  adaptive_ = allocateFixed<AdaptiveState>(1);
+  healthBits_ = allocateFixed<unsigned long long>(3);
+  listCounts_ = static_cast<std::uint32_t*>(device_->allocateHost(8 * sizeof(std::uint32_t)));
+  // The owner counts' copies, then the ghosts sent to each side.
+  setupCounts_ = static_cast<std::uint32_t*>(
+    device_->allocateHost(((ranks + 1) * subdomain::kCounterCopies + 2) * sizeof(std::uint32_t)));
+  auto exec = device_->executor();
+  exec.fillZero(maskBuilds_, sizeof(unsigned long long));
+  exec.fillZero(borderMaskBuilds_, sizeof(unsigned long long));
+}
+
+template <class Real, class Device>
+typename DeviceSubdomainStepper<Real, Device>::HostState
+DeviceSubdomainStepper<Real, Device>::hostState() const
+{
+  device_->activate();
+  HostState s;
+  s.x.resize(n_);
+  s.v.resize(n_);
+  s.density.resize(n_);
+  s.lambda.resize(n_);
+  s.id.resize(n_);
+  if (n_ > 0)
+  {
+    device_->download(s.x.data(), vec_[xBuffer_], n_ * sizeof(Vec3<Real>));
+    device_->download(s.v.data(), vec_[vBuffer_], n_ * sizeof(Vec3<Real>));
+    device_->download(s.density.data(), density_, n_ * sizeof(Real));
+    device_->download(s.lambda.data(), lambda_, n_ * sizeof(Real));
+    device_->download(s.id.data(), id_, n_ * sizeof(std::int64_t));
+  }
+  device_->synchronize();
+  return s;
+}
+
+template <class Real, class Device>
+template <class In>
+void DeviceSubdomainStepper<Real, Device>::loadState(const Snapshot<In>& state)
+{
+  HostState s;
+  loadFromSnapshot(state, HostParticles<Real>{ s.x, s.v, s.density, s.lambda, s.id });
+  device_->activate();
+  device_->synchronize();
+  const std::size_t n = s.id.size();
+  n_ = 0;
+  reserve(n, 0);
+  xBuffer_ = 0;
+  vBuffer_ = 1;
+  if (n > 0)
+  {
+    device_->upload(vec_[xBuffer_], s.x.data(), n * sizeof(Vec3<Real>));
+    device_->upload(vec_[vBuffer_], s.v.data(), n * sizeof(Vec3<Real>));
+    device_->upload(density_, s.density.data(), n * sizeof(Real));
+    device_->upload(lambda_, s.lambda.data(), n * sizeof(Real));
+    device_->upload(id_, s.id.data(), n * sizeof(std::int64_t));
+  }
+  device_->synchronize();
+  n_ = n;
+}
 
 template <class Real, class Device>
 void DeviceSubdomainStepper<Real, Device>::releaseParticles()

@@ -1,129 +1,218 @@
-// The solve of DeviceSubdomainStepper (its step 5): the passes of a step over the owned particles,
-// border first and interior beside the exchange, the adaptive reduction over the ranks, and the
-// owned particles kept in cell order.
+// The step of DeviceSubdomainStepper as StepLoop.h's Loop (its parts 1-4 are the Loop's predict
+// and findNeighbours; part 5, the passes over the owned particles, its stages), the adaptive
+// reduction over the ranks, and the owned particles kept in cell order.
 // Included at the end of DeviceSubdomainStepper.h; not a header of its own.
 #pragma once
 
 namespace pbf::cuda
 {
 
+// The Loop of StepLoop.h for one rank's GPU sub-domain: each pass over the owned particles runs
+// as two launches, the border particles (the columns a neighbour mirrors) on the border stream
+// and then the interior ones, the border's fields on their way to the neighbours while the
+// interior runs (twoSided). Adaptive mode's compression is reduced over every rank's owned
+// particles after each density pass, as SubdomainStepper's is (per rank in fixed blocks, then the
+// ranks in order), so every rank ends the solve after the same projection.
 template <class Real, class Device>
-void DeviceSubdomainStepper<Real, Device>::solve(Roles4 r, const CellKey* sortedKeys)
+class DeviceSubdomainStepper<Real, Device>::Loop
 {
-  const std::uint32_t n = count(n_);
-  const std::uint32_t border = border_;
-  const std::uint32_t interior = n - border;
-  const detail::ListedParticles onBorder{ borderList_ };
-  const detail::ListedParticles onInterior{ interiorList_ };
-  const StepConstants<Real>& k = constants_;
-  const StepBuffers<Real> b = buffers();
-  auto exec = device_->executor();
-  Vec3<Real>* const x = vec_[r.x];
-  Vec3<Real>* const v = vec_[r.v];
-  Vec3<Real>* const positions[2] = { vec_[r.p], vec_[r.free] };
-  exec.fillZero(maxMoved_, static_cast<std::size_t>(k.iterations) * sizeof(unsigned long long));
-  // The border launches run on the device's border stream, beside the interior ones (the two
-  // write disjoint particles; interior particles read no ghost); their mask builds are counted
-  // apart, so that no counter is written by two launches at once.
-  StepBuffers<Real> edgeBuffers = b;
-  edgeBuffers.maskBuilds = borderMaskBuilds_;
-  const StepBuffers<Real>& be = edgeBuffers;
-  // Adaptive mode: the mean compression over every rank's owned particles after each density
-  // pass, as SubdomainStepper::meanDensityError has it (per rank in fixed blocks, then the
-  // ranks in order); after the first projection the loop ends once it is within the tolerance,
-  // and the velocities are then updated from the positions reached.
-  const bool adaptive = k.tolerance > 0;
-  int performed = 0;
-  bool converged = false;
-  for (int iteration = 0; iteration < k.iterations; ++iteration)
+public:
+  explicit Loop(DeviceSubdomainStepper& s)
+    : s_(s)
+    , device_(*s.device_)
+    , k_(s.constants_)
+    , start_(Clock::now())
   {
-    const FluidView<Real, MaskedNeighbors<Real>> f =
-      detail::iterationView(b, k, sortedKeys, x, v, positions, iteration);
-    exec = device_->executor();
-    auto edge = device_->borderExecutor();
-    device_->forkBorder();
-    detail::firstPassOnPositions(
-      edge, DensityStage<Real>{}, be, k, border, f, iteration, false, detail::DensityPass{}, onBorder);
-    sendRefresh<Real>(density_, lambda_);
-    detail::firstPassOnPositions(
-      exec, DensityStage<Real>{}, b, k, interior, f, iteration, false, detail::DensityPass{}, onInterior);
-    device_->joinBorder();
-    receiveRefresh<Real>(density_, lambda_);
-    if (adaptive)
+  }
+
+  // x, v and the predicted positions in the free buffer. The prediction does not depend on the
+  // cut, so it runs first and the cut's one wait also brings back the predicted positions'
+  // column counts, from which the migration's and the ghosts' counts follow.
+  void predict()
+  {
+    const int p = freeBuffer(s_.xBuffer_, s_.vBuffer_, -1);
+    auto exec = device_.executor();
+    subdomain::predict(
+      exec, k_, count(s_.n_), s_.vec_[s_.xBuffer_], s_.vec_[s_.vBuffer_], s_.vec_[p]);
+    s_.cut(s_.xBuffer_, p);
+    r_ = Roles4{ s_.xBuffer_, p, s_.vBuffer_, otherBuffer(s_.xBuffer_, p, s_.vBuffer_) };
+  }
+
+  void findNeighbours()
+  {
+    r_ = s_.migrate(r_);
+    r_ = s_.receiveGhosts(r_);
+    keys_ = s_.sortByCell(r_);
+    s_.exchange_.beforePassesMilliseconds = since(start_);
+    // Now vec[r.x] = x, vec[r.p] = x*, vec[r.v] = v in cell order; vec[r.free] is free.
+    n_ = count(s_.n_);
+    b_ = s_.buffers();
+    // The border launches count their mask builds apart, so that no counter is written by two
+    // launches at once.
+    edgeBuffers_ = b_;
+    edgeBuffers_.maskBuilds = s_.borderMaskBuilds_;
+    x_ = s_.vec_[r_.x];
+    v_ = s_.vec_[r_.v];
+    positions_[0] = s_.vec_[r_.p];
+    positions_[1] = s_.vec_[r_.free];
+    auto exec = device_.executor();
+    exec.fillZero(s_.maxMoved_, static_cast<std::size_t>(k_.iterations) * sizeof(unsigned long long));
+  }
+
+  void densityAndLambda(const Projection& p)
+  {
+    const FluidView<Real, MaskedNeighbors<Real>> f = view(p.iteration);
+    twoSided<Real>(
+      [&](auto& exec, const StepBuffers<Real>& b, std::uint32_t n, detail::ListedParticles on) {
+        detail::firstPassOnPositions(
+          exec, DensityStage<Real>{}, b, k_, n, f, p.iteration, false, detail::DensityPass{}, on);
+      },
+      s_.density_, s_.lambda_);
+  }
+
+  void measureCompression(const Projection&, bool mayStop)
+  {
+    const Compression c = s_.compression(n_);
+    s_.report_.densityError = c.mean;
+    stopped_ = mayStop &&
+      c.within(s_.parameters_.densityErrorTolerance, s_.parameters_.maxDensityErrorTolerance);
+  }
+
+  // Chebyshev's blend reads each owned particle's own positions two projections back, which
+  // the other position buffer still holds (StepSchedule.h's correctionPass). The last
+  // correction the count allows also updates the velocities, which XSPH and vorticity read.
+  void correct(const Projection& p)
+  {
+    if (stopped_)
     {
-      const Compression c = compression(n);
-      report_.densityError = c.mean;
-      if (iteration > 0 &&
-        c.within(parameters_.densityErrorTolerance, parameters_.maxDensityErrorTolerance))
-      {
-        converged = true;
-        break;
-      }
+      return;
     }
-    const bool last = iteration + 1 == k.iterations;
-    // Chebyshev's blend reads each owned particle's own positions two projections back, which
-    // the other position buffer still holds (StepSchedule.h's correctionPass).
-    const bool accelerate = k.chebyshevRho > 0 && iteration > 0;
-    const Real omega = static_cast<Real>(chebyshevWeight(k.chebyshevRho, iteration));
-    exec = device_->executor();
-    device_->forkBorder();
-    detail::correctionPass(
-      edge, be, border, f, iteration, last, nullptr, accelerate, omega, onBorder);
-    // The last correction also updates the velocities, which XSPH and vorticity read.
-    sendRefresh<Vec3<Real>>(f.scratch, last ? v : nullptr);
-    detail::correctionPass(
-      exec, b, interior, f, iteration, last, nullptr, accelerate, omega, onInterior);
-    device_->joinBorder();
-    receiveRefresh<Vec3<Real>>(f.scratch, last ? v : nullptr);
-    ++performed;
+    const FluidView<Real, MaskedNeighbors<Real>> f = view(p.iteration);
+    const Real omega = static_cast<Real>(p.omega);
+    twoSided<Vec3<Real>>(
+      [&](auto& exec, const StepBuffers<Real>& b, std::uint32_t n, detail::ListedParticles on) {
+        detail::correctionPass(
+          exec, b, n, f, p.iteration, p.last, nullptr, p.accelerate, omega, on);
+      },
+      f.scratch, p.last ? v_ : nullptr);
+    ++performed_;
   }
-  if (adaptive)
+
+  template <class Body>
+  void whileCompressed(int first, int end, Body&& body)
   {
-    report_.iterations = performed;
-  }
-  if (converged)
-  {
-    // The last correction did not know it was the last: line 21 for the positions reached,
-    // border particles first so that their velocities travel while the interior's are set.
-    FluidView<Real, MaskedNeighbors<Real>> apply =
-      detail::iterationView(b, k, sortedKeys, x, v, positions, performed);
-    exec = device_->executor();
-    auto edge = device_->borderExecutor();
-    device_->forkBorder();
-    subdomain::updateVelocities<Real>(edge, border, borderList_, apply);
-    sendRefresh<Vec3<Real>>(v, nullptr);
-    subdomain::updateVelocities<Real>(exec, interior, interiorList_, apply);
-    device_->joinBorder();
-    receiveRefresh<Vec3<Real>>(v, nullptr);
-  }
-  // The passes after the iterations read the positions the last projection wrote.
-  StepConstants<Real> after = k;
-  after.iterations = performed;
-  const FluidView<Real, MaskedNeighbors<Real>> f =
-    detail::afterIterationsView(b, after, sortedKeys, x, v, positions);
-  exec = device_->executor();
-  // The ghosts' omega, and their XSPH sums where the bi-Laplacian reads them.
-  Vec3<Real>* const ghostSmoothing = parameters_.xsphHyperViscosity > 0 ? f.smoothing : nullptr;
-  detail::withPass<detail::VorticityPass>(k.c.wallFriction != Real(0), [&](auto pass) {
+    for (int k = first; k < end && !stopped_; ++k)
     {
-      auto edge = device_->borderExecutor();
-      device_->forkBorder();
-      detail::firstPassOnPositions(
-        edge, typename decltype(pass)::Stage{}, be, after, border, f, performed, false, pass, onBorder);
+      body(*this, k);
     }
-    sendRefresh<Vec3<Real>>(x, ghostSmoothing);
-    detail::firstPassOnPositions(
-      exec, typename decltype(pass)::Stage{}, b, after, interior, f, performed, false, pass, onInterior);
-  });
-  device_->joinBorder();
-  receiveRefresh<Vec3<Real>>(x, ghostSmoothing);
-  exec = device_->executor();
+  }
+
+  // A solve that stopped early: its last correction did not know it was the last, so line 21
+  // runs here for the positions reached.
+  void finishSolve()
+  {
+    if (k_.tolerance > 0)
+    {
+      s_.report_.iterations = performed_;
+    }
+    else
+    {
+      s_.report_.iterations = k_.iterations;
+      s_.report_.densityError = std::numeric_limits<double>::quiet_NaN();
+    }
+    if (!stopped_)
+    {
+      return;
+    }
+    const FluidView<Real, MaskedNeighbors<Real>> apply = view(performed_);
+    twoSided<Vec3<Real>>(
+      [&](auto& exec, const StepBuffers<Real>&, std::uint32_t n, detail::ListedParticles on) {
+        subdomain::updateVelocities<Real>(exec, n, on.list, apply);
+      },
+      v_, nullptr);
+  }
+
+  // Omega into x's buffer and XSPH's sum into the other position buffer; the ghosts' omega, and
+  // their XSPH sums where the bi-Laplacian reads them.
+  void vorticityAndXsph()
+  {
+    const StepConstants<Real> after = afterConstants();
+    const FluidView<Real, MaskedNeighbors<Real>> f = afterView();
+    Vec3<Real>* const ghostSmoothing = s_.parameters_.xsphHyperViscosity > 0 ? f.smoothing : nullptr;
+    detail::withPass<detail::VorticityPass>(k_.c.wallFriction != Real(0), [&](auto pass) {
+      twoSided<Vec3<Real>>(
+        [&](auto& exec, const StepBuffers<Real>& b, std::uint32_t n, detail::ListedParticles on) {
+          detail::firstPassOnPositions(exec, typename decltype(pass)::Stage{}, b, after, n, f,
+            performed_, false, pass, on);
+        },
+        x_, ghostSmoothing);
+    });
+  }
+
   // The velocities in place (omega = x, XSPH's sum = f.scratch: the neighbours read both).
-  subdomain::confine<Real>(exec, n, ownedList_, f);
+  void confine()
+  {
+    auto exec = device_.executor();
+    subdomain::confine<Real>(exec, n_, s_.ownedList_, afterView());
+  }
+
   // Line 23 and the ghosts dropped: x = the corrected positions, v, owned only, into the
   // buffers that held omega and XSPH's sum.
-  keepOwned(f.p, v, r.x, f.scratch == vec_[r.p] ? r.p : r.free);
-}
+  void commit()
+  {
+    const FluidView<Real, MaskedNeighbors<Real>> f = afterView();
+    s_.keepOwned(f.p, v_, r_.x, f.scratch == s_.vec_[r_.p] ? r_.p : r_.free);
+  }
+
+private:
+  // pass(executor, buffers, count, particles) over the border particles on the border stream,
+  // the fields a (and b) of the send lists on their way out, the same pass over the interior
+  // beside them, then the neighbours' fields into the ghost slots before the next pass.
+  template <class T, class Pass>
+  void twoSided(Pass&& pass, T* a, T* b)
+  {
+    auto exec = device_.executor();
+    auto edge = device_.borderExecutor();
+    device_.forkBorder();
+    pass(edge, edgeBuffers_, s_.border_, detail::ListedParticles{ s_.borderList_ });
+    s_.template sendRefresh<T>(a, b);
+    pass(exec, b_, n_ - s_.border_, detail::ListedParticles{ s_.interiorList_ });
+    device_.joinBorder();
+    s_.template receiveRefresh<T>(a, b);
+  }
+
+  FluidView<Real, MaskedNeighbors<Real>> view(int iteration) const
+  {
+    return detail::iterationView(b_, k_, keys_, x_, v_, positions_, iteration);
+  }
+
+  // The passes after the solve read the positions the last projection wrote.
+  StepConstants<Real> afterConstants() const
+  {
+    StepConstants<Real> after = k_;
+    after.iterations = performed_;
+    return after;
+  }
+  FluidView<Real, MaskedNeighbors<Real>> afterView() const
+  {
+    return detail::afterIterationsView(b_, afterConstants(), keys_, x_, v_, positions_);
+  }
+
+  DeviceSubdomainStepper& s_;
+  Device& device_;
+  const StepConstants<Real>& k_;
+  Clock::time_point start_;
+  Roles4 r_{};
+  const CellKey* keys_ = nullptr;
+  std::uint32_t n_ = 0;
+  StepBuffers<Real> b_{};
+  StepBuffers<Real> edgeBuffers_{};
+  Vec3<Real>* x_ = nullptr;
+  Vec3<Real>* v_ = nullptr;
+  Vec3<Real>* positions_[2] = {};
+  int performed_ = 0;
+  bool stopped_ = false;
+};
 
 template <class Real, class Device>
 Compression DeviceSubdomainStepper<Real, Device>::compression(std::uint32_t n)

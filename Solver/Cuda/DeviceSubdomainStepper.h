@@ -64,6 +64,7 @@
 #include "DeviceParticleStore.h"
 #include "HostParticles.h"
 #include "ParticleChecks.h"
+#include "StepLoop.h"
 #include "StepSchedule.h"
 #include "SubdomainSchedule.h"
 
@@ -317,30 +318,10 @@ private:
   void stepAlone()
   {
     device_->activate();
-    const auto stepStart = Clock::now();
     exchange_ = distributed::ExchangeReport{};
     report_ = StepReport{};
-    {
-      // x, v and the predicted positions in the free buffer. The prediction does not depend on
-      // the cut, so it runs first and the cut's one wait also brings back the predicted
-      // positions' column counts, from which the migration's and the ghosts' counts follow.
-      const int p = freeBuffer(xBuffer_, vBuffer_, -1);
-      auto exec = device_->executor();
-      subdomain::predict(exec, constants_, count(n_), vec_[xBuffer_], vec_[vBuffer_], vec_[p]);
-      cut(xBuffer_, p);
-      Roles4 r{ xBuffer_, p, vBuffer_, otherBuffer(xBuffer_, p, vBuffer_) };
-      r = migrate(r);
-      r = receiveGhosts(r);
-      const CellKey* keys = sortByCell(r);
-      exchange_.beforePassesMilliseconds = since(stepStart);
-      // Now vec[r.x] = x, vec[r.p] = x*, vec[r.v] = v in cell order; vec[r.free] is free.
-      solve(r, keys);
-    }
-    if (constants_.tolerance <= 0)
-    {
-      report_.iterations = constants_.iterations;
-      report_.densityError = std::numeric_limits<double>::quiet_NaN();
-    }
+    Loop loop(*this);
+    runStep(loop, SolveRule::of(parameters_));
   }
 
   // Every rank sets the same dt (Simulation chooses it from reduced maxima).
@@ -454,31 +435,7 @@ private:
     return static_cast<T*>(p);
   }
 
-  void allocateFixed()
-  {
-    const auto ranks = static_cast<std::size_t>(communicator_.size());
-    cellOffsets_ = allocateFixed<std::uint32_t>(std::size_t(constants_.cellCount) + 1);
-    maxMoved_ = allocateFixed<unsigned long long>(
-      static_cast<std::size_t>(std::max(constants_.iterations, 1)));
-    maskBuilds_ = allocateFixed<unsigned long long>(1);
-    borderMaskBuilds_ = allocateFixed<unsigned long long>(1);
-    columnCounts_ = allocateFixed<std::uint32_t>(
-      2 * static_cast<std::size_t>(constants_.geometry.nx) * subdomain::kCounterCopies);
-    ownerCounts_ = allocateFixed<std::uint32_t>((ranks + 1) * subdomain::kCounterCopies);
-    slabFirst_ = allocateFixed<int>(ranks + 1);
-    selected_ = allocateFixed<std::uint32_t>(8);
-    deviceTime_ = allocateFixed<StepTime<Real>>(1);
-    constants_.time = deviceTime_;
-    adaptive_ = allocateFixed<AdaptiveState>(1);
-    healthBits_ = allocateFixed<unsigned long long>(3);
-    listCounts_ = static_cast<std::uint32_t*>(device_->allocateHost(8 * sizeof(std::uint32_t)));
-    // The owner counts' copies, then the ghosts sent to each side.
-    setupCounts_ = static_cast<std::uint32_t*>(
-      device_->allocateHost(((ranks + 1) * subdomain::kCounterCopies + 2) * sizeof(std::uint32_t)));
-    auto exec = device_->executor();
-    exec.fillZero(maskBuilds_, sizeof(unsigned long long));
-    exec.fillZero(borderMaskBuilds_, sizeof(unsigned long long));
-  }
+  void allocateFixed(); // the arrays that do not grow with the particles
 
   void releaseParticles();
 
@@ -564,6 +521,9 @@ private:
   // the first `stay` slots fill the leavers' holes, so only O(leavers) particles move on the
   // device; the arrivals are appended.
   Roles4 migrate(Roles4 r);
+  // migrate's exchange: the leavers' records from the page-locked staging to each destination
+  // (owners[to + 1] of them), the arrivals into in_ (their counts known from the cut).
+  void exchangeMigrants(const unsigned char* staging, const std::uint32_t* owners);
 
   // 3. The border particles (by vec[r.p]) to the neighbours; theirs appended as ghosts.
   Roles4 receiveGhosts(Roles4 r);
@@ -604,10 +564,11 @@ private:
   // host.
   void exchangeCopied(std::size_t record, std::size_t sendBytes, unsigned char* recv);
 
-  // 5. The passes over the owned particles, each one border first, its fields sent while the
-  // interior runs, received before the next pass; then the owned particles back into cell
-  // order. Ghosts are never computed: nothing reads a ghost's own result.
-  void solve(Roles4 r, const CellKey* sortedKeys);
+  // A step as StepLoop.h's Loop (DeviceSubdomainSolve.h): parts 1-4 above, then 5, the passes
+  // over the owned particles, each one border first, its fields sent while the interior runs,
+  // received before the next pass; then the owned particles back into cell order. Ghosts are
+  // never computed: nothing reads a ghost's own result.
+  class Loop;
 
   // Adaptive mode: mean and max of max(rho_i / rho_0 - 1, 0) over every rank's owned particles
   // (collective). The owned densities are gathered into densityAlt_ (free until keepOwned) and
@@ -622,51 +583,11 @@ private:
   // SubdomainStepper::evaluateAtRest: the ghosts' values are not refreshed, nothing reads them.
   void evaluateAtRest();
 
-  HostState hostState() const
-  {
-    device_->activate();
-    HostState s;
-    s.x.resize(n_);
-    s.v.resize(n_);
-    s.density.resize(n_);
-    s.lambda.resize(n_);
-    s.id.resize(n_);
-    if (n_ > 0)
-    {
-      device_->download(s.x.data(), vec_[xBuffer_], n_ * sizeof(Vec3<Real>));
-      device_->download(s.v.data(), vec_[vBuffer_], n_ * sizeof(Vec3<Real>));
-      device_->download(s.density.data(), density_, n_ * sizeof(Real));
-      device_->download(s.lambda.data(), lambda_, n_ * sizeof(Real));
-      device_->download(s.id.data(), id_, n_ * sizeof(std::int64_t));
-    }
-    device_->synchronize();
-    return s;
-  }
+  HostState hostState() const;
 
   // This rank's particles as read() gave them; the next step cuts the slabs from them.
   template <class In>
-  void loadState(const Snapshot<In>& state)
-  {
-    HostState s;
-    loadFromSnapshot(state, HostParticles<Real>{ s.x, s.v, s.density, s.lambda, s.id });
-    device_->activate();
-    device_->synchronize();
-    const std::size_t n = s.id.size();
-    n_ = 0;
-    reserve(n, 0);
-    xBuffer_ = 0;
-    vBuffer_ = 1;
-    if (n > 0)
-    {
-      device_->upload(vec_[xBuffer_], s.x.data(), n * sizeof(Vec3<Real>));
-      device_->upload(vec_[vBuffer_], s.v.data(), n * sizeof(Vec3<Real>));
-      device_->upload(density_, s.density.data(), n * sizeof(Real));
-      device_->upload(lambda_, s.lambda.data(), n * sizeof(Real));
-      device_->upload(id_, s.id.data(), n * sizeof(std::int64_t));
-    }
-    device_->synchronize();
-    n_ = n;
-  }
+  void loadState(const Snapshot<In>& state);
 
   distributed::Communicator& communicator_;
   Parameters parameters_;

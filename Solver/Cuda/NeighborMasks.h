@@ -170,6 +170,119 @@ PBF_HD PBF_INLINE void buildNeighborMasks(std::uint32_t i, const GridView<Real>&
 // separate tail case) it took 27% of the density pass's instructions and 38% of the correction
 // pass's; staged rows with the tail decided in the loop still took 23 instructions an iteration,
 // 9% and 13% of those passes.
+namespace detail
+{
+
+#if defined(__CUDA_ARCH__)
+// Lane i's visits staged at word[0], word[kMaskBlock], ...: one (base, mask) word per row with a
+// marked candidate, then one per 32 candidates of a row's tail (all of their bits set, as the
+// tail is visited unconditionally). Returns how many words the visits need; beyond kMaskWords
+// only the first kMaskWords are written.
+template <class Real>
+__device__ PBF_INLINE int stageMaskWords(
+  const MaskedNeighbors<Real>& neighbors, std::uint32_t i, uint2* word)
+{
+  int count = 0;
+  const RowFrame frame = rowFrame(neighbors.cells, i);
+#pragma unroll
+  for (int r = 0; r < kNeighborRows; ++r)
+  {
+    std::uint32_t begin = 0, end = 0;
+    if (rowRange(neighbors.cells, frame, r, begin, end))
+    {
+      const std::uint32_t mask = neighbors.masks[static_cast<std::size_t>(r) * neighbors.stride + i];
+      if (mask != 0)
+      {
+        if (count < kMaskWords)
+        {
+          word[count * kMaskBlock] = make_uint2(begin, mask);
+        }
+        ++count;
+      }
+      for (std::uint32_t b = begin + kMaskWidth; b < end; b += kMaskWidth)
+      {
+        const std::uint32_t left = end - b;
+        if (count < kMaskWords)
+        {
+          word[count * kMaskBlock] = make_uint2(b, firstCandidates(left));
+        }
+        ++count;
+      }
+    }
+  }
+  return count;
+}
+
+// The staged words' candidates in order, refilling with one shared load when a word runs out.
+template <class Visit>
+__device__ PBF_INLINE void visitMaskWords(const uint2* word, int count, Visit& visit)
+{
+  const uint2* const last = word + count * kMaskBlock;
+  std::uint32_t mask = 0, base = 0;
+  for (;;)
+  {
+    if (mask == 0)
+    {
+      if (word == last)
+      {
+        break;
+      }
+      const uint2 w = *word;
+      word += kMaskBlock;
+      base = w.x;
+      mask = w.y;
+    }
+    const int k = firstCandidate(mask);
+    const std::uint32_t j = base + static_cast<std::uint32_t>(k);
+    mask = withoutFirst(mask, k);
+    visit(j);
+  }
+}
+#endif
+
+// The host's walk of the same visits, row by row: the marked candidates, then the row's tail.
+template <class Real, class Visit>
+PBF_HD PBF_INLINE void walkMaskedRows(
+  const MaskedNeighbors<Real>& neighbors, std::uint32_t i, Visit& visit)
+{
+  const RowFrame frame = rowFrame(neighbors.cells, i);
+  int nextRow = 0;
+  std::uint32_t mask = 0, base = 0, tail = 0, tailEnd = 0;
+  for (;;)
+  {
+    while (mask == 0 && tail == tailEnd && nextRow < kNeighborRows)
+    {
+      const int r = nextRow++;
+      std::uint32_t begin = 0, end = 0;
+      if (rowRange(neighbors.cells, frame, r, begin, end))
+      {
+        base = begin;
+        mask = neighbors.masks[static_cast<std::size_t>(r) * neighbors.stride + i];
+        tail = end - begin > kMaskWidth ? begin + kMaskWidth : end;
+        tailEnd = end;
+      }
+    }
+    std::uint32_t j;
+    if (mask != 0)
+    {
+      const int k = firstCandidate(mask);
+      j = base + static_cast<std::uint32_t>(k);
+      mask = withoutFirst(mask, k);
+    }
+    else if (tail != tailEnd)
+    {
+      j = tail++;
+    }
+    else
+    {
+      break;
+    }
+    visit(j);
+  }
+}
+
+} // namespace detail
+
 template <class Real, class Visit>
 PBF_HD PBF_INLINE void forEachNeighbor(
   const MaskedNeighbors<Real>& neighbors, std::uint32_t i, Visit&& visit)
@@ -186,99 +299,16 @@ PBF_HD PBF_INLINE void forEachNeighbor(
   // lane that needs more (a strongly compressed neighbourhood) walks its 27 cells instead, which
   // visits the same candidates within h in the same order.
   __shared__ uint2 words[kMaskWords][kMaskBlock];
-  uint2* word = &words[0][threadIdx.x];
-  int count = 0;
-  {
-    const detail::RowFrame frame = detail::rowFrame(neighbors.cells, i);
-#pragma unroll
-    for (int r = 0; r < kNeighborRows; ++r)
-    {
-      std::uint32_t begin = 0, end = 0;
-      if (detail::rowRange(neighbors.cells, frame, r, begin, end))
-      {
-        const std::uint32_t mask =
-          neighbors.masks[static_cast<std::size_t>(r) * neighbors.stride + i];
-        if (mask != 0)
-        {
-          if (count < kMaskWords)
-          {
-            word[count * kMaskBlock] = make_uint2(begin, mask);
-          }
-          ++count;
-        }
-        for (std::uint32_t b = begin + kMaskWidth; b < end; b += kMaskWidth)
-        {
-          const std::uint32_t left = end - b;
-          if (count < kMaskWords)
-          {
-            word[count * kMaskBlock] =
-              make_uint2(b, detail::firstCandidates(left));
-          }
-          ++count;
-        }
-      }
-    }
-  }
+  uint2* const word = &words[0][threadIdx.x];
+  const int count = detail::stageMaskWords(neighbors, i, word);
   if (count > kMaskWords)
   {
     forEachNeighbor(neighbors.cells, i, visit);
     return;
   }
-  const uint2* const last = word + count * kMaskBlock;
-  std::uint32_t mask = 0, base = 0;
-  for (;;)
-  {
-    if (mask == 0)
-    {
-      if (word == last)
-      {
-        break;
-      }
-      const uint2 w = *word;
-      word += kMaskBlock;
-      base = w.x;
-      mask = w.y;
-    }
-    const int k = detail::firstCandidate(mask);
-    const std::uint32_t j = base + static_cast<std::uint32_t>(k);
-    mask = detail::withoutFirst(mask, k);
-    visit(j);
-  }
+  detail::visitMaskWords(word, count, visit);
 #else
-  const detail::RowFrame frame = detail::rowFrame(neighbors.cells, i);
-  int nextRow = 0;
-  std::uint32_t mask = 0, base = 0, tail = 0, tailEnd = 0;
-  for (;;)
-  {
-    while (mask == 0 && tail == tailEnd && nextRow < kNeighborRows)
-    {
-      const int r = nextRow++;
-      std::uint32_t begin = 0, end = 0;
-      if (detail::rowRange(neighbors.cells, frame, r, begin, end))
-      {
-        base = begin;
-        mask = neighbors.masks[static_cast<std::size_t>(r) * neighbors.stride + i];
-        tail = end - begin > kMaskWidth ? begin + kMaskWidth : end;
-        tailEnd = end;
-      }
-    }
-    std::uint32_t j;
-    if (mask != 0)
-    {
-      const int k = detail::firstCandidate(mask);
-      j = base + static_cast<std::uint32_t>(k);
-      mask = detail::withoutFirst(mask, k);
-    }
-    else if (tail != tailEnd)
-    {
-      j = tail++;
-    }
-    else
-    {
-      break;
-    }
-    visit(j);
-  }
+  detail::walkMaskedRows(neighbors, i, visit);
 #endif
 }
 

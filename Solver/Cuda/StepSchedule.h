@@ -1,9 +1,10 @@
-// One solver step of the CUDA backend as a sequence of per-particle stages, written once over an
-// executor: DeviceStepper.h queues it on the device policy (kernels, CUB and CUDA graphs on CUDA; the
-// host policy in the tests, where it must reproduce the serial backend bit for bit:
-// Testing/Cuda/DeviceStepperHostTest.cpp).
+// The stages of the CUDA backend's step as per-particle passes over an executor: DeviceStepLoop.h
+// runs them in StepLoop.h's order for the CUDA stepper, DeviceSubdomainSolve.h for one rank's GPU
+// sub-domain. The executor is the device policy's (kernels, CUB and CUDA graphs on CUDA) or the
+// host policy in the tests, where the step must reproduce the serial backend bit for bit
+// (Testing/Cuda/DeviceStepperHostTest.cpp).
 //
-// It is CpuStepper::step() with the memory of a GPU in mind:
+// They are the CPU's stages with the memory of a GPU in mind:
 // - Algorithm 1's arrays rotate through four Vec3 buffers instead of six plus gather copies;
 //   between steps x and v live in vec[0] and vec[1] (in either order, see Roles).
 // - The sort is stable and keyed like the CPU's counting sort, so the permutation is the same.
@@ -194,6 +195,25 @@ FluidView<Real> plainView(const StepConstants<Real>& k)
   return f;
 }
 
+// to[i] = from[perm[i]], and the grid's cell offsets from the sorted keys: offsets[c] = the
+// particles with key < c. Each run of equal keys writes its end at key + 1 and a max-scan fills
+// the empty cells in between: every entry is written once, no atomics.
+template <class Real, class Exec>
+void gatherWithOffsets(Exec& exec, const StepConstants<Real>& k, std::uint32_t n,
+  const CellKey* keys, const std::uint32_t* perm, const Vec3<Real>* from, Vec3<Real>* to,
+  std::uint32_t* offsets)
+{
+  exec.fillZero(offsets, (static_cast<std::size_t>(k.cellCount) + 1) * sizeof(std::uint32_t));
+  exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) {
+    to[i] = from[perm[i]];
+    if (i + 1 == n || keys[i] != keys[i + 1])
+    {
+      offsets[keys[i] + 1] = i + 1;
+    }
+  });
+  exec.maxScan(offsets, static_cast<std::size_t>(k.cellCount) + 1);
+}
+
 // Sorts by the keys in keys[0] (values: the identity in lambda), builds the cell offsets and
 // gathers every array into cell order. On entry A = x, B = v, C = p (old order), D is free; on
 // exit D = x, A = p, C = v (cell order) and B is free. Returns the sorted keys.
@@ -207,18 +227,7 @@ const CellKey* sortAndGather(Exec& exec, const StepBuffers<Real>& b, const StepC
   const CellKey* keys = sorted.keys;
   const std::uint32_t* perm = sorted.values;
 
-  // cellOffsets[c] = particles with key < c. Each run of equal keys writes its end at key + 1 and
-  // a max-scan fills the empty cells in between: every entry is written once, no atomics.
-  std::uint32_t* offsets = b.cellOffsets;
-  exec.fillZero(offsets, (static_cast<std::size_t>(k.cellCount) + 1) * sizeof(std::uint32_t));
-  exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) {
-    D[i] = A[perm[i]];
-    if (i + 1 == n || keys[i] != keys[i + 1])
-    {
-      offsets[keys[i] + 1] = i + 1;
-    }
-  });
-  exec.maxScan(offsets, static_cast<std::size_t>(k.cellCount) + 1);
+  gatherWithOffsets(exec, k, n, keys, perm, A, D, b.cellOffsets);
   exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { A[i] = C[perm[i]]; });
   exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { C[i] = B[perm[i]]; });
   // B is free now; it holds the gathered ids until they are copied back.
@@ -267,7 +276,7 @@ FluidView<Real, MaskedNeighbors<Real>> iterationView(const StepBuffers<Real>& b,
 // After the iterations (vorticity, XSPH, confinement): the corrected positions are
 // positions[k.iterations & 1]; the other buffer (scratch) and x's, which the step no longer
 // needs, hold omega and XSPH's sum: omega in x's and the sum in scratch here (the decomposed
-// step's layout; the single-GPU step swaps them, see enqueueStep).
+// step's layout; the single-GPU step swaps them, see DeviceStepLoop::afterView).
 template <class Real>
 FluidView<Real, MaskedNeighbors<Real>> afterIterationsView(const StepBuffers<Real>& b,
   const StepConstants<Real>& k, const CellKey* sortedKeys, Vec3<Real>* x, Vec3<Real>* v,
@@ -513,120 +522,6 @@ void finishAdaptiveSolve(Exec& exec, std::uint32_t n, const FluidView<Real, Mask
 
 } // namespace detail
 
-// Algorithm 1 of Macklin & Mueller 2013, one step; returns where x and v are afterwards.
-template <class Real, class Exec>
-Roles enqueueStep(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Real>& k,
-  std::uint32_t n, Roles roles, const CellKey** sortedKeysOut)
-{
-  Vec3<Real>* const A = b.vec[roles.x];
-  Vec3<Real>* const B = b.vec[roles.v];
-  Vec3<Real>* const C = b.vec[2];
-  Vec3<Real>* const D = b.vec[3];
-
-  // Lines 1-4: gravity and the predicted positions x*_i, with their cell keys.
-  {
-    FluidView<Real> f = detail::plainView(k);
-    f.x = A;
-    f.v = B;
-    f.p = C;
-    CellKey* keys = b.keys[0];
-    std::uint32_t* order = reinterpret_cast<std::uint32_t*>(b.lambda);
-    const GridGeometry<Real> geometry = k.geometry;
-    exec.forEach(PredictStage{}, n, [=] PBF_HD(std::uint32_t i) {
-      predictPosition(i, f);
-      keys[i] = geometry.keyOf(f.p[i]);
-      order[i] = i;
-    });
-  }
-  // Line 7: neighbours from the predicted positions, once per step.
-  const CellKey* sortedKeys = detail::sortAndGather(exec, b, k, n, A, B, C, D);
-  *sortedKeysOut = sortedKeys;
-  // Now D = x, A = x*, C = v; the solver's positions alternate between A and B.
-  Vec3<Real>* const positions[2] = { A, B };
-  exec.fillZero(b.maxMoved, static_cast<std::size_t>(k.iterations) * sizeof(unsigned long long));
-  if (b.moved)
-  {
-    exec.fillZero(b.moved, static_cast<std::size_t>(n) * sizeof(float));
-    exec.fillZero(b.cellMoved, static_cast<std::size_t>(k.cellCount) * sizeof(std::uint32_t));
-  }
-
-  // Lines 8-20, Jacobi iterations.
-  const bool adaptive = k.tolerance > 0;
-  if (adaptive)
-  {
-    exec.fillZero(b.adaptive, sizeof(AdaptiveState));
-  }
-  // Adaptive mode: projection `iteration` runs when the reduction before it says so
-  // (proceed[iteration]). The conditions belong to the step's own graph, so they are all made
-  // before its first projection.
-  std::vector<typename Exec::Branch> proceed(static_cast<std::size_t>(k.iterations) + 1);
-  for (int iteration = 0; iteration <= k.iterations; ++iteration)
-  {
-    proceed[iteration] =
-      adaptive && iteration > 0 && iteration < k.iterations ? exec.branch() : Exec::noBranch();
-  }
-  const auto projection = [&](auto& e, int iteration) {
-    const FluidView<Real, MaskedNeighbors<Real>> f =
-      detail::iterationView(b, k, sortedKeys, D, C, positions, iteration);
-    detail::firstPassOnPositions(
-      e, DensityStage<Real>{}, b, k, n, f, iteration, adaptive, detail::DensityPass{});
-    if (adaptive)
-    {
-      // The first projection always runs: it carries the step's tensile push.
-      e.reduceCompression(b.density, n, b.adaptive, b.blockSums, k,
-        iteration == 0 ? -1.0 : k.tolerance, proceed[iteration + 1]);
-    }
-    const bool last = !adaptive && iteration + 1 == k.iterations;
-    const bool accelerate = k.chebyshevRho > 0 && iteration > 0;
-    detail::correctionPass(e, b, n, f, iteration, last, adaptive ? b.adaptive : nullptr,
-      accelerate, static_cast<Real>(chebyshevWeight(k.chebyshevRho, iteration)));
-  };
-  projection(exec, 0);
-  if (adaptive)
-  {
-    // Projection k runs when the reduction before it says so. Nested: a step that stops after
-    // two projections skips the other 37 conditions as one (in sequence, each skipped
-    // condition had cost the graph about 3 us, 0.12 ms a step at 1.15M particles).
-    exec.runIfChain(proceed.data(), 1, k.iterations, projection);
-  }
-  else
-  {
-    for (int iteration = 1; iteration < k.iterations; ++iteration)
-    {
-      projection(exec, iteration);
-    }
-  }
-  if (adaptive)
-  {
-    const FluidView<Real, MaskedNeighbors<Real>> f =
-      detail::iterationView(b, k, sortedKeys, D, C, positions, k.iterations);
-    detail::finishAdaptiveSolve(exec, n, f, positions, k.iterations, b.adaptive);
-  }
-
-  // Lines 22-23 (vorticity confinement and XSPH) on the corrected positions. XSPH's sum goes
-  // into x's buffer and omega into the other position buffer, where the confinement then writes
-  // the velocity over each particle's own omega (the neighbours read |omega_j| from
-  // b.omegaLength): v ends in a buffer of x and v's pair, as Roles expects.
-  FluidView<Real, MaskedNeighbors<Real>> f =
-    detail::afterIterationsView(b, k, sortedKeys, D, C, positions);
-  f.omega = f.scratch;
-  f.smoothing = D;
-  detail::withPass<detail::VorticityPass>(k.c.wallFriction != Real(0), [&](auto pass) {
-    detail::firstPassOnPositions(
-      exec, typename decltype(pass)::Stage{}, b, k, n, f, k.iterations, false, pass);
-  });
-  Vec3<Real>* const velocity = f.scratch;
-  detail::withPass<detail::ConfinementPass>(k.c.xsphHyper, [&](auto pass) {
-    detail::confinementPass(exec, n, detail::AllParticles{}, f, velocity, pass);
-  });
-
-  // Line 23, x_i = x*_i: the corrected positions' buffer becomes x.
-  Roles next;
-  next.x = f.p == A ? roles.x : roles.v;
-  next.v = f.p == A ? roles.v : roles.x;
-  return next;
-}
-
 // CpuStepper::evaluateDensityAtRest: density and lambda of the current positions, nothing moves.
 // Used after particles are added; x and v keep their buffers.
 template <class Real, class Exec>
@@ -672,15 +567,7 @@ const CellKey* enqueueSortedCopy(Exec& exec, const StepConstants<Real>& k, std::
   const SortedPairs s = exec.sortByKey(keys, keysAlt, order, orderAlt, n, k.keyBits);
   const CellKey* sortedKeys = s.keys;
   const std::uint32_t* perm = s.values;
-  exec.fillZero(offsets, (static_cast<std::size_t>(k.cellCount) + 1) * sizeof(std::uint32_t));
-  exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) {
-    sorted[i] = x[perm[i]];
-    if (i + 1 == n || sortedKeys[i] != sortedKeys[i + 1])
-    {
-      offsets[sortedKeys[i] + 1] = i + 1;
-    }
-  });
-  exec.maxScan(offsets, static_cast<std::size_t>(k.cellCount) + 1);
+  detail::gatherWithOffsets(exec, k, n, sortedKeys, perm, x, sorted, offsets);
   return sortedKeys;
 }
 

@@ -385,51 +385,60 @@ void SubdomainStepper<Real>::stepAlone()
 {
   exchange_ = ExchangeReport{};
   report_ = StepReport{};
+  HostStepLoop<Real, SubdomainStepper> loop(fluid_, *this, report_);
+  runStep(loop, SolveRule::of(fluid_.parameters));
+  dropGhosts();
+}
+
+template <class Real>
+void SubdomainStepper<Real>::predict()
+{
   cut();
+  owned_.resize(fluid_.x.size());
+  for (std::size_t i = 0; i < owned_.size(); ++i)
   {
-    owned_.resize(fluid_.x.size());
-    for (std::size_t i = 0; i < owned_.size(); ++i)
-    {
-      owned_[i] = static_cast<std::uint32_t>(i);
-    }
-    fluid_.p.resize(fluid_.x.size());
-    fluid_.scratch.resize(fluid_.x.size());
-    fluid_.omega.resize(fluid_.x.size());
-    fluid_.keys.resize(fluid_.x.size());
-    const FluidView<Real> f = fluid_.view();
-    forOwned([&](std::uint32_t i) { predictPosition(i, f); });
+    owned_[i] = static_cast<std::uint32_t>(i);
   }
+  fluid_.p.resize(fluid_.x.size());
+  fluid_.scratch.resize(fluid_.x.size());
+  fluid_.omega.resize(fluid_.x.size());
+  fluid_.keys.resize(fluid_.x.size());
+  const FluidView<Real> f = fluid_.view();
+  forOwned([&](std::uint32_t i) { predictPosition(i, f); });
+}
+
+template <class Real>
+void SubdomainStepper<Real>::findNeighbours()
+{
   migrate(true);
   receiveGhosts();
-  // Neighbours are found once per step, on the predicted positions (Algorithm 1, line 7).
   sortByCell();
-  auto refresh = [&](HostField field) {
-    switch (field)
-    {
-      case HostField::DensityAndLambda:
-        refreshGhosts([&](std::uint32_t i) -> Real& { return fluid_.density[i]; });
-        refreshGhosts([&](std::uint32_t i) -> Real& { return fluid_.lambda[i]; });
-        break;
-      case HostField::Predicted:
-        refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.p[i]; });
-        break;
-      case HostField::Velocity:
-        refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.v[i]; });
-        break;
-      case HostField::Vorticity:
-        refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.omega[i]; });
-        if (fluid_.parameters.xsphHyperViscosity > 0)
-        {
-          // XSPH's sum (HostFluid::view puts it in scratch), which the bi-Laplacian smooths.
-          refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.scratch[i]; });
-        }
-        break;
-    }
-  };
-  projectAndUpdate(
-    fluid_, [&](auto&& stage) { forOwned(stage); }, refresh, [&] { return compression(); },
-    report_);
-  dropGhosts();
+}
+
+template <class Real>
+void SubdomainStepper<Real>::refresh(HostField field)
+{
+  switch (field)
+  {
+    case HostField::DensityAndLambda:
+      refreshGhosts([&](std::uint32_t i) -> Real& { return fluid_.density[i]; });
+      refreshGhosts([&](std::uint32_t i) -> Real& { return fluid_.lambda[i]; });
+      break;
+    case HostField::Predicted:
+      refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.p[i]; });
+      break;
+    case HostField::Velocity:
+      refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.v[i]; });
+      break;
+    case HostField::Vorticity:
+      refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.omega[i]; });
+      if (fluid_.parameters.xsphHyperViscosity > 0)
+      {
+        // XSPH's sum (HostFluid::view puts it in scratch), which the bi-Laplacian smooths.
+        refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.scratch[i]; });
+      }
+      break;
+  }
 }
 
 template <class Real>

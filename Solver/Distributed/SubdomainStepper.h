@@ -19,6 +19,7 @@
 #pragma once
 
 #include "Communicator.h"
+#include "HostStepLoop.h"
 #include "HostStepper.h"
 #include "Slabs.h"
 #include "Stepper.h"
@@ -104,6 +105,13 @@ public:
 
 private:
   void stepAlone();
+  // The stages of a step that are this stepper's own (HostStepLoop.h).
+  friend class HostStepLoop<Real, SubdomainStepper>;
+  void predict();        // after a new cut, over the owned particles
+  void findNeighbours(); // migration by x*, the ghosts, the sort of owned and ghosts
+  template <class Stage>
+  void forEach(Stage&& stage) { forOwned(stage); }
+  void refresh(HostField field);
   template <class Stage>
   void forOwned(Stage&& stage);
   int column(const Vec3<Real>& q) const;

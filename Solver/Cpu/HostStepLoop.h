@@ -1,0 +1,143 @@
+// The Loop of StepLoop.h over a HostFluid: how the stages of a step run on the CPU, for the serial
+// and OpenMP stepper and one rank's CPU sub-domain. What differs between the two comes from the
+// stepper, which has these members (HostStepLoop is their friend):
+//   forEach(stage)       runs stage(i) over the particles it owns, in parallel or not
+//   refresh(field)       brings that field of the particles it does not own (its ghosts) up to
+//                        date; nothing to do when it owns them all
+//   compression()        the whole fluid's mean and largest compression (collective)
+//   predict(), findNeighbours()   Algorithm 1's lines 1-7 (a sub-domain also cuts, migrates and
+//                        receives its ghosts there)
+#pragma once
+
+#include "HostFluid.h"
+#include "StepLoop.h"
+
+#include <limits>
+
+namespace pbf
+{
+
+template <class Real, class Owner>
+class HostStepLoop
+{
+public:
+  HostStepLoop(HostFluid<Real>& fluid, Owner& owner, StepReport& report)
+    : fluid_(fluid)
+    , owner_(owner)
+    , report_(report)
+  {
+  }
+
+  void predict() { owner_.predict(); }
+  void findNeighbours()
+  {
+    owner_.findNeighbours();
+    // The sort swaps the arrays with their gathered copies and a sub-domain's migration resizes
+    // them: the views are taken after.
+    f_ = fluid_.view();
+    first_ = fluid_.view(true);
+  }
+
+  void densityAndLambda(const Projection&)
+  {
+    const FluidView<Real>& f = f_;
+    owner_.forEach([&](std::uint32_t i) { pbf::densityAndLambda(i, f); });
+    owner_.refresh(HostField::DensityAndLambda);
+  }
+
+  void measureCompression(const Projection&, bool mayStop)
+  {
+    const Compression c = owner_.compression();
+    report_.densityError = c.mean;
+    const Parameters& parameters = fluid_.parameters;
+    stopped_ = mayStop &&
+      c.within(parameters.densityErrorTolerance, parameters.maxDensityErrorTolerance);
+  }
+
+  void correct(const Projection& p)
+  {
+    if (stopped_)
+    {
+      return;
+    }
+    const FluidView<Real>& f = f_;
+    const FluidView<Real>& pass = p.tensile ? first_ : f_;
+    owner_.forEach([&](std::uint32_t i) { positionCorrection(i, pass); });
+    if (fluid_.parameters.chebyshevRho > 0)
+    {
+      // Chebyshev's positions two projections back (Chebyshev.h) live in omega's array, which
+      // the solve does not use: each projection leaves there the positions it started from,
+      // which the next one's blend reads as p^{k-1}.
+      Vec3<Real>* const twoBack = fluid_.omega.data();
+      const Real omega = static_cast<Real>(p.omega);
+      const bool accelerate = p.accelerate;
+      owner_.forEach([&](std::uint32_t i) {
+        const Vec3<Real> before = f.p[i];
+        applyCorrection(i, f);
+        if (accelerate)
+        {
+          f.p[i] = acceleratedCorrection(f.p[i], twoBack[i], omega, f);
+        }
+        twoBack[i] = before;
+      });
+    }
+    else
+    {
+      owner_.forEach([&](std::uint32_t i) { applyCorrection(i, f); });
+    }
+    owner_.refresh(HostField::Predicted);
+    ++report_.iterations;
+  }
+
+  template <class Body>
+  void whileCompressed(int first, int end, Body&& body)
+  {
+    for (int k = first; k < end && !stopped_; ++k)
+    {
+      body(*this, k);
+    }
+  }
+
+  // Line 21 always runs here: the CPU's correction pass does not fuse it.
+  void finishSolve()
+  {
+    if (!(fluid_.parameters.densityErrorTolerance > 0))
+    {
+      report_.densityError = std::numeric_limits<double>::quiet_NaN();
+    }
+    const FluidView<Real>& f = f_;
+    owner_.forEach([&](std::uint32_t i) { updateVelocity(i, f); });
+    owner_.refresh(HostField::Velocity);
+  }
+
+  void vorticityAndXsph()
+  {
+    const FluidView<Real>& f = f_;
+    owner_.forEach([&](std::uint32_t i) { pbf::vorticityAndXsph(i, f); });
+    owner_.refresh(HostField::Vorticity);
+  }
+
+  // The velocity in place: each particle reads only its own.
+  void confine()
+  {
+    const FluidView<Real>& f = f_;
+    owner_.forEach([&](std::uint32_t i) { vorticityConfinement(i, f, f.v); });
+  }
+
+  void commit()
+  {
+    const FluidView<Real>& f = f_;
+    Vec3<Real>* const x = fluid_.x.data();
+    owner_.forEach([&](std::uint32_t i) { commitPosition(i, f, x); });
+  }
+
+private:
+  HostFluid<Real>& fluid_;
+  Owner& owner_;
+  StepReport& report_;
+  FluidView<Real> f_{};
+  FluidView<Real> first_{}; // the first projection's view, which adds s_corr
+  bool stopped_ = false;
+};
+
+} // namespace pbf
