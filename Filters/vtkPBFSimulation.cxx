@@ -176,20 +176,13 @@ vtkPBFSettings vtkPBFSimulation::Settings() const
   s.AdaptiveIterations = this->AdaptiveIterations;
   s.Precision =
     this->Precision == PRECISION_DOUBLE ? pbf::Precision::Double : pbf::Precision::Single;
-  switch (this->Backend)
-  {
-    case BACKEND_CUDA:
-      s.Backend = pbf::BackendRequest::CUDA;
-      break;
-    case BACKEND_OPENMP:
-      s.Backend = pbf::BackendRequest::OpenMP;
-      break;
-    case BACKEND_SERIAL:
-      s.Backend = pbf::BackendRequest::Serial;
-      break;
-    default:
-      s.Backend = pbf::BackendRequest::Auto;
-  }
+  // The property's values are the solver's (vtkSetClampMacro keeps it in their range).
+  static_assert(static_cast<int>(pbf::BackendRequest::Auto) == BACKEND_AUTO &&
+      static_cast<int>(pbf::BackendRequest::CUDA) == BACKEND_CUDA &&
+      static_cast<int>(pbf::BackendRequest::OpenMP) == BACKEND_OPENMP &&
+      static_cast<int>(pbf::BackendRequest::Serial) == BACKEND_SERIAL,
+    "vtkPBFSimulation::Backends and pbf::BackendRequest name the same values");
+  s.Backend = static_cast<pbf::BackendRequest>(this->Backend);
   s.ObstacleThickness = this->ObstacleThickness;
   s.DecomposeAcrossRanks = this->DecomposeAcrossRanks;
   s.CheckpointInterval = this->CheckpointInterval;

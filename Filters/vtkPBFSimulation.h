@@ -104,6 +104,7 @@ public:
     PRESET_MARIN_DAM_BREAK = 4
   };
 
+  // The values of pbf::BackendRequest (Solver/Backends/BackendChoice.h).
   enum Backends
   {
     BACKEND_AUTO = 0, // CUDA when a device is present, else OpenMP, said once

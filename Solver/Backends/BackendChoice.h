@@ -16,12 +16,14 @@ namespace distributed
 class Communicator;
 }
 
+// The values are the ParaView property's (vtkPBFSimulation::Backends, the proxy's Backend
+// entries), which the filter casts.
 enum class BackendRequest
 {
-  Auto,
-  CUDA,
-  OpenMP,
-  Serial
+  Auto = 0,
+  CUDA = 1,
+  OpenMP = 2,
+  Serial = 3
 };
 
 struct BackendChoice

@@ -5,7 +5,9 @@
 // (sameParameters), the tools' options (ToolOptions), the proxy XML (generated at build time by
 // Plugin/ProxyXml.cpp), the filter's setters and cache key, the field-data record and the
 // messages in the GUI's terms (Filters/). Adding a parameter is a row here plus the physics that
-// reads it.
+// reads it. Every row is part of a run's identity: changing one restarts the run from its start
+// (the state after step k depends on all of them); what may change mid-run without a restart
+// (the frames, checkpoints, the surface's settings) is the filter's, not a row here.
 #pragma once
 
 #include "Parameters.h"

@@ -239,14 +239,9 @@ void Report(const char* title, const std::vector<Sample>& samples, int warmup, i
   std::fflush(stdout);
 }
 
-} // namespace
-
-int main(int argc, char* argv[])
+// The filter as the options say, its information updated.
+void Configure(vtkPBFSimulation* simulation, const Options& o, const std::string& scene)
 {
-  const Options o = Parse(argc, argv);
-  const std::string scene = o.scene.empty() ? WriteScaledDamBreak(o) : o.scene;
-
-  vtkNew<vtkPBFSimulation> simulation;
   simulation->SetSceneFile(scene.c_str());
   simulation->SetParameter("ParticleSpacing", o.spacing);
   simulation->SetSubstepsPerFrame(o.substeps);
@@ -267,6 +262,45 @@ int main(int argc, char* argv[])
     Usage(("unknown backend " + o.backend).c_str());
   simulation->UpdateInformation();
 
+}
+
+// Scrubbing, as a user dragging the time slider back would: an earlier frame resumes from the
+// latest checkpoint at or before it; the frame just shown again costs nothing.
+template <class Request, class Output>
+void Scrub(vtkPBFSimulation* simulation, const Options& o, Request& request, Output& output)
+{
+  const int last = o.frames + (o.pageable ? 0 : o.comparePageable);
+  const int back = std::max(1, last / 2 + 1);
+  const Sample scrub = request(back);
+  std::printf("scrub back to frame %d: %.1f ms wall, %ld steps (from %s)\n", back, scrub.wall,
+    scrub.steps,
+    output()
+      ->GetFieldData()
+      ->GetAbstractArray("ResumedFrom")
+      ->GetVariantValue(0)
+      .ToString()
+      .c_str());
+  simulation->SetNumberOfFrames(last + 10); // re-executes the algorithm, changes no frame
+  const Sample again = request(back);
+  std::printf("same frame after a NumberOfFrames change: %.3f ms wall, %ld steps (from %s)\n",
+    again.wall, again.steps,
+    output()
+      ->GetFieldData()
+      ->GetAbstractArray("ResumedFrom")
+      ->GetVariantValue(0)
+      .ToString()
+      .c_str());
+}
+
+} // namespace
+
+int main(int argc, char* argv[])
+{
+  const Options o = Parse(argc, argv);
+  const std::string scene = o.scene.empty() ? WriteScaledDamBreak(o) : o.scene;
+
+  vtkNew<vtkPBFSimulation> simulation;
+  Configure(simulation, o, scene);
   const double interval = simulation->GetFrameInterval();
   auto request = [&](int frame)
   {
@@ -338,29 +372,7 @@ int main(int argc, char* argv[])
     Report("pageable output", pageable, std::min(o.warmup, o.comparePageable - 1), o.substeps);
   }
 
-  // Scrubbing, as a user dragging the time slider back would: an earlier frame resumes from the
-  // latest checkpoint at or before it; the frame just shown again costs nothing.
-  const int last = o.frames + (o.pageable ? 0 : o.comparePageable);
-  const int back = std::max(1, last / 2 + 1);
-  const Sample scrub = request(back);
-  std::printf("scrub back to frame %d: %.1f ms wall, %ld steps (from %s)\n", back, scrub.wall,
-    scrub.steps,
-    output()
-      ->GetFieldData()
-      ->GetAbstractArray("ResumedFrom")
-      ->GetVariantValue(0)
-      .ToString()
-      .c_str());
-  simulation->SetNumberOfFrames(last + 10); // re-executes the algorithm, changes no frame
-  const Sample again = request(back);
-  std::printf("same frame after a NumberOfFrames change: %.3f ms wall, %ld steps (from %s)\n",
-    again.wall, again.steps,
-    output()
-      ->GetFieldData()
-      ->GetAbstractArray("ResumedFrom")
-      ->GetVariantValue(0)
-      .ToString()
-      .c_str());
+  Scrub(simulation, o, request, output);
   auto* table = vtkTable::SafeDownCast(simulation->GetOutputDataObject(1));
   std::printf("diagnostics: %lld rows\n", static_cast<long long>(table->GetNumberOfRows()));
   return 0;

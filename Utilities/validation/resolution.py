@@ -98,19 +98,8 @@ def table(title, runs):
             s["seconds_per_simulated_second"]))
 
 
-def main():
-    parser = argparse.ArgumentParser()
-    parser.add_argument("folder")
-    parser.add_argument("--plots", nargs="?", const=IMAGES, metavar="DIR",
-                        help="draw resolution_front.png into DIR (default %(const)s)")
-    args = parser.parse_args()
-    folder = args.folder
-
-    def load(pattern):
-        found = sorted(glob.glob(os.path.join(folder, pattern)))
-        return rows(found[0]) if found else None
-
-    # 1. The default dam break at five spacings.
+def spacing_ladder(load):
+    """1. The default dam break at five spacings: the table of every frame; returns the fronts."""
     ladder = [(0.04, "dam_break_0.04_defaults_CUDA.csv"), (0.02, "dam_break_0.02_defaults_CUDA.csv"),
               (0.01, "dam_break_0.01_defaults_CUDA.csv"), (0.005, "dam_break_0.005_defaults_CUDA.csv"),
               (0.0025, "dam_break_0.0025_defaults_CUDA.csv")]
@@ -129,7 +118,10 @@ def main():
         if frames:
             runs.append(summary("s = %g m, CUDA, fixed 4 iterations" % spacing, frames))
     table("Dam break, every frame (defaults unless said)", runs)
+    return fronts
 
+
+def front_table(fronts):
     print("\nSurge front: arrival time [s] at x (the column's face starts at 0.4 m)")
     print("| spacing | " + " | ".join("x = %.1f m" % x for x in FRONT_X) +
           " | largest gap to the next finer | the same from x = %.1f m |" % STARTED_X[0])
@@ -144,7 +136,9 @@ def main():
         print("| %g | %s | %s | %s |" % (s, " | ".join("%.4f" % t if t else "-" for t in times),
                                          percent(gap), percent(started)))
 
-    # 2. Smoothing ratios.
+
+def smoothing_ratios(load):
+    """2. Smoothing ratios."""
     print("\nSmoothing ratio at s = 0.02 m: tank (0.5 s) and dam-break front")
     print("| h/s | neighbours at start | lowest | highest | change | centre height: largest change "
           "| front gap to h/s 2 | worst max % |")
@@ -169,7 +163,9 @@ def main():
             100 * largest_gap(front, reference) if reference else float("nan"),
             100 * max(r["max_error"] for r in front)))
 
-    # 3. The time step.
+
+def time_step(load):
+    """3. The time step."""
     print("\nCFL 0.4 (default) against 0.2: largest change of the front's arrival time")
     for spacing in (0.01, 0.005):
         a = load("dam_break_%g_defaults_CUDA.csv" % spacing)
@@ -178,67 +174,93 @@ def main():
             print("- s = %g m: %.2f %% (from x = %.1f m: %.2f %%)" % (
                 spacing, 100 * largest_gap(a, b), STARTED_X[0], 100 * largest_gap(a, b, STARTED_X)))
 
-    # 4. Martin & Moyce.
+
+def mm_points(path):
+    return [line.strip().split(",") for line in open(path)
+            if line.count(",") == 3 and not line.startswith("Z")]
+
+
+def mm_gap(a, b, z_from=0.0):
+    return max(abs(p[2] - q[2]) / q[2] for p, q in zip(a, b) if q[0] >= z_from - 1e-9)
+
+
+def martin_moyce(folder):
+    """4. Martin & Moyce."""
     mm = {}
     for across in (10, 20, 40, 80):
         path = os.path.join(folder, "mm_%d.txt" % across)
         if os.path.exists(path):
             text = dict(line.split(",", 1) for line in open(path) if line.count(",") == 1)
-            points = [line.strip().split(",") for line in open(path)
-                      if line.count(",") == 3 and not line.startswith("Z")]
             mm[across] = {"rms": float(text["rms_relative_error"]),
-                          "points": [(float(z), float(te), float(ts)) for z, te, ts, _ in points]}
-    if mm:
-        finest = max(mm)
-        pts = mm[finest]["points"]
-        # One shift, least squares on T over points 2-15, on the finest run.
-        shift = sum(te - ts for _, te, ts in pts[1:]) / len(pts[1:])
-        print("\nMartin & Moyce (n^2 = 2): T0 = %.3f fitted on %d across (points 2-15)" % (shift, finest))
-        print("| across | RMS unshifted | RMS points 2-15, shifted by T0 | late dZ/dT (Z 2.56-4.11) |")
-        print("|---|---:|---:|---:|")
-        for across, r in sorted(mm.items()):
-            p = r["points"]
-            rel = [((ts + shift) - te) / te for _, te, ts in p[1:]]
-            rms = math.sqrt(sum(x * x for x in rel) / len(rel))
-            late = (p[-1][0] - p[7][0]) / (p[-1][2] - p[7][2])
-            print("| %d | %.1f %% | %.1f %% | %.3f |" % (across, 100 * r["rms"], 100 * rms, late))
-        experiment_late = (pts[-1][0] - pts[7][0]) / (pts[-1][1] - pts[7][1])
-        print("experiment late dZ/dT: %.3f" % experiment_late)
-        def mm_gap(a, b, z_from=0.0):
-            return max(abs(p[2] - q[2]) / q[2] for p, q in zip(a, b) if q[0] >= z_from - 1e-9)
+                          "points": [(float(z), float(te), float(ts)) for z, te, ts, _ in mm_points(path)]}
+    if not mm:
+        return
+    finest = max(mm)
+    pts = mm[finest]["points"]
+    # One shift, least squares on T over points 2-15, on the finest run.
+    shift = sum(te - ts for _, te, ts in pts[1:]) / len(pts[1:])
+    print("\nMartin & Moyce (n^2 = 2): T0 = %.3f fitted on %d across (points 2-15)" % (shift, finest))
+    print("| across | RMS unshifted | RMS points 2-15, shifted by T0 | late dZ/dT (Z 2.56-4.11) |")
+    print("|---|---:|---:|---:|")
+    for across, r in sorted(mm.items()):
+        p = r["points"]
+        rel = [((ts + shift) - te) / te for _, te, ts in p[1:]]
+        rms = math.sqrt(sum(x * x for x in rel) / len(rel))
+        late = (p[-1][0] - p[7][0]) / (p[-1][2] - p[7][2])
+        print("| %d | %.1f %% | %.1f %% | %.3f |" % (across, 100 * r["rms"], 100 * rms, late))
+    experiment_late = (pts[-1][0] - pts[7][0]) / (pts[-1][1] - pts[7][1])
+    print("experiment late dZ/dT: %.3f" % experiment_late)
+    if 40 in mm and 80 in mm:
+        print("40 vs 80 across: largest arrival-time gap %.2f %% (from Z = %.2f: %.2f %%)" % (
+            100 * mm_gap(mm[40]["points"], mm[80]["points"]), STARTED_Z,
+            100 * mm_gap(mm[40]["points"], mm[80]["points"], STARTED_Z)))
+    for across in (40, 80):
+        path = os.path.join(folder, "mm_%d_cfl0.2.txt" % across)
+        if os.path.exists(path) and across in mm:
+            half = [(float(z), 0.0, float(ts)) for z, _, ts, _ in mm_points(path)]
+            print("%d across, CFL 0.2 vs 0.4: largest arrival-time change %.2f %% (from Z = %.2f: "
+                  "%.2f %%)" % (across, 100 * mm_gap(half, mm[across]["points"]), STARTED_Z,
+                                100 * mm_gap(half, mm[across]["points"], STARTED_Z)))
 
-        if 40 in mm and 80 in mm:
-            print("40 vs 80 across: largest arrival-time gap %.2f %% (from Z = %.2f: %.2f %%)" % (
-                100 * mm_gap(mm[40]["points"], mm[80]["points"]), STARTED_Z,
-                100 * mm_gap(mm[40]["points"], mm[80]["points"], STARTED_Z)))
-        for across in (40, 80):
-            path = os.path.join(folder, "mm_%d_cfl0.2.txt" % across)
-            if os.path.exists(path) and across in mm:
-                points = [line.strip().split(",") for line in open(path)
-                          if line.count(",") == 3 and not line.startswith("Z")]
-                half = [(float(z), 0.0, float(ts)) for z, _, ts, _ in points]
-                print("%d across, CFL 0.2 vs 0.4: largest arrival-time change %.2f %% (from Z = %.2f: "
-                      "%.2f %%)" % (across, 100 * mm_gap(half, mm[across]["points"]), STARTED_Z,
-                                    100 * mm_gap(half, mm[across]["points"], STARTED_Z)))
 
+def plot_fronts(fronts, folder):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    for s in sorted(fronts, reverse=True):
+        f = fronts[s]
+        ax[0].plot([r["time"] for r in f], [r["front"] for r in f], label="s = %g m" % s)
+        ax[1].plot([r["time"] for r in f], [100 * r["max_error"] for r in f], label="s = %g m" % s)
+    ax[0].set_xlabel("t [s]"); ax[0].set_ylabel("surge front x [m]"); ax[0].set_xlim(0, 0.6)
+    ax[0].set_title("dam_break preset, defaults"); ax[0].legend()
+    ax[1].set_xlabel("t [s]"); ax[1].set_ylabel("max compression [%]")
+    ax[1].set_title("largest compression per frame"); ax[1].legend()
+    fig.tight_layout()
+    os.makedirs(folder, exist_ok=True)
+    path = os.path.join(folder, "resolution_front.png")
+    fig.savefig(path, dpi=90)
+    print("wrote %s" % os.path.relpath(path))
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("folder")
+    parser.add_argument("--plots", nargs="?", const=IMAGES, metavar="DIR",
+                        help="draw resolution_front.png into DIR (default %(const)s)")
+    args = parser.parse_args()
+
+    def load(pattern):
+        found = sorted(glob.glob(os.path.join(args.folder, pattern)))
+        return rows(found[0]) if found else None
+
+    fronts = spacing_ladder(load)
+    front_table(fronts)
+    smoothing_ratios(load)
+    time_step(load)
+    martin_moyce(args.folder)
     if args.plots:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        fig, ax = plt.subplots(1, 2, figsize=(11, 4))
-        for s in sorted(fronts, reverse=True):
-            f = fronts[s]
-            ax[0].plot([r["time"] for r in f], [r["front"] for r in f], label="s = %g m" % s)
-            ax[1].plot([r["time"] for r in f], [100 * r["max_error"] for r in f], label="s = %g m" % s)
-        ax[0].set_xlabel("t [s]"); ax[0].set_ylabel("surge front x [m]"); ax[0].set_xlim(0, 0.6)
-        ax[0].set_title("dam_break preset, defaults"); ax[0].legend()
-        ax[1].set_xlabel("t [s]"); ax[1].set_ylabel("max compression [%]")
-        ax[1].set_title("largest compression per frame"); ax[1].legend()
-        fig.tight_layout()
-        os.makedirs(args.plots, exist_ok=True)
-        path = os.path.join(args.plots, "resolution_front.png")
-        fig.savefig(path, dpi=90)
-        print("wrote %s" % os.path.relpath(path))
+        plot_fronts(fronts, args.plots)
 
 
 if __name__ == "__main__":
