@@ -43,6 +43,14 @@ private:
   template <class Stage>
   void forEach(Stage&& stage) { forEachParticle(stage); }
   void refresh(HostField) {} // every particle is this stepper's own
+  std::size_t ownedCount() const { return fluid_.x.size(); }
+  template <class Stage>
+  void forEachInBlocks(std::size_t block, Stage&& stage)
+  {
+    pbf::forEachInBlocks(parallel_, fluid_.x.size(), block,
+      [](std::size_t k) { return static_cast<std::uint32_t>(k); }, stage);
+  }
+  std::vector<double> sumOverRanks(const std::vector<double>& mine) const { return mine; }
 
   template <class In>
   void loadState(const Snapshot<In>& state)

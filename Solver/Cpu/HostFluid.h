@@ -12,6 +12,7 @@
 #include "SignedDistance.h"
 #include "Stepper.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -154,6 +155,24 @@ struct HostFluid
   std::vector<Real> boundaryValues;
   BoundaryTable<Real> boundary{};
 };
+
+// stage(b, at(k)) for k in [0, n), b = k / block: the blocks in parallel (OpenMP, when
+// `parallel`), each block's particles in order, so that sums kept per block and then added in
+// block order have the same bits whatever the number of threads.
+template <class At, class Stage>
+void forEachInBlocks(bool parallel, std::size_t n, std::size_t block, At&& at, Stage&& stage)
+{
+  const auto blocks = static_cast<std::int64_t>((n + block - 1) / block);
+#pragma omp parallel for schedule(static) if (parallel)
+  for (std::int64_t b = 0; b < blocks; ++b)
+  {
+    const std::size_t end = std::min(n, static_cast<std::size_t>(b + 1) * block);
+    for (std::size_t k = static_cast<std::size_t>(b) * block; k < end; ++k)
+    {
+      stage(static_cast<std::size_t>(b), at(k));
+    }
+  }
+}
 
 // The fields a stepper that does not own every particle it reads (a sub-domain, whose ghosts are
 // owned by its neighbours) refreshes between the stages of a step.

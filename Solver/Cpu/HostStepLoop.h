@@ -5,6 +5,10 @@
 //   refresh(field)       brings that field of the particles it does not own (its ghosts) up to
 //                        date; nothing to do when it owns them all
 //   compression()        the whole fluid's mean and largest compression (collective)
+//   ownedCount(), forEachInBlocks(block, stage)   stage(b, i) for the owned particles, the
+//                        k-th of them in block b = k / block; blocks in parallel or not, each
+//                        block's particles in order
+//   sumOverRanks(values) the values summed over the ranks in rank order (collective)
 //   predict(), findNeighbours()   Algorithm 1's lines 1-7 (a sub-domain also cuts, migrates and
 //                        receives its ghosts there)
 #pragma once
@@ -12,7 +16,9 @@
 #include "HostFluid.h"
 #include "StepLoop.h"
 
+#include <cstddef>
 #include <limits>
+#include <vector>
 
 namespace pbf
 {
@@ -89,6 +95,49 @@ public:
     ++report_.iterations;
   }
 
+  // Summed in fixed blocks of particles, then the blocks in order, then the ranks in order: the
+  // same bits whatever the number of threads, as compression() sums.
+  void sumLoads(const Projection& p)
+  {
+    const std::size_t solids = fluid_.obstacles.size();
+    if (stopped_ || solids == 0)
+    {
+      return;
+    }
+    constexpr std::size_t block = 4096;
+    const std::size_t blocks = (owner_.ownedCount() + block - 1) / block;
+    constexpr std::size_t values = 6; // force and torque
+    blockLoads_.assign(blocks * solids * values, 0.0);
+    const FluidView<Real>& f = p.tensile ? first_ : f_;
+    owner_.forEachInBlocks(block, [&](std::size_t b, std::uint32_t i) {
+      solidLoads(i, f, [&](int o, const Vec3<Real>& force, const Vec3<Real>& torque) {
+        double* sum = &blockLoads_[(b * solids + static_cast<std::size_t>(o)) * values];
+        sum[0] += force.x;
+        sum[1] += force.y;
+        sum[2] += force.z;
+        sum[3] += torque.x;
+        sum[4] += torque.y;
+        sum[5] += torque.z;
+      });
+    });
+    std::vector<double> mine(solids * values, 0.0);
+    for (std::size_t b = 0; b < blocks; ++b)
+    {
+      for (std::size_t k = 0; k < mine.size(); ++k)
+      {
+        mine[k] += blockLoads_[b * mine.size() + k];
+      }
+    }
+    const std::vector<double> all = owner_.sumOverRanks(mine);
+    report_.loads.resize(solids);
+    for (std::size_t o = 0; o < solids; ++o)
+    {
+      const double* v = &all[o * values];
+      report_.loads[o].force += Vec3d{ v[0], v[1], v[2] };
+      report_.loads[o].torque += Vec3d{ v[3], v[4], v[5] };
+    }
+  }
+
   template <class Body>
   void whileCompressed(int first, int end, Body&& body)
   {
@@ -138,6 +187,7 @@ private:
   FluidView<Real> f_{};
   FluidView<Real> first_{}; // the first projection's view, which adds s_corr
   bool stopped_ = false;
+  std::vector<double> blockLoads_; // per block, per solid: force and torque
 };
 
 } // namespace pbf

@@ -118,6 +118,9 @@ public:
       mayStop ? k_.tolerance : -1.0, (*proceed_)[p.iteration + 1]);
   }
 
+  // The CUDA stepper does not sum the solids' loads yet (StepReport::loads stays empty).
+  void sumLoads(const Projection&) {}
+
   // With a fixed count the last correction also updates the velocity (line 21); in adaptive
   // mode no correction knows it is the last, and finishSolve does.
   void correct(const Projection& p)

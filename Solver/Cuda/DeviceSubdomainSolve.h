@@ -78,6 +78,9 @@ public:
       c.within(s_.parameters_.densityErrorTolerance, s_.parameters_.maxDensityErrorTolerance);
   }
 
+  // The GPU sub-domain does not sum the solids' loads yet (StepReport::loads stays empty).
+  void sumLoads(const Projection&) {}
+
   // Chebyshev's blend reads each owned particle's own positions two projections back, which
   // the other position buffer still holds (StepSchedule.h's correctionPass). The last
   // correction the count allows also updates the velocities, which XSPH and vorticity read.

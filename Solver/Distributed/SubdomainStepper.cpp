@@ -416,6 +416,20 @@ void SubdomainStepper<Real>::findNeighbours()
 }
 
 template <class Real>
+std::vector<double> SubdomainStepper<Real>::sumOverRanks(const std::vector<double>& mine)
+{
+  std::vector<double> total(mine.size(), 0.0);
+  for (const std::vector<double>& r : allGather(communicator_, mine))
+  {
+    for (std::size_t k = 0; k < total.size(); ++k)
+    {
+      total[k] += r[k];
+    }
+  }
+  return total;
+}
+
+template <class Real>
 void SubdomainStepper<Real>::refresh(HostField field)
 {
   switch (field)

@@ -112,6 +112,14 @@ private:
   template <class Stage>
   void forEach(Stage&& stage) { forOwned(stage); }
   void refresh(HostField field);
+  std::size_t ownedCount() const { return owned_.size(); }
+  template <class Stage>
+  void forEachInBlocks(std::size_t block, Stage&& stage)
+  {
+    pbf::forEachInBlocks(parallel_, owned_.size(), block,
+      [this](std::size_t k) { return owned_[k]; }, stage);
+  }
+  std::vector<double> sumOverRanks(const std::vector<double>& mine);
   template <class Stage>
   void forOwned(Stage&& stage);
   int column(const Vec3<Real>& q) const;

@@ -152,6 +152,16 @@ PBF_HD PBF_INLINE void forEachNearSolid(
   }
 }
 
+// A solid's share of delta p_i (eq. 14, before m / rho_0), for the solid at outward normal n with
+// the table's sums b there: it carries lambda_i, as a mirror image does, and s_corr's push.
+// positionCorrection adds it; the particle pushes the solid back with it (solidLoads).
+template <class Real>
+PBF_HD PBF_INLINE Vec3<Real> solidShare(
+  const Vec3<Real>& n, const BoundarySample<Real>& b, Real lambdaI, Real tensile)
+{
+  return n * (b.spiky * (lambdaI + lambdaI) + tensile * b.tensile);
+}
+
 // A particle inside an obstacle goes to its surface, along the field's gradient.
 template <class Real, class Neighbors>
 PBF_HD PBF_INLINE Vec3<Real> collideWithObstacles(Vec3<Real> q, const FluidView<Real, Neighbors>& f)
@@ -383,9 +393,27 @@ PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real,
   // The solid's share carries lambda_i, as a mirror image does (Boundary.h).
   forEachNearSolid(pi, f,
     [&](const Vec3<Real>& n, const BoundarySample<Real>& b, const DistanceGridView<Real>&) {
-    delta += n * (b.spiky * (lambdaI + lambdaI) + tensile * b.tensile);
+    delta += solidShare(n, b, lambdaI, tensile);
   });
   f.scratch[i] = delta * f.c.massOverRho0;
+}
+
+// What particle i pushes each solid with in this projection: the solid's share of its delta p_i
+// (positionCorrection's) as a force, m delta p / dt^2, reversed, and that force's torque about
+// the world's origin; add(solid index, force, torque). The same model that keeps the fluid out:
+// a solid feels exactly what it does to the fluid.
+template <class Real, class Neighbors, class Add>
+PBF_HD PBF_INLINE void solidLoads(std::uint32_t i, const FluidView<Real, Neighbors>& f, Add&& add)
+{
+  const Vec3<Real> pi = f.p[i];
+  const Real lambdaI = f.lambda[i];
+  const Real tensile = f.tensile ? f.time->tensile : Real(0);
+  const Real scale = -f.c.massOverRho0 * f.c.mass * f.time->inverseDt * f.time->inverseDt;
+  forEachNearSolid(pi, f,
+    [&](const Vec3<Real>& n, const BoundarySample<Real>& b, const DistanceGridView<Real>& solid) {
+    const Vec3<Real> force = solidShare(n, b, lambdaI, tensile) * scale;
+    add(static_cast<int>(&solid - f.obstacles), force, cross(pi, force));
+  });
 }
 
 // Algorithm 1, lines 17-19: apply delta p_i and resolve collisions (Jacobi update).

@@ -19,6 +19,9 @@
 //   measureCompression(p, mayStop)   adaptive mode: the whole fluid's compression after the
 //                             density pass; with mayStop, a compression within the tolerance ends
 //                             the solve: nothing more of this projection or a later one runs
+//   sumLoads(p)               what the fluid pushes each solid with in projection p (the solid's
+//                             share of delta p, Equations.h's solidLoads), added to the step's
+//                             loads; nothing once the solve has stopped
 //   correct(p)                lines 12-18: delta p (eq. 12 with s_corr when p.tensile) and the
 //                             Jacobi update, blended when p.accelerate; a Loop may also run line 21
 //                             in the correction where p.last says no projection follows
@@ -90,6 +93,7 @@ void runStep(Loop& loop, const SolveRule& rule)
       // The first projection always runs: it carries the step's tensile push.
       at.measureCompression(p, k > 0);
     }
+    at.sumLoads(p);
     at.correct(p);
   };
   projection(loop, 0);

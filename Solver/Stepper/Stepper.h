@@ -69,12 +69,23 @@ struct Compression
 };
 
 // What the last step() did.
+// What the fluid pushes one solid with over a step: the mean force [N] and its torque about the
+// world's origin [N m] (about a point c: torque - c x force).
+struct SolidLoad
+{
+  Vec3d force{ 0, 0, 0 };
+  Vec3d torque{ 0, 0, 0 };
+};
+
 struct StepReport
 {
   int iterations = 0; // constraint projections applied
   // Adaptive mode: mean of max(rho_i / rho_0 - 1, 0) at the last evaluation, the one that ended
   // the loop. NaN in fixed mode, which computes no reduction inside a step (see statistics()).
   double densityError = 0;
+  // One per solid obstacle, in the order of setObstacles, over every rank; empty where the
+  // stepper has no solids or does not sum their loads yet (the CUDA steppers).
+  std::vector<SolidLoad> loads;
 };
 
 class Stepper

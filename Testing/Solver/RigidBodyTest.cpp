@@ -1,0 +1,288 @@
+// The mass properties of a body the fluid moves, its bad input, and its rigid motion.
+#include "MassProperties.h"
+#include "RigidBody.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
+#include <string>
+
+using namespace pbf;
+
+namespace
+{
+
+// The closed box [lo, hi] as 12 triangles facing out.
+TriangleMesh boxMesh(const Vec3d& lo, const Vec3d& hi)
+{
+  TriangleMesh m;
+  for (int k = 0; k < 8; ++k)
+  {
+    m.points.push_back({ k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z });
+  }
+  // Each face as two triangles, counter-clockwise seen from outside.
+  const std::uint32_t faces[6][4] = { { 0, 2, 3, 1 }, { 4, 5, 7, 6 }, { 0, 1, 5, 4 },
+    { 2, 6, 7, 3 }, { 0, 4, 6, 2 }, { 1, 3, 7, 5 } };
+  for (const auto& f : faces)
+  {
+    m.triangles.push_back({ f[0], f[1], f[2] });
+    m.triangles.push_back({ f[0], f[2], f[3] });
+  }
+  return m;
+}
+
+// An icosahedron subdivided `levels` times onto the sphere of `radius` at `centre`.
+TriangleMesh sphereMesh(const Vec3d& centre, double radius, int levels)
+{
+  const double t = (1 + std::sqrt(5.0)) / 2;
+  std::vector<Vec3d> p = { { -1, t, 0 }, { 1, t, 0 }, { -1, -t, 0 }, { 1, -t, 0 }, { 0, -1, t },
+    { 0, 1, t }, { 0, -1, -t }, { 0, 1, -t }, { t, 0, -1 }, { t, 0, 1 }, { -t, 0, -1 },
+    { -t, 0, 1 } };
+  std::vector<std::array<std::uint32_t, 3>> f = { { 0, 11, 5 }, { 0, 5, 1 }, { 0, 1, 7 },
+    { 0, 7, 10 }, { 0, 10, 11 }, { 1, 5, 9 }, { 5, 11, 4 }, { 11, 10, 2 }, { 10, 7, 6 },
+    { 7, 1, 8 }, { 3, 9, 4 }, { 3, 4, 2 }, { 3, 2, 6 }, { 3, 6, 8 }, { 3, 8, 9 }, { 4, 9, 5 },
+    { 2, 4, 11 }, { 6, 2, 10 }, { 8, 6, 7 }, { 9, 8, 1 } };
+  auto unit = [](const Vec3d& v) { return v * (1.0 / std::sqrt(dot(v, v))); };
+  for (Vec3d& q : p)
+  {
+    q = unit(q);
+  }
+  for (int level = 0; level < levels; ++level)
+  {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> middle;
+    auto mid = [&](std::uint32_t a, std::uint32_t b) {
+      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+      const auto found = middle.find(key);
+      if (found != middle.end())
+      {
+        return found->second;
+      }
+      p.push_back(unit((p[a] + p[b]) * 0.5));
+      return middle[key] = static_cast<std::uint32_t>(p.size() - 1);
+    };
+    std::vector<std::array<std::uint32_t, 3>> finer;
+    for (const auto& tri : f)
+    {
+      const std::uint32_t a = mid(tri[0], tri[1]), b = mid(tri[1], tri[2]), c = mid(tri[2], tri[0]);
+      finer.push_back({ tri[0], a, c });
+      finer.push_back({ tri[1], b, a });
+      finer.push_back({ tri[2], c, b });
+      finer.push_back({ a, b, c });
+    }
+    f = finer;
+  }
+  TriangleMesh m;
+  for (const Vec3d& q : p)
+  {
+    m.points.push_back(centre + q * radius);
+  }
+  m.triangles = f;
+  return m;
+}
+
+std::string errorOf(const std::function<void()>& f)
+{
+  try
+  {
+    f();
+  }
+  catch (const InvalidInput& e)
+  {
+    return e.what();
+  }
+  return "";
+}
+
+bool contains(const std::string& text, const std::string& part)
+{
+  return text.find(part) != std::string::npos;
+}
+
+} // namespace
+
+// A box off the origin: the tetrahedra's sums against the closed forms. The tolerance is
+// rounding: a few hundred products of numbers of order 10, relative 1e-12.
+TEST(MassProperties, ABoxMeshHasTheBoxsMassCentreAndInertia)
+{
+  const Box box{ { 5, -1, 2 }, { 6, 1, 5 } };
+  const MassProperties exact = boxMassProperties(box, 1000, "box");
+  EXPECT_DOUBLE_EQ(exact.mass, 6000);
+  EXPECT_DOUBLE_EQ(exact.inertia[0], 6000.0 / 12 * (4 + 9));
+  for (bool inverted : { false, true })
+  {
+    TriangleMesh mesh = boxMesh(box.min, box.max);
+    if (inverted)
+    {
+      for (auto& t : mesh.triangles)
+      {
+        std::swap(t[1], t[2]);
+      }
+    }
+    const MassProperties m = meshMassProperties(mesh, 1000, "box");
+    EXPECT_NEAR(m.volume, 6, 6e-12) << "inverted " << inverted;
+    EXPECT_NEAR(m.mass, exact.mass, 6e-9);
+    EXPECT_NEAR(m.centre.x, 5.5, 1e-12);
+    EXPECT_NEAR(m.centre.y, 0, 1e-12);
+    EXPECT_NEAR(m.centre.z, 3.5, 1e-12);
+    for (int k = 0; k < 9; ++k)
+    {
+      EXPECT_NEAR(m.inertia[k], exact.inertia[k], 1e-12 * exact.inertia[0]) << "entry " << k;
+    }
+  }
+}
+
+// The box turned: its inertia about the centre is R I R^T, off-diagonal terms included.
+TEST(MassProperties, ATurnedBoxsInertiaIsTheTurnedTensor)
+{
+  TriangleMesh mesh = boxMesh({ -0.5, -1, -1.5 }, { 0.5, 1, 1.5 });
+  const Rotation turn = Rotation::fromDegrees({ 30, 45, 60 });
+  for (Vec3d& p : mesh.points)
+  {
+    p = turn.apply(p) + Vec3d{ 1, 2, 3 };
+  }
+  const MassProperties m = meshMassProperties(mesh, 500, "turned box");
+  const MassProperties axes = boxMassProperties({ { -0.5, -1, -1.5 }, { 0.5, 1, 1.5 } }, 500, "b");
+  const std::array<double, 9> r = turn.matrix();
+  for (int i = 0; i < 3; ++i)
+  {
+    for (int j = 0; j < 3; ++j)
+    {
+      double expected = 0;
+      for (int k = 0; k < 3; ++k)
+      {
+        expected += r[3 * i + k] * axes.inertia[4 * k] * r[3 * j + k];
+      }
+      EXPECT_NEAR(m.inertia[3 * i + j], expected, 1e-11 * axes.inertia[0]) << i << "," << j;
+    }
+  }
+  EXPECT_NEAR(m.centre.x, 1, 1e-12);
+  EXPECT_NEAR(m.centre.z, 3, 1e-12);
+}
+
+// A subdivided icosahedron inscribed in a sphere: its volume and inertia approach the sphere's
+// from below, within the polyhedron's own deficit (1280 faces: the volume 0.5 % short, measured
+// 0.46 %); the inertia stays isotropic to rounding, since the polyhedron is symmetric.
+TEST(MassProperties, ASphereMeshApproachesTheSphere)
+{
+  const MassProperties sphere = sphereMassProperties({ 1, 1, 1 }, 0.2, 800, "sphere");
+  const MassProperties m = meshMassProperties(sphereMesh({ 1, 1, 1 }, 0.2, 3), 800, "sphere");
+  EXPECT_LT(m.volume, sphere.volume);
+  EXPECT_GT(m.volume, 0.99 * sphere.volume);
+  EXPECT_LT(m.inertia[0], sphere.inertia[0]);
+  EXPECT_GT(m.inertia[0], 0.98 * sphere.inertia[0]);
+  EXPECT_NEAR(m.inertia[4], m.inertia[0], 1e-9 * m.inertia[0]);
+  EXPECT_NEAR(m.inertia[8], m.inertia[0], 1e-9 * m.inertia[0]);
+  EXPECT_NEAR(m.inertia[1], 0, 1e-9 * m.inertia[0]);
+  EXPECT_NEAR(m.centre.y, 1, 1e-12);
+}
+
+TEST(MassProperties, BadBodiesAreInvalidInputNamingTheBodyAndTheValue)
+{
+  const TriangleMesh box = boxMesh({ 0, 0, 0 }, { 1, 1, 1 });
+  for (double density : { 0.0, -5.0, std::numeric_limits<double>::quiet_NaN() })
+  {
+    const std::string e = errorOf([&] { meshMassProperties(box, density, "obstacles[2]"); });
+    EXPECT_TRUE(contains(e, "obstacles[2]: density = ")) << e;
+    EXPECT_TRUE(contains(e, "must be a finite number > 0")) << e;
+  }
+  TriangleMesh open = box;
+  open.triangles.pop_back();
+  EXPECT_TRUE(contains(errorOf([&] { meshMassProperties(open, 1000, "boat"); }), "boat: "));
+  EXPECT_TRUE(contains(errorOf([&] { meshMassProperties(open, 1000, "boat"); }), "not closed"));
+  TriangleMesh flipped = box;
+  std::swap(flipped.triangles[3][1], flipped.triangles[3][2]);
+  const std::string orientation = errorOf([&] { meshMassProperties(flipped, 1000, "boat"); });
+  EXPECT_TRUE(contains(orientation, "boat: the edge from point")) << orientation;
+  EXPECT_TRUE(contains(orientation, "agree on their orientation")) << orientation;
+  SolidRegion shell;
+  shell.kind = SolidRegion::Kind::Mesh;
+  shell.mesh = box;
+  shell.thickness = 0.01;
+  EXPECT_TRUE(contains(errorOf([&] { solidMassProperties(shell, 1000, "plate"); }), "plate: a shell"));
+  EXPECT_TRUE(contains(
+    errorOf([&] { sphereMassProperties({ 0, 0, 0 }, 0, 1000, "ball"); }), "ball: the sphere has no volume"));
+}
+
+// Without a force, the centre falls as semi-implicit Euler says: v_n = g n dt,
+// x_n = x_0 + g dt^2 n (n + 1) / 2, to rounding.
+TEST(RigidBody, AFreeBodyFallsAsTheIntegratorSays)
+{
+  const MassProperties m = boxMassProperties({ { 0, 0, 0 }, { 1, 1, 1 } }, 500, "box");
+  RigidState s = restingState(m);
+  const Vec3d g{ 0, -9.81, 0 };
+  const double dt = 1e-3;
+  const int n = 500;
+  for (int k = 0; k < n; ++k)
+  {
+    s = advanceRigid(s, m, { 0, 0, 0 }, { 0, 0, 0 }, g, dt);
+  }
+  EXPECT_NEAR(s.velocity.y, -9.81 * n * dt, 1e-12);
+  EXPECT_NEAR(s.centre.y, 0.5 - 9.81 * dt * dt * n * (n + 1) / 2, 1e-12);
+  EXPECT_DOUBLE_EQ(s.centre.x, 0.5);
+  // Its weight held by an equal force: it stays.
+  RigidState held = restingState(m);
+  for (int k = 0; k < n; ++k)
+  {
+    held = advanceRigid(held, m, g * -m.mass, { 0, 0, 0 }, g, dt);
+  }
+  EXPECT_NEAR(held.centre.y, 0.5, 1e-12);
+}
+
+// A torque about a principal axis from rest: omega = tau t / I exactly, and the body turns by
+// the sum of omega dt about that axis only.
+TEST(RigidBody, ATorqueAboutAPrincipalAxisSpinsItUp)
+{
+  const MassProperties m = boxMassProperties({ { 0, 0, 0 }, { 1, 2, 3 } }, 100, "box");
+  RigidState s = restingState(m);
+  const double dt = 1e-3, tau = 2.0;
+  double angle = 0;
+  for (int k = 1; k <= 100; ++k)
+  {
+    s = advanceRigid(s, m, { 0, 0, 0 }, { 0, 0, tau }, { 0, 0, 0 }, dt);
+    angle += tau * k * dt / m.inertia[8] * dt;
+  }
+  const Vec3d w = angularVelocity(s, m);
+  EXPECT_NEAR(w.z, tau * 100 * dt / m.inertia[8], 1e-12);
+  EXPECT_NEAR(w.x, 0, 1e-15);
+  EXPECT_NEAR(2 * std::atan2(s.orientation.z, s.orientation.w), angle, 1e-12);
+}
+
+// Without a torque the angular momentum is exact and a spin about a tilted axis (not a
+// principal one) keeps its kinetic energy to the integrator's second-order error: measured 7.9e-8
+// relative over 2,000 steps of 1 ms at about 2 rad/s (9.8e-8 over 60 s, so no drift; 7.8e-10 at
+// 0.1 ms); the bound, 1e-6, fails a first-order rotation (2e-3). The pose keeps the centre.
+TEST(RigidBody, AFreeSpinKeepsItsAngularMomentumAndEnergy)
+{
+  const MassProperties m = boxMassProperties({ { 0, 0, 0 }, { 0.2, 0.5, 1.0 } }, 700, "box");
+  RigidState s = restingState(m);
+  s.angularMomentum = Vec3d{ m.inertia[0] * 1.0, m.inertia[4] * 1.0, m.inertia[8] * 1.4 };
+  const Vec3d l0 = s.angularMomentum;
+  const double e0 = 0.5 * dot(angularVelocity(s, m), l0);
+  double worst = 0;
+  for (int k = 0; k < 2000; ++k)
+  {
+    s = advanceRigid(s, m, { 0, 0, 0 }, { 0, 0, 0 }, { 0, 0, 0 }, 1e-3);
+    const double e = 0.5 * dot(angularVelocity(s, m), s.angularMomentum);
+    worst = std::max(worst, std::abs(e / e0 - 1));
+  }
+  EXPECT_EQ(s.angularMomentum.x, l0.x);
+  EXPECT_EQ(s.angularMomentum.z, l0.z);
+  EXPECT_LT(worst, 1e-6);
+  const double norm = s.orientation.w * s.orientation.w + s.orientation.x * s.orientation.x +
+    s.orientation.y * s.orientation.y + s.orientation.z * s.orientation.z;
+  EXPECT_NEAR(norm, 1, 1e-14);
+  const SolidPose pose = poseOf(s, m);
+  const Vec3d c = pose.toWorld(m.centre);
+  EXPECT_NEAR(c.x, s.centre.x, 1e-14);
+  EXPECT_NEAR(c.z, s.centre.z, 1e-14);
+  // A point of the body moves at v + omega x r.
+  const Vec3d corner = pose.toWorld({ 0.2, 0.5, 1.0 });
+  const Vec3d expected = cross(angularVelocity(s, m), corner - s.centre);
+  const Vec3d got = pose.velocityAt(corner);
+  EXPECT_NEAR(got.x, expected.x, 1e-14);
+  EXPECT_NEAR(got.y, expected.y, 1e-14);
+}
