@@ -30,7 +30,11 @@
 #include <algorithm>
 #include <cstdint>
 #include <initializer_list>
+#include <limits>
+#include <map>
+#include <string>
 #include <type_traits>
+#include <vector>
 
 namespace
 {
@@ -140,7 +144,72 @@ void FillParticlesOf(const pbf::Stepper& stepper, bool pinned,
   pointData->SetGlobalIds(id);
 }
 
+// Per obstacle, the columns "Force <name>" [N] and "Torque <name>" [N m] (3 components: the
+// frame's mean, the torque about the obstacle's centre of mass), NaN in the rows without loads
+// (frame 0, a backend that sums none).
+void AddLoadColumns(const std::map<int, pbf::FrameRow>& rows, vtkTable* table)
+{
+  std::vector<std::string> names;
+  for (const auto& entry : rows)
+  {
+    if (entry.second.loadNames.size() > names.size())
+    {
+      names = entry.second.loadNames;
+    }
+  }
+  const auto count = static_cast<vtkIdType>(rows.size());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t k = 0; k < names.size(); ++k)
+  {
+    auto force = NewArray<vtkDoubleArray>(("Force " + names[k]).c_str(), 3, count);
+    auto torque = NewArray<vtkDoubleArray>(("Torque " + names[k]).c_str(), 3, count);
+    vtkIdType r = 0;
+    for (const auto& entry : rows)
+    {
+      const std::vector<pbf::SolidLoad>& loads = entry.second.loads;
+      if (k < loads.size())
+      {
+        force->SetTuple3(r, loads[k].force.x, loads[k].force.y, loads[k].force.z);
+        torque->SetTuple3(r, loads[k].torque.x, loads[k].torque.y, loads[k].torque.z);
+      }
+      else
+      {
+        force->SetTuple3(r, nan, nan, nan);
+        torque->SetTuple3(r, nan, nan, nan);
+      }
+      ++r;
+    }
+    table->AddColumn(force);
+    table->AddColumn(torque);
+  }
+}
+
 } // namespace
+
+//------------------------------------------------------------------------------
+void vtkPBFOutput::AddLoads(vtkFieldData* fieldData, const pbf::FrameRow& row)
+{
+  if (row.loads.empty())
+  {
+    return;
+  }
+  const auto count = static_cast<vtkIdType>(row.loads.size());
+  auto force = NewArray<vtkDoubleArray>("ObstacleForce", 3, count);
+  auto torque = NewArray<vtkDoubleArray>("ObstacleTorque", 3, count);
+  vtkNew<vtkStringArray> names;
+  names->SetName("ObstacleNames");
+  names->SetNumberOfValues(count);
+  for (vtkIdType k = 0; k < count; ++k)
+  {
+    const pbf::SolidLoad& load = row.loads[static_cast<std::size_t>(k)];
+    force->SetTuple3(k, load.force.x, load.force.y, load.force.z);
+    torque->SetTuple3(k, load.torque.x, load.torque.y, load.torque.z);
+    names->SetValue(k, row.loadNames[static_cast<std::size_t>(k)]);
+  }
+  fieldData->AddArray(force);
+  fieldData->AddArray(torque);
+  fieldData->AddArray(names);
+}
 
 //------------------------------------------------------------------------------
 void vtkPBFOutput::AddValue(vtkFieldData* fieldData, const char* name, double value)
@@ -296,6 +365,7 @@ vtkSmartPointer<vtkTable> vtkPBFOutput::DiagnosticsTable(
   {
     table->AddColumn(imbalance);
   }
+  AddLoadColumns(rows, table);
   return table;
 }
 

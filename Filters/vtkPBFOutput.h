@@ -63,6 +63,13 @@ public:
   static vtkSmartPointer<vtkPolyData> Surface(
     const pbf::SurfaceMesh& mesh, double milliseconds, const std::string& device);
 
+  /**
+   * The loads of one diagnostics row as field data: ObstacleForce [N] and ObstacleTorque [N m]
+   * (one 3-component tuple per obstacle: the mean over the frame's steps, the torque about the
+   * obstacle's centre of mass) and ObstacleNames. Nothing when the row has no loads.
+   */
+  static void AddLoads(vtkFieldData* fieldData, const pbf::FrameRow& row);
+
   static void AddValue(vtkFieldData* fieldData, const char* name, double value);
   static void AddInteger(vtkFieldData* fieldData, const char* name, vtkIdType value);
   static void AddText(vtkFieldData* fieldData, const char* name, const std::string& value);

@@ -478,6 +478,11 @@ void vtkPBFSimulationInternals::Deliver(const vtkPBFSettings& settings, const Fr
   fieldData->AddArray(held);
   vtkPBFOutput::AddValue(
     fieldData, "CheckpointMemoryMB", this->Playback.checkpointBytes() / 1048576.0);
+  const auto row = this->Playback.rows().find(r.Frame);
+  if (row != this->Playback.rows().end())
+  {
+    vtkPBFOutput::AddLoads(fieldData, row->second);
+  }
   result->SetFieldData(fieldData);
   result->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), r.Time);
   this->LastOutput = result;

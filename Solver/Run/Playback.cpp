@@ -234,6 +234,8 @@ void Playback::resetPending()
   pendingSteps_ = 0;
   pendingMinTimeStep_ = 0;
   pendingMaxTimeStep_ = 0;
+  pendingSeconds_ = 0;
+  pendingImpulses_.clear();
 }
 
 void Playback::addPending(const AdvanceReport& report)
@@ -248,6 +250,13 @@ void Playback::addPending(const AdvanceReport& report)
   pendingIterations_ += report.iterations;
   pendingMilliseconds_ += report.milliseconds;
   pendingSteps_ += static_cast<int>(report.steps);
+  pendingSeconds_ += report.seconds;
+  pendingImpulses_.resize(std::max(pendingImpulses_.size(), report.impulses.size()));
+  for (std::size_t k = 0; k < report.impulses.size(); ++k)
+  {
+    pendingImpulses_[k].force += report.impulses[k].force;
+    pendingImpulses_[k].torque += report.impulses[k].torque;
+  }
 }
 
 // The row of the frame the live simulation has just reached. A frame computed again (after going
@@ -280,6 +289,12 @@ void Playback::recordFrame(int frame, FrameReached& reached)
     row.substeps = pendingSteps_;
     row.minTimeStep = pendingMinTimeStep_;
     row.maxTimeStep = pendingMaxTimeStep_;
+    for (const SolidLoad& impulse : pendingImpulses_)
+    {
+      row.loads.push_back(
+        { impulse.force * (1.0 / pendingSeconds_), impulse.torque * (1.0 / pendingSeconds_) });
+      row.loadNames.push_back(live_->solidName(row.loadNames.size()));
+    }
   }
   row.maxSpeed = statistics.maxSpeed;
   row.kineticEnergy = statistics.kineticEnergy;

@@ -72,6 +72,11 @@ struct FrameRow
   std::int64_t particles = 0;
   std::string backend;
   double loadImbalance = 0; // decomposed: the largest rank's particles over the mean - 1, percent
+  // Per obstacle of the scene: the mean force the fluid pushed it with over the frame's steps [N]
+  // and its torque about the obstacle's centre of mass [N m] (their impulses over the frame's
+  // time); empty at frame 0 and where the backend sums no loads (CUDA, for now).
+  std::vector<SolidLoad> loads;
+  std::vector<std::string> loadNames; // the obstacles' names (Simulation::solidName)
 };
 
 // What reaching a frame did.
@@ -167,6 +172,8 @@ private:
   int pendingSteps_ = 0;
   double pendingMinTimeStep_ = 0;
   double pendingMaxTimeStep_ = 0;
+  double pendingSeconds_ = 0;
+  std::vector<SolidLoad> pendingImpulses_;
 
   std::map<int, SimulationCheckpoint> checkpoints_;
   std::size_t checkpointBytes_ = 0;

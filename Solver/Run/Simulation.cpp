@@ -1,5 +1,7 @@
 #include "Simulation.h"
 
+#include "MassProperties.h"
+
 #include "Backends.h"
 #include "ParticleChecks.h"
 
@@ -101,6 +103,10 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
     stepper_->setObstacles(solids, poses);
   }
   solidFields_ = solids;
+  for (const SolidRegion& solid : scene_.solids)
+  {
+    solidCentres_.push_back(solidCentre(solid));
+  }
   nextId_ = static_cast<std::int64_t>(initial.position.size());
 
   // The divergence limits, from the initial state and the scene.
@@ -329,6 +335,13 @@ void AdvanceReport::add(const AdvanceReport& more)
   iterations += more.iterations;
   densityError = more.densityError;
   milliseconds += more.milliseconds;
+  seconds += more.seconds;
+  impulses.resize(std::max(impulses.size(), more.impulses.size()));
+  for (std::size_t k = 0; k < more.impulses.size(); ++k)
+  {
+    impulses[k].force += more.impulses[k].force;
+    impulses[k].torque += more.impulses[k].torque;
+  }
 }
 
 double Simulation::nextTimeStep() const
@@ -383,9 +396,7 @@ void Simulation::setSolidMotion(std::size_t solid, SolidMotion motion)
     throw InvalidInput("solid = " + std::to_string(solid) + ": the scene has " +
       std::to_string(motions_.size()) + " solid(s)");
   }
-  const std::string name = scene_.solids[solid].name.empty()
-    ? "obstacles[" + std::to_string(solid) + "]"
-    : scene_.solids[solid].name;
+  const std::string name = solidName(solid);
   motion.validate(name + ".motion");
   if (motion.moves() && std::isnan(motion.pivot.x))
   {
@@ -441,7 +452,23 @@ void Simulation::stepOnce(double dt, double end, AdvanceReport& report)
   report.densityError = step.densityError;
   report.minTimeStep = report.steps == 0 ? dt : std::min(report.minTimeStep, dt);
   report.maxTimeStep = std::max(report.maxTimeStep, dt);
+  report.seconds += dt;
   ++report.steps;
+  // The stepper's torques are about the world's origin: about the centre c, torque - c x force.
+  report.impulses.resize(step.loads.size());
+  for (std::size_t k = 0; k < step.loads.size(); ++k)
+  {
+    const Vec3d centre = k < poses.size() ? poses[k].toWorld(solidCentres_[k]) : solidCentres_[k];
+    const SolidLoad& load = step.loads[k];
+    report.impulses[k].force += load.force * dt;
+    report.impulses[k].torque += (load.torque - cross(centre, load.force)) * dt;
+  }
+}
+
+std::string Simulation::solidName(std::size_t k) const
+{
+  return scene_.solids[k].name.empty() ? "obstacles[" + std::to_string(k) + "]"
+                                        : scene_.solids[k].name;
 }
 
 AdvanceReport Simulation::advance(std::uint64_t steps)

@@ -86,6 +86,11 @@ struct AdvanceReport
   double milliseconds = 0;   // wall time, the queued GPU work included
   double minTimeStep = 0;    // the smallest and largest dt of the steps [s]; 0 when none
   double maxTimeStep = 0;
+  double seconds = 0;        // the simulated time the steps covered [s]
+  // Per solid of the scene: the force its loads (StepReport::loads) gave over the steps, summed
+  // as impulses, force dt [N s], and their torque about the solid's centre of mass (where it was
+  // at each step's end) likewise [N m s]; empty where the stepper sums no loads.
+  std::vector<SolidLoad> impulses;
 
   void add(const AdvanceReport& more); // the steps of `more` after these
 };
@@ -165,6 +170,9 @@ public:
   // simulation's fields: valid while it lives).
   SurfaceSolids surfaceSolids(double time) const;
 
+  // What errors and tables call solid k: its name, or "obstacles[k]".
+  std::string solidName(std::size_t k) const;
+
   // Initial particles that lay inside a solid obstacle of the scene and were removed.
   std::size_t seededInsideSolids() const { return seededInsideSolids_; }
 
@@ -198,6 +206,7 @@ private:
   bool healthValid_ = false;
   double xsphStepLimit_ = 0; // kMaxXsphBlend beta h^2 / (nu + nu_4) [s]; infinity without XSPH
   std::int64_t nextId_ = 0;
+  std::vector<Vec3d> solidCentres_; // per solid, its centre of mass in its own frame
   std::vector<std::int64_t> layersEmitted_; // per emitter
   DivergenceLimits limits_;
   std::uint64_t checkInterval_ = 1;

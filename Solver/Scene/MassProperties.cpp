@@ -2,6 +2,7 @@
 
 #include "Parameters.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <sstream>
@@ -78,6 +79,17 @@ std::array<double, 9> inertiaFromCovariance(
     inertia[k] = (k % 4 == 0 ? trace : 0.0) - covariance[k];
   }
   return inertia;
+}
+
+Vec3d centreOfBounds(const TriangleMesh& mesh)
+{
+  Box bounds{ mesh.points[0], mesh.points[0] };
+  for (const Vec3d& p : mesh.points)
+  {
+    bounds.min = { std::min(bounds.min.x, p.x), std::min(bounds.min.y, p.y), std::min(bounds.min.z, p.z) };
+    bounds.max = { std::max(bounds.max.x, p.x), std::max(bounds.max.y, p.y), std::max(bounds.max.z, p.z) };
+  }
+  return (bounds.min + bounds.max) * 0.5;
 }
 
 } // namespace
@@ -195,6 +207,26 @@ MassProperties solidMassProperties(const SolidRegion& solid, double density, con
     throw InvalidInput(what + ": the mesh of " + solid.file + " has not been read");
   }
   return meshMassProperties(solid.mesh, density, what);
+}
+
+Vec3d solidCentre(const SolidRegion& solid)
+{
+  if (solid.kind != SolidRegion::Kind::Mesh || solid.thickness > 0 || solid.mesh.triangles.empty())
+  {
+    return solid.kind == SolidRegion::Kind::Sphere ? solid.center
+      : solid.kind == SolidRegion::Kind::Box      ? (solid.box.min + solid.box.max) * 0.5
+      : solid.mesh.points.empty()                  ? Vec3d{ 0, 0, 0 }
+                                                   : centreOfBounds(solid.mesh);
+  }
+  try
+  {
+    return meshMassProperties(solid.mesh, 1.0, "solid").centre;
+  }
+  catch (const InvalidInput&)
+  {
+    // Closed (the distance field checked it) but not consistently oriented: no signed volume.
+    return centreOfBounds(solid.mesh);
+  }
 }
 
 } // namespace pbf

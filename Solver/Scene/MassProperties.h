@@ -37,4 +37,8 @@ MassProperties sphereMassProperties(
 // A scene's solid by its kind (a shell of some thickness is not a closed solid: InvalidInput).
 MassProperties solidMassProperties(const SolidRegion& solid, double density, const std::string& what);
 
+// Where a solid's loads turn it about (its centre of mass at uniform density), in its own frame:
+// a shell's, or a surface whose triangles disagree on their orientation, is its bounds' centre.
+Vec3d solidCentre(const SolidRegion& solid);
+
 } // namespace pbf

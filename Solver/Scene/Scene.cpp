@@ -194,21 +194,21 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
     SolidRegion solid;
     if (type == "box")
     {
-      requireKeys(item, path, { "type", "min", "max", "motion" }, { "min", "max" });
+      requireKeys(item, path, { "type", "name", "min", "max", "motion" }, { "min", "max" });
       solid.kind = SolidRegion::Kind::Box;
       solid.box = { vector3(item, path, "min"), vector3(item, path, "max") };
       requireOrdered(solid.box.min, solid.box.max, path, item["max"]);
     }
     else if (type == "sphere")
     {
-      requireKeys(item, path, { "type", "center", "radius", "motion" }, { "center", "radius" });
+      requireKeys(item, path, { "type", "name", "center", "radius", "motion" }, { "center", "radius" });
       solid.kind = SolidRegion::Kind::Sphere;
       solid.center = vector3(item, path, "center");
       solid.radius = positive(item, path, "radius");
     }
     else if (type == "mesh")
     {
-      requireKeys(item, path, { "type", "file", "thickness", "motion" }, { "file" });
+      requireKeys(item, path, { "type", "name", "file", "thickness", "motion" }, { "file" });
       if (!item["file"].is_string() || item["file"].get<std::string>().empty())
       {
         reject(path + ".file", item["file"], "must be the path of an STL, OBJ, PLY or VTP file");
@@ -224,6 +224,15 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
     else
     {
       reject(path + ".type", item["type"], "must be \"box\", \"sphere\" or \"mesh\"");
+    }
+    if (item.contains("name"))
+    {
+      // What the Diagnostics table's load columns and the errors call it.
+      if (!item["name"].is_string() || item["name"].get<std::string>().empty())
+      {
+        reject(path + ".name", item["name"], "must be a non-empty string");
+      }
+      solid.name = item["name"].get<std::string>();
     }
     if (item.contains("motion"))
     {

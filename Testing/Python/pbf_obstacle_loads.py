@@ -1,0 +1,72 @@
+"""The loads on obstacles reach ParaView: water at rest in a container of five solid boxes (a floor
+and four walls, inside a larger tank so that the tank's own walls are out of reach). The
+Diagnostics table gains "Force <name>" and "Torque <name>" columns per obstacle (NaN at frame 0,
+which has no steps), the particles' field data ObstacleForce, ObstacleTorque and ObstacleNames,
+and the floor carries the water's weight."""
+import json
+import os
+import sys
+import tempfile
+
+import numpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import pbf_testing as T  # noqa: E402
+
+T.load_plugin(globals())
+expect = T.expect
+
+S = 0.05
+INNER, FLOOR, LO, HIGH = 12 * S, 0.3, 0.5, 8 * S
+TOP = FLOOR + 2 * HIGH + 1
+scene = {
+    "name": "container",
+    "domain": {"min": [0, 0, 0], "max": [2 * LO + INNER, FLOOR + 2 * HIGH, 2 * LO + INNER]},
+    "fluid": [{"type": "box", "min": [LO, FLOOR, LO], "max": [LO + INNER, FLOOR + HIGH, LO + INNER]}],
+    "obstacles": [
+        {"type": "box", "name": "floor", "min": [-1, -1, -1], "max": [3, FLOOR, 3]},
+        {"type": "box", "name": "west", "min": [-1, FLOOR, -1], "max": [LO, TOP, 3]},
+        {"type": "box", "name": "east", "min": [LO + INNER, FLOOR, -1], "max": [3, TOP, 3]},
+        {"type": "box", "name": "south", "min": [LO, FLOOR, -1], "max": [LO + INNER, TOP, LO]},
+        {"type": "box", "name": "north", "min": [LO, FLOOR, LO + INNER], "max": [LO + INNER, TOP, 3]},
+    ],
+}
+folder = tempfile.mkdtemp()
+path = os.path.join(folder, "container.json")
+with open(path, "w") as f:
+    json.dump(scene, f)
+
+INTERVAL = 1.0 / 60.0
+FRAMES = 40
+source = PositionBasedFluids(SceneFile=path, ParticleSpacing=S, NumberOfFrames=FRAMES + 1,  # noqa: F821
+                             Backend="CPU (OpenMP)")
+particles = T.output_at(source, FRAMES * INTERVAL)
+names = particles.GetFieldData().GetAbstractArray("ObstacleNames")
+expect(names is not None and names.GetNumberOfValues() == 5, "ObstacleNames: %s" % names)
+expect([names.GetValue(k) for k in range(5)] == ["floor", "west", "east", "south", "north"],
+       "names %s" % [names.GetValue(k) for k in range(5)])
+force = particles.GetFieldData().GetArray("ObstacleForce")
+expect(force.GetNumberOfTuples() == 5 and force.GetNumberOfComponents() == 3,
+       "ObstacleForce has %d tuples of %d" % (force.GetNumberOfTuples(), force.GetNumberOfComponents()))
+expect(particles.GetFieldData().GetArray("ObstacleTorque") is not None, "no ObstacleTorque")
+
+table = T.diagnostics(source)
+for name in ("floor", "west", "east", "south", "north"):
+    expect("Force " + name in table and "Torque " + name in table, "no load columns for %s" % name)
+floor = table["Force floor"]
+expect(floor.shape == (FRAMES + 1, 3), "Force floor has shape %s" % (floor.shape,))
+expect(numpy.all(numpy.isnan(floor[0])), "frame 0 has a load: %s" % floor[0])
+# The field data is the frame's row.
+expect(numpy.allclose(force.GetTuple3(0), floor[FRAMES], rtol=0, atol=0),
+       "field data %s against the table's %s" % (force.GetTuple3(0), floor[FRAMES]))
+
+# The weight: the particles' count and mass; the floor's mean over the second half of the run
+# (0.33-0.67 s, settled) within 1 %: the fluid's momentum changes only by gravity and the solids.
+mass = T.field_value(particles, "ParticleMass") * particles.GetNumberOfPoints()
+weight = 9.81 * mass
+settled = floor[FRAMES // 2:, 1].mean()
+print("floor %.2f N, weight %.2f N (%+.3f %%)" % (-settled, weight, 100 * (-settled / weight - 1)))
+expect(abs(-settled / weight - 1) < 0.01, "the floor carries %.2f N of a %.2f N weight" % (-settled, weight))
+west, east = table["Force west"][FRAMES // 2:, 0].mean(), table["Force east"][FRAMES // 2:, 0].mean()
+expect(west < 0 < east and abs(west + east) < 0.02 * abs(west),
+       "the walls are not pushed apart alike: west %.2f N, east %.2f N" % (west, east))
