@@ -17,6 +17,8 @@
 #include "vtkSphereSource.h"
 #include "vtkStringArray.h"
 #include "vtkTable.h"
+#include "vtkTransform.h"
+#include "vtkTransformPolyDataFilter.h"
 #include "vtkTypeInt64Array.h"
 
 #include "ParameterTable.h"
@@ -184,11 +186,48 @@ void AddLoadColumns(const std::map<int, pbf::FrameRow>& rows, vtkTable* table)
   }
 }
 
+// Per body the fluid moves, the columns "Position <name>" (its centre of mass, m), "Orientation
+// <name>" (a unit quaternion w, x, y, z from the scene's pose), "Velocity <name>" (m/s) and
+// "AngularVelocity <name>" (rad/s).
+void AddBodyColumns(const std::map<int, pbf::FrameRow>& rows, vtkTable* table)
+{
+  if (rows.empty() || rows.begin()->second.bodies.empty())
+  {
+    return;
+  }
+  const auto count = static_cast<vtkIdType>(rows.size());
+  const std::vector<pbf::FrameRow::BodyAt>& first = rows.begin()->second.bodies;
+  for (std::size_t k = 0; k < first.size(); ++k)
+  {
+    const std::string& name = first[k].name;
+    auto position = NewArray<vtkDoubleArray>(("Position " + name).c_str(), 3, count);
+    auto orientation = NewArray<vtkDoubleArray>(("Orientation " + name).c_str(), 4, count);
+    auto velocity = NewArray<vtkDoubleArray>(("Velocity " + name).c_str(), 3, count);
+    auto spin = NewArray<vtkDoubleArray>(("AngularVelocity " + name).c_str(), 3, count);
+    vtkIdType r = 0;
+    for (const auto& entry : rows)
+    {
+      const pbf::FrameRow::BodyAt& b = entry.second.bodies.at(k);
+      position->SetTuple3(r, b.centre.x, b.centre.y, b.centre.z);
+      const double q[4] = { b.orientation.w, b.orientation.x, b.orientation.y, b.orientation.z };
+      orientation->SetTuple(r, q);
+      velocity->SetTuple3(r, b.velocity.x, b.velocity.y, b.velocity.z);
+      spin->SetTuple3(r, b.angularVelocity.x, b.angularVelocity.y, b.angularVelocity.z);
+      ++r;
+    }
+    for (vtkDoubleArray* column : { position.Get(), orientation.Get(), velocity.Get(), spin.Get() })
+    {
+      table->AddColumn(column);
+    }
+  }
+}
+
 } // namespace
 
 //------------------------------------------------------------------------------
 void vtkPBFOutput::AddLoads(vtkFieldData* fieldData, const pbf::FrameRow& row)
 {
+  AddBodies(fieldData, row);
   if (row.loads.empty())
   {
     return;
@@ -209,6 +248,38 @@ void vtkPBFOutput::AddLoads(vtkFieldData* fieldData, const pbf::FrameRow& row)
   fieldData->AddArray(force);
   fieldData->AddArray(torque);
   fieldData->AddArray(names);
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFOutput::AddBodies(vtkFieldData* fieldData, const pbf::FrameRow& row)
+{
+  if (row.bodies.empty())
+  {
+    return;
+  }
+  const auto bodies = static_cast<vtkIdType>(row.bodies.size());
+  auto position = NewArray<vtkDoubleArray>("BodyPosition", 3, bodies);
+  auto orientation = NewArray<vtkDoubleArray>("BodyOrientation", 4, bodies);
+  auto velocity = NewArray<vtkDoubleArray>("BodyVelocity", 3, bodies);
+  auto spin = NewArray<vtkDoubleArray>("BodyAngularVelocity", 3, bodies);
+  vtkNew<vtkStringArray> bodyNames;
+  bodyNames->SetName("BodyNames");
+  bodyNames->SetNumberOfValues(bodies);
+  for (vtkIdType k = 0; k < bodies; ++k)
+  {
+    const pbf::FrameRow::BodyAt& b = row.bodies[static_cast<std::size_t>(k)];
+    position->SetTuple3(k, b.centre.x, b.centre.y, b.centre.z);
+    const double q[4] = { b.orientation.w, b.orientation.x, b.orientation.y, b.orientation.z };
+    orientation->SetTuple(k, q);
+    velocity->SetTuple3(k, b.velocity.x, b.velocity.y, b.velocity.z);
+    spin->SetTuple3(k, b.angularVelocity.x, b.angularVelocity.y, b.angularVelocity.z);
+    bodyNames->SetValue(k, b.name);
+  }
+  for (vtkAbstractArray* a :
+    std::initializer_list<vtkAbstractArray*>{ position, orientation, velocity, spin, bodyNames })
+  {
+    fieldData->AddArray(a);
+  }
 }
 
 //------------------------------------------------------------------------------
@@ -366,6 +437,7 @@ vtkSmartPointer<vtkTable> vtkPBFOutput::DiagnosticsTable(
     table->AddColumn(imbalance);
   }
   AddLoadColumns(rows, table);
+  AddBodyColumns(rows, table);
   return table;
 }
 
@@ -428,20 +500,23 @@ vtkSmartPointer<vtkPolyData> vtkPBFOutput::Surface(
 }
 
 //------------------------------------------------------------------------------
-vtkSmartPointer<vtkPolyData> vtkPBFOutput::DomainOutline(const pbf::Box& box, const pbf::Scene& scene)
+vtkSmartPointer<vtkPolyData> vtkPBFOutput::DomainOutline(const pbf::Box& box,
+  const pbf::Scene& scene, const std::vector<pbf::SolidPose>& poses)
 {
   vtkNew<vtkAppendPolyData> all;
   vtkNew<vtkOutlineSource> outline;
   outline->SetBounds(box.min.x, box.max.x, box.min.y, box.max.y, box.min.z, box.max.z);
   all->AddInputConnection(outline->GetOutputPort());
-  for (const pbf::SolidRegion& solid : scene.solids)
+  for (std::size_t k = 0; k < scene.solids.size(); ++k)
   {
+    const pbf::SolidRegion& solid = scene.solids[k];
+    vtkNew<vtkAppendPolyData> shape;
     if (solid.kind == pbf::SolidRegion::Kind::Box)
     {
       vtkNew<vtkCubeSource> cube;
       cube->SetBounds(solid.box.min.x, solid.box.max.x, solid.box.min.y, solid.box.max.y,
         solid.box.min.z, solid.box.max.z);
-      all->AddInputConnection(cube->GetOutputPort());
+      shape->AddInputConnection(cube->GetOutputPort());
     }
     else if (solid.kind == pbf::SolidRegion::Kind::Sphere)
     {
@@ -450,7 +525,7 @@ vtkSmartPointer<vtkPolyData> vtkPBFOutput::DomainOutline(const pbf::Box& box, co
       sphere->SetRadius(solid.radius);
       sphere->SetThetaResolution(32);
       sphere->SetPhiResolution(32);
-      all->AddInputConnection(sphere->GetOutputPort());
+      shape->AddInputConnection(sphere->GetOutputPort());
     }
     else if (!solid.file.empty())
     {
@@ -468,9 +543,29 @@ vtkSmartPointer<vtkPolyData> vtkPBFOutput::DomainOutline(const pbf::Box& box, co
       vtkNew<vtkPolyData> mesh;
       mesh->SetPoints(points);
       mesh->SetPolys(triangles);
-      all->AddInputData(mesh);
+      shape->AddInputData(mesh);
     }
+    if (shape->GetNumberOfInputConnections(0) == 0)
+    {
+      continue;
+    }
+    // Where the solid stands at the frame: a point x of its own frame is at rotation x +
+    // translation (SolidPose).
+    vtkNew<vtkTransformPolyDataFilter> placed;
+    placed->SetInputConnection(shape->GetOutputPort());
+    vtkNew<vtkTransform> transform;
+    if (k < poses.size())
+    {
+      const pbf::SolidPose& pose = poses[k];
+      const auto& r = pose.rotation;
+      const double matrix[16] = { r[0], r[1], r[2], pose.translation.x, r[3], r[4], r[5],
+        pose.translation.y, r[6], r[7], r[8], pose.translation.z, 0, 0, 0, 1 };
+      transform->SetMatrix(matrix);
+    }
+    placed->SetTransform(transform);
+    all->AddInputConnection(placed->GetOutputPort());
   }
+
   all->Update();
   vtkSmartPointer<vtkPolyData> domain = all->GetOutput();
   AddText(domain->GetFieldData(), "Scene", scene.name);

@@ -16,6 +16,7 @@
 #include "vtkType.h"
 
 #include <map>
+#include <vector>
 #include <string>
 
 class vtkCellArray;
@@ -30,6 +31,7 @@ class Stepper;
 struct Box;
 struct Scene;
 struct FrameRow;
+struct SolidPose;
 struct SurfaceMesh;
 }
 
@@ -55,7 +57,8 @@ public:
   // The 12 edges of the domain and the surfaces of the scene's own obstacles (the JSON's boxes,
   // spheres and mesh files: those of the Obstacles port are the user's to show), with field data
   // Scene.
-  static vtkSmartPointer<vtkPolyData> DomainOutline(const pbf::Box& box, const pbf::Scene& scene);
+  static vtkSmartPointer<vtkPolyData> DomainOutline(const pbf::Box& box, const pbf::Scene& scene,
+    const std::vector<pbf::SolidPose>& poses = {});
 
   // The fluid's surface (port 3): its triangles, Normals, velocity (the active vectors) and
   // density (the active scalars), and field data SurfaceTriangles, SurfaceMilliseconds,
@@ -69,6 +72,14 @@ public:
    * obstacle's centre of mass) and ObstacleNames. Nothing when the row has no loads.
    */
   static void AddLoads(vtkFieldData* fieldData, const pbf::FrameRow& row);
+
+  /**
+   * The bodies the fluid moves at the row's frame as field data, one tuple per body:
+   * BodyPosition (its centre of mass, m), BodyOrientation (a unit quaternion w, x, y, z from the
+   * scene's pose), BodyVelocity (m/s), BodyAngularVelocity (rad/s), and BodyNames. AddLoads adds
+   * them too.
+   */
+  static void AddBodies(vtkFieldData* fieldData, const pbf::FrameRow& row);
 
   static void AddValue(vtkFieldData* fieldData, const char* name, double value);
   static void AddInteger(vtkFieldData* fieldData, const char* name, vtkIdType value);

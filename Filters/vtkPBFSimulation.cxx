@@ -356,9 +356,15 @@ void vtkPBFSimulation::RequestDomain(vtkInformationVector* outputVector)
   vtkPolyData* domain = vtkPolyData::GetData(outputVector, 2);
   vtkPolyData* particles = vtkPolyData::GetData(outputVector, 0);
   const pbf::Simulation* live = internals.Playback.live();
-  if (live && !(internals.DomainBuilt && internals.DomainKey == internals.Playback.key()))
+  // Built once a run, or at every frame while a solid moves (keyframes or a body the fluid
+  // moves), where the solids stand at the frame.
+  const std::vector<pbf::SolidPose> poses =
+    live ? live->solidPoses(live->time()) : std::vector<pbf::SolidPose>();
+  if (live &&
+    (!poses.empty() || !(internals.DomainBuilt && internals.DomainKey == internals.Playback.key())))
   {
-    internals.Domain = vtkPBFOutput::DomainOutline(live->parameters().domain, live->scene());
+    internals.Domain =
+      vtkPBFOutput::DomainOutline(live->parameters().domain, live->scene(), poses);
     internals.DomainKey = internals.Playback.key();
     internals.DomainBuilt = true;
   }

@@ -311,6 +311,11 @@ void Playback::recordFrame(int frame, FrameReached& reached)
     row.loadImbalance = total > 0 ? 100.0 * (largest * key_.ranks / total - 1.0) : 0.0;
   }
   row.backend = stepper.description();
+  for (const Body& body : live_->bodies())
+  {
+    row.bodies.push_back({ live_->solidName(body.solid), body.state.centre,
+      body.state.orientation, body.state.velocity, angularVelocity(body.state, body.mass) });
+  }
   rows_[frame] = row;
   ++rowsVersion_;
   resetPending();

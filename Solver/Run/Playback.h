@@ -77,6 +77,16 @@ struct FrameRow
   // time); empty at frame 0 and where the backend sums no loads (CUDA, for now).
   std::vector<SolidLoad> loads;
   std::vector<std::string> loadNames; // the obstacles' names (Simulation::solidName)
+  // Per body the fluid moves (Simulation::bodies): where it is at the frame.
+  struct BodyAt
+  {
+    std::string name;
+    Vec3d centre;          // of mass [m]
+    Rotation orientation;  // from its own frame (the scene's at the start)
+    Vec3d velocity;        // [m/s]
+    Vec3d angularVelocity; // [rad/s]
+  };
+  std::vector<BodyAt> bodies;
 };
 
 // What reaching a frame did.

@@ -62,7 +62,8 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   const std::vector<DistanceGrid> solids = solidFields(scene_.solids, parameters_);
   motions_ = pbf::solidMotions(scene_.solids);
   solidReach_ = solidReaches(scene_.solids, motions_);
-  const std::vector<SolidPose> poses = posesAt(motions_, 0.0);
+  makeBodies(backend);
+  const std::vector<SolidPose> poses = solidPoses(0.0);
   const ParticleBatch initial =
     solids.empty() ? given : outsideSolids(given, solids, poses, seededInsideSolids_);
   if (initial.position.empty() && scene_.emitters.empty())
@@ -386,6 +387,11 @@ double Simulation::fastestSolidPoint() const
         fastest, length(pose.pivotVelocity) + length(pose.angularVelocity) * solidReach_[k]);
     }
   }
+  for (const Body& body : bodies_)
+  {
+    fastest = std::max(fastest,
+      length(body.state.velocity) + length(angularVelocity(body.state, body.mass)) * body.reach);
+  }
   return fastest;
 }
 
@@ -438,8 +444,13 @@ void Simulation::stepOnce(double dt, double end, AdvanceReport& report)
   {
     stepper_->setTimeStep(dt);
   }
+  for (Body& body : bodies_)
+  {
+    body.state = advanceRigid(
+      body.state, body.mass, body.load.force, body.load.torque, parameters_.gravity, dt);
+  }
   // The constraints hold at the step's end, with the solids where they are then.
-  const std::vector<SolidPose> poses = posesAt(motions_, end);
+  const std::vector<SolidPose> poses = solidPoses(end);
   if (!poses.empty())
   {
     stepper_->setObstaclePoses(poses);
@@ -463,6 +474,54 @@ void Simulation::stepOnce(double dt, double end, AdvanceReport& report)
     report.impulses[k].force += load.force * dt;
     report.impulses[k].torque += (load.torque - cross(centre, load.force)) * dt;
   }
+  for (Body& body : bodies_)
+  {
+    const SolidLoad& load = step.loads[body.solid];
+    body.load = { load.force, load.torque - cross(body.state.centre, load.force) };
+  }
+}
+
+void Simulation::makeBodies(Backend backend)
+{
+  for (std::size_t k = 0; k < scene_.solids.size(); ++k)
+  {
+    const SolidRegion& solid = scene_.solids[k];
+    if (solid.density == 0)
+    {
+      continue; // static or prescribed; any other density is a body's, checked below
+    }
+    if (backend == Backend::CUDA)
+    {
+      throw InvalidInput(solidName(k) + ".density = " + number(solid.density) +
+        ": bodies the fluid moves run on the Serial and CPU (OpenMP) backends for now; choose one "
+        "of them");
+    }
+    Body body;
+    body.solid = k;
+    body.mass = solidMassProperties(solid, solid.density, solidName(k));
+    body.state = restingState(body.mass);
+    const Box b = solidBounds(solid, solidName(k));
+    const Vec3d c = body.mass.centre;
+    body.reach = length(Vec3d{ std::max(std::abs(b.min.x - c.x), std::abs(b.max.x - c.x)),
+      std::max(std::abs(b.min.y - c.y), std::abs(b.max.y - c.y)),
+      std::max(std::abs(b.min.z - c.z), std::abs(b.max.z - c.z)) });
+    bodies_.push_back(body);
+  }
+}
+
+std::vector<SolidPose> Simulation::solidPoses(double time) const
+{
+  std::vector<SolidPose> poses = posesAt(motions_, time);
+  if (bodies_.empty())
+  {
+    return poses;
+  }
+  poses.resize(scene_.solids.size());
+  for (const Body& body : bodies_)
+  {
+    poses[body.solid] = poseOf(body.state, body.mass);
+  }
+  return poses;
 }
 
 std::string Simulation::solidName(std::size_t k) const
@@ -547,7 +606,8 @@ std::size_t SimulationCheckpoint::bytes() const
     [this](const auto& s) {
       return s.position.size() * sizeof(s.position[0]) + s.velocity.size() * sizeof(s.velocity[0]) +
         s.density.size() * sizeof(s.density[0]) + s.lambda.size() * sizeof(s.lambda[0]) +
-        s.id.size() * sizeof(s.id[0]) + layersEmitted.size() * sizeof(std::int64_t);
+        s.id.size() * sizeof(s.id[0]) + layersEmitted.size() * sizeof(std::int64_t) +
+        bodyStates.size() * sizeof(RigidState) + bodyLoads.size() * sizeof(SolidLoad);
     },
     state);
 }
@@ -559,6 +619,11 @@ SimulationCheckpoint Simulation::checkpoint() const
   c.time = time_;
   c.nextId = nextId_;
   c.layersEmitted = layersEmitted_;
+  for (const Body& body : bodies_)
+  {
+    c.bodyStates.push_back(body.state);
+    c.bodyLoads.push_back(body.load);
+  }
   if (stepper_->precision() == Precision::Single)
   {
     Snapshot<float> s;
@@ -580,6 +645,20 @@ void Simulation::restore(const SimulationCheckpoint& c)
   {
     throw InvalidInput("checkpoint emitters = " + std::to_string(c.layersEmitted.size()) +
       ": the scene has " + std::to_string(layersEmitted_.size()));
+  }
+  if (c.bodyStates.size() != bodies_.size())
+  {
+    throw InvalidInput("checkpoint bodies = " + std::to_string(c.bodyStates.size()) +
+      ": the scene has " + std::to_string(bodies_.size()));
+  }
+  for (std::size_t k = 0; k < bodies_.size(); ++k)
+  {
+    bodies_[k].state = c.bodyStates[k];
+    bodies_[k].load = c.bodyLoads[k];
+  }
+  if (!bodies_.empty())
+  {
+    stepper_->setObstaclePoses(solidPoses(c.time));
   }
   std::visit([this](const auto& s) { stepper_->load(s); }, c.state);
   steps_ = c.steps;
@@ -662,7 +741,7 @@ namespace pbf
 SurfaceSolids Simulation::surfaceSolids(double time) const
 {
   SurfaceSolids solids;
-  const std::vector<SolidPose> poses = posesAt(motions_, time);
+  const std::vector<SolidPose> poses = solidPoses(time);
   for (std::size_t k = 0; k < solidFields_.size(); ++k)
   {
     // posesAt gives none when no solid moves: each then stands where its field was made.

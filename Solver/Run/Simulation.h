@@ -3,7 +3,9 @@
 // command-line tools drive this.
 #pragma once
 
+#include "MassProperties.h"
 #include "Parameters.h"
+#include "RigidBody.h"
 #include "Scene.h"
 #include "SignedDistance.h"
 #include "Stepper.h"
@@ -73,6 +75,9 @@ struct SimulationCheckpoint
   std::int64_t nextId = 0;
   std::vector<std::int64_t> layersEmitted;
   std::variant<Snapshot<float>, Snapshot<double>> state;
+  // The bodies the fluid moves (Simulation::Body): their states and last loads.
+  std::vector<RigidState> bodyStates;
+  std::vector<SolidLoad> bodyLoads;
 
   std::size_t bytes() const; // host memory held
 };
@@ -93,6 +98,19 @@ struct AdvanceReport
   std::vector<SolidLoad> impulses;
 
   void add(const AdvanceReport& more); // the steps of `more` after these
+};
+
+// An obstacle of the scene with a density: the fluid moves it (two-way coupling). Each step
+// first moves it by the previous step's load on it and gravity (RigidBody.h), so that the
+// constraints see it where it is at the step's end, as they see a prescribed motion; the step's
+// load on it (StepReport::loads, its torque about the body's centre) then moves it over the next.
+struct Body
+{
+  std::size_t solid = 0; // its index among the scene's solids
+  MassProperties mass;
+  RigidState state;
+  SolidLoad load;        // the last step's: force [N], torque about the centre [N m]
+  double reach = 0;      // from its centre to the farthest corner of its bounds [m]
 };
 
 class Simulation
@@ -172,6 +190,10 @@ public:
 
   // What errors and tables call solid k: its name, or "obstacles[k]".
   std::string solidName(std::size_t k) const;
+  const std::vector<Body>& bodies() const { return bodies_; }
+  // Where every solid is at `time`: a prescribed one by its keyframes, a body where its state
+  // has it now; empty when none moves (each stands where its field was made).
+  std::vector<SolidPose> solidPoses(double time) const;
 
   // Initial particles that lay inside a solid obstacle of the scene and were removed.
   std::size_t seededInsideSolids() const { return seededInsideSolids_; }
@@ -187,6 +209,8 @@ public:
 
 private:
   void stepOnce(double dt, double end, AdvanceReport& report); // `end`: time() after it
+  // The scene's obstacles with a density (InvalidInput naming one that cannot be a body).
+  void makeBodies(Backend backend);
   double checkedTimeStep() const; // nextTimeStep(), or SimulationDiverged below the smallest
   void emit();
   void checkEmitters(std::size_t initialParticles) const;
@@ -207,6 +231,7 @@ private:
   double xsphStepLimit_ = 0; // kMaxXsphBlend beta h^2 / (nu + nu_4) [s]; infinity without XSPH
   std::int64_t nextId_ = 0;
   std::vector<Vec3d> solidCentres_; // per solid, its centre of mass in its own frame
+  std::vector<Body> bodies_;
   std::vector<std::int64_t> layersEmitted_; // per emitter
   DivergenceLimits limits_;
   std::uint64_t checkInterval_ = 1;

@@ -194,21 +194,21 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
     SolidRegion solid;
     if (type == "box")
     {
-      requireKeys(item, path, { "type", "name", "min", "max", "motion" }, { "min", "max" });
+      requireKeys(item, path, { "type", "name", "min", "max", "motion", "density" }, { "min", "max" });
       solid.kind = SolidRegion::Kind::Box;
       solid.box = { vector3(item, path, "min"), vector3(item, path, "max") };
       requireOrdered(solid.box.min, solid.box.max, path, item["max"]);
     }
     else if (type == "sphere")
     {
-      requireKeys(item, path, { "type", "name", "center", "radius", "motion" }, { "center", "radius" });
+      requireKeys(item, path, { "type", "name", "center", "radius", "motion", "density" }, { "center", "radius" });
       solid.kind = SolidRegion::Kind::Sphere;
       solid.center = vector3(item, path, "center");
       solid.radius = positive(item, path, "radius");
     }
     else if (type == "mesh")
     {
-      requireKeys(item, path, { "type", "name", "file", "thickness", "motion" }, { "file" });
+      requireKeys(item, path, { "type", "name", "file", "thickness", "motion", "density" }, { "file" });
       if (!item["file"].is_string() || item["file"].get<std::string>().empty())
       {
         reject(path + ".file", item["file"], "must be the path of an STL, OBJ, PLY or VTP file");
@@ -237,6 +237,21 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
     if (item.contains("motion"))
     {
       solid.motion = parseMotion(item["motion"], path + ".motion");
+    }
+    if (item.contains("density"))
+    {
+      // A body the fluid moves: what it weighs, not how it is moved.
+      solid.density = number(item, path, "density");
+      if (!(solid.density > 0) || !std::isfinite(solid.density))
+      {
+        reject(path + ".density", item["density"],
+          "must be a finite number > 0 [kg/m^3] (a body the fluid moves)");
+      }
+      if (item.contains("motion"))
+      {
+        reject(path + ".density", item["density"],
+          "an obstacle is moved either by the fluid (density) or by its keyframes (motion), not both");
+      }
     }
     solids.push_back(solid);
   }

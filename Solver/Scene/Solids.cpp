@@ -8,11 +8,7 @@
 namespace pbf
 {
 
-namespace
-{
-
-// The solid's bounding box (a shell's padded by half its thickness).
-Box boundsOf(const SolidRegion& s, const std::string& name)
+Box solidBounds(const SolidRegion& s, const std::string& name)
 {
   if (s.kind == SolidRegion::Kind::Box)
   {
@@ -34,6 +30,9 @@ Box boundsOf(const SolidRegion& s, const std::string& name)
   const double t = 0.5 * s.thickness;
   return Box{ b.min - Vec3d{ t, t, t }, b.max + Vec3d{ t, t, t } };
 }
+
+namespace
+{
 
 // The world box around `box` placed at `pose`.
 Box placedBounds(const Box& box, const SolidPose& pose)
@@ -70,7 +69,7 @@ std::vector<SolidMotion> solidMotions(const std::vector<SolidRegion>& solids)
     SolidMotion m = solids[k].motion;
     if (m.moves() && std::isnan(m.pivot.x))
     {
-      const Box b = boundsOf(solids[k], nameOf(solids[k], k));
+      const Box b = solidBounds(solids[k], nameOf(solids[k], k));
       m.pivot = (b.min + b.max) * 0.5;
     }
     m.validate(nameOf(solids[k], k) + ".motion");
@@ -104,7 +103,7 @@ std::vector<double> solidReaches(
     {
       continue;
     }
-    const Box b = boundsOf(solids[k], nameOf(solids[k], k));
+    const Box b = solidBounds(solids[k], nameOf(solids[k], k));
     const Vec3d p = motions[k].pivot;
     const Vec3d far{ std::max(std::abs(b.min.x - p.x), std::abs(b.max.x - p.x)),
       std::max(std::abs(b.min.y - p.y), std::abs(b.max.y - p.y)),
@@ -123,7 +122,7 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
   {
     const SolidRegion& s = solids[k];
     const std::string name = nameOf(s, k);
-    const Box bounds = boundsOf(s, name);
+    const Box bounds = solidBounds(s, name);
     // Only what the fluid can reach: the solid within h of the domain; a moving solid whole,
     // when some keyframe brings it within h of the domain.
     const Box padded{ d.min - Vec3d{ h, h, h }, d.max + Vec3d{ h, h, h } };

@@ -32,6 +32,9 @@ struct SolidRegion
   std::string name;      // what errors call the solid ("obstacles[k]" when empty)
   // How it moves (none: it stays where it is). A NaN pivot.x stands for the centre of its bounds.
   SolidMotion motion;
+  // > 0: a body the fluid moves (Scene/RigidBody.h), of this uniform density [kg/m^3], from rest
+  // where it is given; 0: it stays or follows `motion`.
+  double density = 0;
 };
 
 // The field of each solid: nodes s/2 apart (coarser only beyond 2^24 nodes) over the part of the
@@ -46,6 +49,10 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
 // were inside.
 ParticleBatch outsideSolids(const ParticleBatch& batch, const std::vector<DistanceGrid>& fields,
   const std::vector<SolidPose>& poses, std::size_t& removed);
+
+// The solid's bounding box in its own frame (a shell's padded by half its thickness); InvalidInput
+// naming `name` for a mesh that was not read or is bad.
+Box solidBounds(const SolidRegion& solid, const std::string& name);
 
 // The solids' motions with every pivot given (a NaN pivot.x becomes the centre of the solid's
 // bounds), and checked (InvalidInput naming the solid).

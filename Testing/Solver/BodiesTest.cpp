@@ -1,0 +1,179 @@
+// Bodies the fluid moves (Run/Simulation.h's Body): a box floats at Archimedes' draft, the run is
+// the same on Serial and OpenMP and from a checkpoint, and bad bodies are named.
+#include "Scene.h"
+#include "Simulation.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+using namespace pbf;
+
+namespace
+{
+
+constexpr double kSpacing = 0.04;
+constexpr double kHeight = 0.16; // the box's
+
+// Water 0.3 m deep in a 0.6 m tank and a 0.2 x 0.16 x 0.2 m box of `relative` times the water's
+// density, let go with its bottom 0.02 m below the surface.
+Scene floatingBox(double relative)
+{
+  Scene scene;
+  scene.name = "floating box";
+  scene.domain = { { 0, 0, 0 }, { 0.6, 0.6, 0.6 } };
+  scene.boxes.push_back({ { 0, 0, 0 }, { 0.6, 0.3, 0.6 }, { 0, 0, 0 } });
+  SolidRegion box;
+  box.kind = SolidRegion::Kind::Box;
+  box.box = { { 0.2, 0.28, 0.2 }, { 0.4, 0.28 + kHeight, 0.4 } };
+  box.density = relative * Parameters().restDensity;
+  box.name = "box";
+  scene.solids.push_back(box);
+  return scene;
+}
+
+Parameters parameters()
+{
+  Parameters p;
+  p.particleSpacing = kSpacing;
+  return p;
+}
+
+// The box's draft: from the free surface (half a spacing above the highest particle away from
+// the box) down to its bottom.
+double draft(const Simulation& simulation)
+{
+  Snapshot<double> state;
+  simulation.stepper().read(state);
+  double top = 0;
+  for (const Vec3d& q : state.position)
+  {
+    if (std::abs(q.x - 0.3) > 0.17 || std::abs(q.z - 0.3) > 0.17)
+    {
+      top = std::max(top, q.y);
+    }
+  }
+  const Body& box = simulation.bodies().at(0);
+  return top + 0.5 * kSpacing - (box.state.centre.y - 0.5 * kHeight);
+}
+
+std::string errorOf(const Scene& scene, Backend backend = Backend::Serial)
+{
+  try
+  {
+    Simulation simulation(scene, parameters(), backend, Precision::Single);
+  }
+  catch (const InvalidInput& e)
+  {
+    return e.what();
+  }
+  return "";
+}
+
+} // namespace
+
+// Archimedes: a box of relative density r floats with a draft of r times its height. Fast
+// version at 4 spacings of box height: the draft averaged over 1.5-2 s within 5 % of the height
+// (measured at 2 s: r = 0.25 +3.2 %, 0.5 -0.9 %, 0.75 +1.4 %), and deeper for a denser box.
+TEST(Bodies, BoxesFloatAtArchimedesDraft)
+{
+  double previous = 0;
+  for (double relative : { 0.25, 0.5, 0.75 })
+  {
+    Simulation simulation(floatingBox(relative), parameters(), Backend::OpenMP, Precision::Single);
+    simulation.advanceTo(1.5);
+    double sum = 0;
+    int samples = 0;
+    for (int f = 1; f <= 10; ++f)
+    {
+      simulation.advanceTo(1.5 + 0.05 * f);
+      sum += draft(simulation);
+      ++samples;
+    }
+    const double mean = sum / samples;
+    std::printf("relative density %.2f: draft %.4f m, Archimedes %.4f m (%+.1f %% of the height)\n",
+      relative, mean, relative * kHeight, 100 * (mean - relative * kHeight) / kHeight);
+    EXPECT_NEAR(mean, relative * kHeight, 0.05 * kHeight) << "relative density " << relative;
+    EXPECT_GT(mean, previous);
+    previous = mean;
+  }
+}
+
+// The body's state comes from loads summed in a fixed order: OpenMP moves it as Serial does, bit
+// for bit, and a run resumed from a checkpoint (the bodies' states and last loads in it) goes on
+// as the straight run.
+TEST(Bodies, TheSameBitsOnSerialOpenMpAndFromACheckpoint)
+{
+  Simulation serial(floatingBox(0.5), parameters(), Backend::Serial, Precision::Single);
+  Simulation openmp(floatingBox(0.5), parameters(), Backend::OpenMP, Precision::Single);
+  // Frame by frame on both (a frame's steps are shortened to land on it).
+  serial.advanceTo(0.1);
+  const SimulationCheckpoint halfway = serial.checkpoint();
+  serial.advanceTo(0.2);
+  openmp.advanceTo(0.1);
+  openmp.advanceTo(0.2);
+  const RigidState a = serial.bodies()[0].state, b = openmp.bodies()[0].state;
+  EXPECT_EQ(a.centre.y, b.centre.y);
+  EXPECT_EQ(a.velocity.y, b.velocity.y);
+  EXPECT_EQ(a.orientation.x, b.orientation.x);
+  EXPECT_NE(a.centre.y, 0.28 + 0.5 * kHeight) << "the box did not move";
+  Simulation resumed(floatingBox(0.5), parameters(), Backend::Serial, Precision::Single);
+  resumed.restore(halfway);
+  resumed.advanceTo(0.2);
+  const RigidState c = resumed.bodies()[0].state;
+  EXPECT_EQ(a.centre.y, c.centre.y);
+  EXPECT_EQ(a.velocity.y, c.velocity.y);
+  EXPECT_EQ(a.angularMomentum.z, c.angularMomentum.z);
+}
+
+TEST(Bodies, BadBodiesAreInvalidInputNamingThem)
+{
+  Scene shell = floatingBox(0.5);
+  shell.solids[0].kind = SolidRegion::Kind::Mesh;
+  shell.solids[0].thickness = 0.01;
+  shell.solids[0].mesh.points = { { 0.2, 0.3, 0.2 }, { 0.4, 0.3, 0.2 }, { 0.3, 0.3, 0.4 } };
+  shell.solids[0].mesh.triangles = { { 0, 1, 2 } };
+  EXPECT_NE(errorOf(shell).find("box: a shell (thickness > 0) encloses no solid"), std::string::npos)
+    << errorOf(shell);
+  // Checked before the backend is: on any machine.
+  const std::string cuda = errorOf(floatingBox(0.5), Backend::CUDA);
+  EXPECT_NE(cuda.find("box.density = 500: bodies the fluid moves run on the Serial and CPU (OpenMP) "
+                      "backends"),
+    std::string::npos)
+    << cuda;
+  Scene moved = floatingBox(0.5);
+  moved.solids[0].density = std::nan("");
+  EXPECT_NE(errorOf(moved).find("box: density = nan"), std::string::npos) << errorOf(moved);
+}
+
+// A scene file says "density" to make an obstacle a body: a number > 0, and not with keyframes.
+TEST(Bodies, ASceneFileNamesItsBadBodies)
+{
+  const std::string head = R"({"domain": {"min": [0, 0, 0], "max": [1, 1, 1]},
+    "fluid": [{"type": "box", "min": [0, 0, 0], "max": [1, 0.5, 1]}], "obstacles": [)";
+  auto errorOfFile = [&](const std::string& obstacle) {
+    try
+    {
+      parseScene(head + obstacle + "]}");
+    }
+    catch (const InvalidInput& e)
+    {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const Scene scene = parseScene(
+    head + R"({"type": "box", "name": "crate", "min": [0.4, 0.4, 0.4], "max": [0.6, 0.6, 0.6], "density": 600})" + "]}");
+  EXPECT_EQ(scene.solids.at(0).density, 600);
+  EXPECT_EQ(scene.solids.at(0).name, "crate");
+  const std::string negative =
+    errorOfFile(R"({"type": "sphere", "center": [0.5, 0.5, 0.5], "radius": 0.1, "density": -1})");
+  EXPECT_NE(negative.find(".obstacles[0].density"), std::string::npos) << negative;
+  EXPECT_NE(negative.find("must be a finite number > 0"), std::string::npos) << negative;
+  const std::string both = errorOfFile(R"({"type": "box", "min": [0.4, 0.4, 0.4], "max": [0.6, 0.6, 0.6],
+    "density": 500, "motion": {"keyframes": [{"time": 0}]}})");
+  EXPECT_NE(both.find("either by the fluid (density) or by its keyframes (motion)"), std::string::npos)
+    << both;
+}
