@@ -368,60 +368,6 @@ double Simulation::nextTimeStep() const
   return dt;
 }
 
-// The fastest point of a moving solid now and one largest step on (the next step may begin a
-// faster keyframe segment): a function of the time alone, so the steps stay a function of the
-// state.
-double Simulation::fastestSolidPoint() const
-{
-  double fastest = 0;
-  for (std::size_t k = 0; k < motions_.size(); ++k)
-  {
-    if (!motions_[k].moves())
-    {
-      continue;
-    }
-    for (double t : { time_, time_ + parameters_.timeStep })
-    {
-      const SolidPose pose = motions_[k].at(t);
-      fastest = std::max(
-        fastest, length(pose.pivotVelocity) + length(pose.angularVelocity) * solidReach_[k]);
-    }
-  }
-  for (const Body& body : bodies_)
-  {
-    fastest = std::max(fastest,
-      length(body.state.velocity) + length(angularVelocity(body.state, body.mass)) * body.reach);
-  }
-  return fastest;
-}
-
-void Simulation::setSolidMotion(std::size_t solid, SolidMotion motion)
-{
-  if (solid >= motions_.size())
-  {
-    throw InvalidInput("solid = " + std::to_string(solid) + ": the scene has " +
-      std::to_string(motions_.size()) + " solid(s)");
-  }
-  const std::string name = solidName(solid);
-  motion.validate(name + ".motion");
-  if (motion.moves() && std::isnan(motion.pivot.x))
-  {
-    throw InvalidInput(name + ".motion.pivot: must be given");
-  }
-  const SolidMotion& old = motions_[solid];
-  const bool samePivot = old.pivot.x == motion.pivot.x && old.pivot.y == motion.pivot.y &&
-    old.pivot.z == motion.pivot.z;
-  const bool startsMoving = old.moves() != motion.moves();
-  motions_[solid] = std::move(motion);
-  scene_.solids[solid].motion = motions_[solid];
-  // The reach (a mesh's bounds, checked whole) only when the pivot moved or the solid began to
-  // move: the VTK filter calls this at every request.
-  if (!samePivot || startsMoving)
-  {
-    solidReach_ = solidReaches(scene_.solids, motions_);
-  }
-}
-
 double Simulation::checkedTimeStep() const
 {
   const double dt = nextTimeStep();
@@ -444,11 +390,7 @@ void Simulation::stepOnce(double dt, double end, AdvanceReport& report)
   {
     stepper_->setTimeStep(dt);
   }
-  for (Body& body : bodies_)
-  {
-    body.state = advanceRigid(
-      body.state, body.mass, body.load.force, body.load.torque, parameters_.gravity, dt);
-  }
+  moveBodies(dt);
   // The constraints hold at the step's end, with the solids where they are then.
   const std::vector<SolidPose> poses = solidPoses(end);
   if (!poses.empty())
@@ -465,69 +407,7 @@ void Simulation::stepOnce(double dt, double end, AdvanceReport& report)
   report.maxTimeStep = std::max(report.maxTimeStep, dt);
   report.seconds += dt;
   ++report.steps;
-  // The stepper's torques are about the world's origin: about the centre c, torque - c x force.
-  report.impulses.resize(step.loads.size());
-  for (std::size_t k = 0; k < step.loads.size(); ++k)
-  {
-    const Vec3d centre = k < poses.size() ? poses[k].toWorld(solidCentres_[k]) : solidCentres_[k];
-    const SolidLoad& load = step.loads[k];
-    report.impulses[k].force += load.force * dt;
-    report.impulses[k].torque += (load.torque - cross(centre, load.force)) * dt;
-  }
-  for (Body& body : bodies_)
-  {
-    const SolidLoad& load = step.loads[body.solid];
-    body.load = { load.force, load.torque - cross(body.state.centre, load.force) };
-  }
-}
-
-void Simulation::makeBodies(Backend backend)
-{
-  for (std::size_t k = 0; k < scene_.solids.size(); ++k)
-  {
-    const SolidRegion& solid = scene_.solids[k];
-    if (solid.density == 0)
-    {
-      continue; // static or prescribed; any other density is a body's, checked below
-    }
-    if (backend == Backend::CUDA)
-    {
-      throw InvalidInput(solidName(k) + ".density = " + number(solid.density) +
-        ": bodies the fluid moves run on the Serial and CPU (OpenMP) backends for now; choose one "
-        "of them");
-    }
-    Body body;
-    body.solid = k;
-    body.mass = solidMassProperties(solid, solid.density, solidName(k));
-    body.state = restingState(body.mass);
-    const Box b = solidBounds(solid, solidName(k));
-    const Vec3d c = body.mass.centre;
-    body.reach = length(Vec3d{ std::max(std::abs(b.min.x - c.x), std::abs(b.max.x - c.x)),
-      std::max(std::abs(b.min.y - c.y), std::abs(b.max.y - c.y)),
-      std::max(std::abs(b.min.z - c.z), std::abs(b.max.z - c.z)) });
-    bodies_.push_back(body);
-  }
-}
-
-std::vector<SolidPose> Simulation::solidPoses(double time) const
-{
-  std::vector<SolidPose> poses = posesAt(motions_, time);
-  if (bodies_.empty())
-  {
-    return poses;
-  }
-  poses.resize(scene_.solids.size());
-  for (const Body& body : bodies_)
-  {
-    poses[body.solid] = poseOf(body.state, body.mass);
-  }
-  return poses;
-}
-
-std::string Simulation::solidName(std::size_t k) const
-{
-  return scene_.solids[k].name.empty() ? "obstacles[" + std::to_string(k) + "]"
-                                        : scene_.solids[k].name;
+  addLoads(step.loads, poses, dt, report);
 }
 
 AdvanceReport Simulation::advance(std::uint64_t steps)
@@ -731,24 +611,6 @@ void Simulation::emit()
     // run resumed from a checkpoint taken now scans them too, so the straight run does the same.
     healthValid_ = false;
   }
-}
-
-} // namespace pbf
-
-namespace pbf
-{
-
-SurfaceSolids Simulation::surfaceSolids(double time) const
-{
-  SurfaceSolids solids;
-  const std::vector<SolidPose> poses = solidPoses(time);
-  for (std::size_t k = 0; k < solidFields_.size(); ++k)
-  {
-    // posesAt gives none when no solid moves: each then stands where its field was made.
-    const DistanceGridView<double> view = solidFields_[k].view<double>(solidFields_[k].phi.data());
-    solids.views.push_back(k < poses.size() ? placed(view, poses[k]) : view);
-  }
-  return solids;
 }
 
 } // namespace pbf

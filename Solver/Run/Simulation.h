@@ -101,9 +101,10 @@ struct AdvanceReport
 };
 
 // An obstacle of the scene with a density: the fluid moves it (two-way coupling). Each step
-// first moves it by the previous step's load on it and gravity (RigidBody.h), so that the
-// constraints see it where it is at the step's end, as they see a prescribed motion; the step's
-// load on it (StepReport::loads, its torque about the body's centre) then moves it over the next.
+// first moves it by the previous step's load on it and gravity (RigidBody.h) and keeps it inside
+// the tank (a rigid contact with each wall), so that the constraints see it where it is at the
+// step's end, as they see a prescribed motion; the step's load on it (StepReport::loads, its
+// torque about the body's centre) then moves it over the next.
 struct Body
 {
   std::size_t solid = 0; // its index among the scene's solids
@@ -111,6 +112,7 @@ struct Body
   RigidState state;
   SolidLoad load;        // the last step's: force [N], torque about the centre [N m]
   double reach = 0;      // from its centre to the farthest corner of its bounds [m]
+  ContactHull hull;      // what of it touches the tank's walls
 };
 
 class Simulation
@@ -211,6 +213,11 @@ private:
   void stepOnce(double dt, double end, AdvanceReport& report); // `end`: time() after it
   // The scene's obstacles with a density (InvalidInput naming one that cannot be a body).
   void makeBodies(Backend backend);
+  // The bodies over a step of dt by their last loads, gravity and the tank's walls.
+  void moveBodies(double dt);
+  // A step's loads (StepReport::loads) into the report's impulses and the bodies' last loads.
+  void addLoads(const std::vector<SolidLoad>& loads, const std::vector<SolidPose>& poses,
+    double dt, AdvanceReport& report);
   double checkedTimeStep() const; // nextTimeStep(), or SimulationDiverged below the smallest
   void emit();
   void checkEmitters(std::size_t initialParticles) const;

@@ -1,5 +1,6 @@
 #include "RigidBody.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace pbf
@@ -106,6 +107,102 @@ RigidState advanceRigid(const RigidState& s, const MassProperties& m, const Vec3
   RigidState half = next;
   half.orientation = turned(s.orientation, start, 0.5 * dt);
   next.orientation = turned(s.orientation, angularVelocity(half, m), dt);
+  return next;
+}
+
+ContactHull contactHull(const SolidRegion& solid)
+{
+  ContactHull hull;
+  switch (solid.kind)
+  {
+    case SolidRegion::Kind::Box:
+      for (int k = 0; k < 8; ++k)
+      {
+        hull.points.push_back({ k & 1 ? solid.box.max.x : solid.box.min.x,
+          k & 2 ? solid.box.max.y : solid.box.min.y, k & 4 ? solid.box.max.z : solid.box.min.z });
+      }
+      break;
+    case SolidRegion::Kind::Sphere:
+      hull.points.push_back(solid.center);
+      hull.radius = solid.radius;
+      break;
+    case SolidRegion::Kind::Mesh:
+      hull.points = solid.mesh.points;
+      break;
+  }
+  return hull;
+}
+
+RigidState keepInside(
+  const RigidState& s, const MassProperties& m, const ContactHull& hull, const Box& domain)
+{
+  RigidState next = s;
+  const double low[3] = { domain.min.x, domain.min.y, domain.min.z };
+  const double high[3] = { domain.max.x, domain.max.y, domain.max.z };
+  // Points within a thousandth of the body's size of the wall touch it, so that a face lying on
+  // it, tilted by a rounding or a rocking, touches at every corner and the body comes to rest.
+  Box extent{ hull.points.empty() ? Vec3d{ 0, 0, 0 } : hull.points[0],
+    hull.points.empty() ? Vec3d{ 0, 0, 0 } : hull.points[0] };
+  for (const Vec3d& p : hull.points)
+  {
+    extent.min = { std::min(extent.min.x, p.x), std::min(extent.min.y, p.y), std::min(extent.min.z, p.z) };
+    extent.max = { std::max(extent.max.x, p.x), std::max(extent.max.y, p.y), std::max(extent.max.z, p.z) };
+  }
+  const double touching = 1e-3 * (length(extent.max - extent.min) + 2 * hull.radius);
+  auto axis = [](const Vec3d& v, int a) { return a == 0 ? v.x : (a == 1 ? v.y : v.z); };
+  std::vector<Vec3d> world(hull.points.size());
+  std::vector<Vec3d> contacts;
+  for (int a = 0; a < 3; ++a)
+  {
+    for (int side = 0; side < 2; ++side)
+    {
+      // n points into the domain; a point's depth is how far it is through the wall.
+      const double sign = side == 0 ? 1.0 : -1.0;
+      const Vec3d n{ a == 0 ? sign : 0.0, a == 1 ? sign : 0.0, a == 2 ? sign : 0.0 };
+      const Matrix r = next.orientation.matrix();
+      double deepest = 0;
+      for (std::size_t k = 0; k < hull.points.size(); ++k)
+      {
+        world[k] = next.centre + times(r, hull.points[k] - m.centre) - n * hull.radius;
+        const double depth = side == 0 ? low[a] - axis(world[k], a) : axis(world[k], a) - high[a];
+        deepest = std::max(deepest, depth);
+      }
+      if (!(deepest > 0))
+      {
+        continue;
+      }
+      next.centre += n * deepest;
+      contacts.clear();
+      for (const Vec3d& p : world)
+      {
+        const double depth = side == 0 ? low[a] - axis(p, a) : axis(p, a) - high[a];
+        if (depth > deepest - touching)
+        {
+          contacts.push_back(p + n * deepest);
+        }
+      }
+      // Impulses along n that stop every touching point moving into the wall, in turn and a few
+      // times over (projected Gauss-Seidel: a box lying flat rests on all four corners).
+      for (int sweep = 0; sweep < 8; ++sweep)
+      {
+        for (const Vec3d& contact : contacts)
+        {
+          const Vec3d arm = contact - next.centre;
+          const double approach = dot(next.velocity + cross(angularVelocity(next, m), arm), n);
+          if (approach >= 0)
+          {
+            continue;
+          }
+          const Matrix rot = next.orientation.matrix();
+          const Vec3d armCrossN = cross(arm, n);
+          const Vec3d turn = times(rot, times(inverse(m.inertia), transposeTimes(rot, armCrossN)));
+          const double j = -approach / (1.0 / m.mass + dot(cross(turn, arm), n));
+          next.velocity += n * (j / m.mass);
+          next.angularMomentum += armCrossN * j;
+        }
+      }
+    }
+  }
   return next;
 }
 

@@ -7,6 +7,8 @@
 #include "MassProperties.h"
 #include "SolidMotion.h"
 
+#include <vector>
+
 namespace pbf
 {
 
@@ -36,5 +38,21 @@ RigidState advanceRigid(const RigidState& s, const MassProperties& m, const Vec3
 // Where the body is: a point x of its own frame is at R (x - c0) + c, c0 the centre of mass as
 // sampled; the pivot is the centre, moving at the state's velocities.
 SolidPose poseOf(const RigidState& s, const MassProperties& m);
+
+// What of a body can touch a wall: points of its own frame, each the centre of a ball of
+// `radius` (a box's corners or a mesh's vertices with radius 0; a sphere's centre with its radius).
+struct ContactHull
+{
+  std::vector<Vec3d> points;
+  double radius = 0;
+};
+ContactHull contactHull(const SolidRegion& solid);
+
+// The body kept inside `domain`: for each wall in turn (x, y, z; low, high), the body is moved
+// back along the wall's normal by its deepest point's depth, and impulses along the normal at the
+// points that then touch the wall stop them moving into it (no bounce, no friction; a few
+// projected Gauss-Seidel sweeps over them), turning the body as a rigid contact does.
+RigidState keepInside(
+  const RigidState& s, const MassProperties& m, const ContactHull& hull, const Box& domain);
 
 } // namespace pbf

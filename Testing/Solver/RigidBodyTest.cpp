@@ -286,3 +286,51 @@ TEST(RigidBody, AFreeSpinKeepsItsAngularMomentumAndEnergy)
   EXPECT_NEAR(got.x, expected.x, 1e-14);
   EXPECT_NEAR(got.y, expected.y, 1e-14);
 }
+
+// A rigid contact with the tank's walls: a box dropped tilted onto the floor comes to rest on it,
+// none of its corners through it (to rounding) and no longer moving down; one thrown at a side
+// wall stops there.
+TEST(RigidBody, ABodyStaysInsideTheTank)
+{
+  const Box tank{ { 0, 0, 0 }, { 1, 1, 1 } };
+  SolidRegion solid;
+  solid.kind = SolidRegion::Kind::Box;
+  solid.box = { { 0.4, 0.5, 0.4 }, { 0.6, 0.6, 0.6 } };
+  const MassProperties m = boxMassProperties(solid.box, 800, "crate");
+  const ContactHull hull = contactHull(solid);
+  RigidState s = restingState(m);
+  s.orientation = Rotation::fromDegrees({ 0, 0, 20 });
+  s.velocity = { 0.5, 0, 0 };
+  const Vec3d g{ 0, -9.81, 0 };
+  double lowest = 1;
+  for (int k = 0; k < 3000; ++k)
+  {
+    s = keepInside(advanceRigid(s, m, { 0, 0, 0 }, { 0, 0, 0 }, g, 1e-3), m, hull, tank);
+    const SolidPose pose = poseOf(s, m);
+    for (const Vec3d& corner : hull.points)
+    {
+      const Vec3d w = pose.toWorld(corner);
+      lowest = std::min(lowest, w.y);
+      EXPECT_LE(w.x, 1 + 1e-12) << "step " << k;
+    }
+  }
+  EXPECT_GE(lowest, -1e-12);
+  EXPECT_GE(s.velocity.y, -1e-9);
+  EXPECT_LT(s.centre.y, 0.2) << "it did not fall";
+  // A sphere against the ceiling, thrown up: its top stays at the ceiling.
+  SolidRegion ball;
+  ball.kind = SolidRegion::Kind::Sphere;
+  ball.center = { 0.5, 0.5, 0.5 };
+  ball.radius = 0.1;
+  const MassProperties mb = sphereMassProperties(ball.center, ball.radius, 100, "ball");
+  RigidState b = restingState(mb);
+  b.velocity = { 0, 3, 0 };
+  for (int k = 0; k < 500; ++k)
+  {
+    b = keepInside(advanceRigid(b, mb, { 0, 0, 0 }, { 0, 0, 0 }, { 0, 0, 0 }, 1e-3), mb,
+      contactHull(ball), tank);
+    EXPECT_LE(b.centre.y + 0.1, 1 + 1e-12);
+  }
+  EXPECT_NEAR(b.centre.y, 0.9, 1e-12);
+  EXPECT_NEAR(b.velocity.y, 0, 1e-12);
+}

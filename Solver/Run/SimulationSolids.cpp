@@ -1,0 +1,164 @@
+// Simulation's solids: the obstacles' motions, the bodies the fluid moves, the loads on them,
+// and where they stand.
+#include "Simulation.h"
+
+#include "MassProperties.h"
+#include "RigidBody.h"
+#include "Solids.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+
+namespace pbf
+{
+
+// The fastest point of a moving solid now and one largest step on (the next step may begin a
+// faster keyframe segment): a function of the time alone, so the steps stay a function of the
+// state.
+double Simulation::fastestSolidPoint() const
+{
+  double fastest = 0;
+  for (std::size_t k = 0; k < motions_.size(); ++k)
+  {
+    if (!motions_[k].moves())
+    {
+      continue;
+    }
+    for (double t : { time_, time_ + parameters_.timeStep })
+    {
+      const SolidPose pose = motions_[k].at(t);
+      fastest = std::max(
+        fastest, length(pose.pivotVelocity) + length(pose.angularVelocity) * solidReach_[k]);
+    }
+  }
+  for (const Body& body : bodies_)
+  {
+    fastest = std::max(fastest,
+      length(body.state.velocity) + length(angularVelocity(body.state, body.mass)) * body.reach);
+  }
+  return fastest;
+}
+
+void Simulation::setSolidMotion(std::size_t solid, SolidMotion motion)
+{
+  if (solid >= motions_.size())
+  {
+    throw InvalidInput("solid = " + std::to_string(solid) + ": the scene has " +
+      std::to_string(motions_.size()) + " solid(s)");
+  }
+  const std::string name = solidName(solid);
+  motion.validate(name + ".motion");
+  if (motion.moves() && std::isnan(motion.pivot.x))
+  {
+    throw InvalidInput(name + ".motion.pivot: must be given");
+  }
+  const SolidMotion& old = motions_[solid];
+  const bool samePivot = old.pivot.x == motion.pivot.x && old.pivot.y == motion.pivot.y &&
+    old.pivot.z == motion.pivot.z;
+  const bool startsMoving = old.moves() != motion.moves();
+  motions_[solid] = std::move(motion);
+  scene_.solids[solid].motion = motions_[solid];
+  // The reach (a mesh's bounds, checked whole) only when the pivot moved or the solid began to
+  // move: the VTK filter calls this at every request.
+  if (!samePivot || startsMoving)
+  {
+    solidReach_ = solidReaches(scene_.solids, motions_);
+  }
+}
+
+void Simulation::makeBodies(Backend backend)
+{
+  for (std::size_t k = 0; k < scene_.solids.size(); ++k)
+  {
+    const SolidRegion& solid = scene_.solids[k];
+    if (solid.density == 0)
+    {
+      continue; // static or prescribed; any other density is a body's, checked below
+    }
+    if (backend == Backend::CUDA)
+    {
+      std::ostringstream text;
+      text << solidName(k) << ".density = " << solid.density
+           << ": bodies the fluid moves run on the Serial and CPU (OpenMP) backends for now; "
+              "choose one of them";
+      throw InvalidInput(text.str());
+    }
+    Body body;
+    body.solid = k;
+    body.mass = solidMassProperties(solid, solid.density, solidName(k));
+    body.state = restingState(body.mass);
+    body.hull = contactHull(solid);
+    const Box b = solidBounds(solid, solidName(k));
+    const Vec3d c = body.mass.centre;
+    body.reach = length(Vec3d{ std::max(std::abs(b.min.x - c.x), std::abs(b.max.x - c.x)),
+      std::max(std::abs(b.min.y - c.y), std::abs(b.max.y - c.y)),
+      std::max(std::abs(b.min.z - c.z), std::abs(b.max.z - c.z)) });
+    bodies_.push_back(body);
+  }
+}
+
+std::vector<SolidPose> Simulation::solidPoses(double time) const
+{
+  std::vector<SolidPose> poses = posesAt(motions_, time);
+  if (bodies_.empty())
+  {
+    return poses;
+  }
+  poses.resize(scene_.solids.size());
+  for (const Body& body : bodies_)
+  {
+    poses[body.solid] = poseOf(body.state, body.mass);
+  }
+  return poses;
+}
+
+std::string Simulation::solidName(std::size_t k) const
+{
+  return scene_.solids[k].name.empty() ? "obstacles[" + std::to_string(k) + "]"
+                                        : scene_.solids[k].name;
+}
+
+void Simulation::moveBodies(double dt)
+{
+  for (Body& body : bodies_)
+  {
+    body.state = keepInside(advanceRigid(body.state, body.mass, body.load.force,
+                              body.load.torque, parameters_.gravity, dt),
+      body.mass, body.hull, parameters_.domain);
+  }
+}
+
+void Simulation::addLoads(const std::vector<SolidLoad>& loads,
+  const std::vector<SolidPose>& poses, double dt, AdvanceReport& report)
+{
+  // The stepper's torques are about the world's origin: about the centre c, torque - c x force.
+  report.impulses.resize(loads.size());
+  for (std::size_t k = 0; k < loads.size(); ++k)
+  {
+    const Vec3d centre = k < poses.size() ? poses[k].toWorld(solidCentres_[k]) : solidCentres_[k];
+    report.impulses[k].force += loads[k].force * dt;
+    report.impulses[k].torque += (loads[k].torque - cross(centre, loads[k].force)) * dt;
+  }
+  for (Body& body : bodies_)
+  {
+    const SolidLoad& load = loads[body.solid];
+    body.load = { load.force, load.torque - cross(body.state.centre, load.force) };
+  }
+}
+
+SurfaceSolids Simulation::surfaceSolids(double time) const
+{
+  SurfaceSolids solids;
+  const std::vector<SolidPose> poses = solidPoses(time);
+  for (std::size_t k = 0; k < solidFields_.size(); ++k)
+  {
+    // posesAt gives none when no solid moves: each then stands where its field was made.
+    const DistanceGridView<double> view = solidFields_[k].view<double>(solidFields_[k].phi.data());
+    solids.views.push_back(k < poses.size() ? placed(view, poses[k]) : view);
+  }
+  return solids;
+}
+
+} // namespace pbf
