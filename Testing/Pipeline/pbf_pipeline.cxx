@@ -269,27 +269,18 @@ void Configure(vtkPBFSimulation* simulation, const Options& o, const std::string
 template <class Request, class Output>
 void Scrub(vtkPBFSimulation* simulation, const Options& o, Request& request, Output& output)
 {
+  auto resumedFrom = [&]() {
+    return output()->GetFieldData()->GetAbstractArray("ResumedFrom")->GetVariantValue(0).ToString();
+  };
   const int last = o.frames + (o.pageable ? 0 : o.comparePageable);
   const int back = std::max(1, last / 2 + 1);
   const Sample scrub = request(back);
   std::printf("scrub back to frame %d: %.1f ms wall, %ld steps (from %s)\n", back, scrub.wall,
-    scrub.steps,
-    output()
-      ->GetFieldData()
-      ->GetAbstractArray("ResumedFrom")
-      ->GetVariantValue(0)
-      .ToString()
-      .c_str());
+    scrub.steps, resumedFrom().c_str());
   simulation->SetNumberOfFrames(last + 10); // re-executes the algorithm, changes no frame
   const Sample again = request(back);
   std::printf("same frame after a NumberOfFrames change: %.3f ms wall, %ld steps (from %s)\n",
-    again.wall, again.steps,
-    output()
-      ->GetFieldData()
-      ->GetAbstractArray("ResumedFrom")
-      ->GetVariantValue(0)
-      .ToString()
-      .c_str());
+    again.wall, again.steps, resumedFrom().c_str());
 }
 
 } // namespace

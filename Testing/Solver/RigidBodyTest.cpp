@@ -1,6 +1,7 @@
 // The mass properties of a body the fluid moves, its bad input, and its rigid motion.
 #include "MassProperties.h"
 #include "RigidBody.h"
+#include "TestScenes.h"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +9,6 @@
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <map>
 #include <string>
 
 using namespace pbf;
@@ -16,72 +16,9 @@ using namespace pbf;
 namespace
 {
 
-// The closed box [lo, hi] as 12 triangles facing out.
 TriangleMesh boxMesh(const Vec3d& lo, const Vec3d& hi)
 {
-  TriangleMesh m;
-  for (int k = 0; k < 8; ++k)
-  {
-    m.points.push_back({ k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z });
-  }
-  // Each face as two triangles, counter-clockwise seen from outside.
-  const std::uint32_t faces[6][4] = { { 0, 2, 3, 1 }, { 4, 5, 7, 6 }, { 0, 1, 5, 4 },
-    { 2, 6, 7, 3 }, { 0, 4, 6, 2 }, { 1, 3, 7, 5 } };
-  for (const auto& f : faces)
-  {
-    m.triangles.push_back({ f[0], f[1], f[2] });
-    m.triangles.push_back({ f[0], f[2], f[3] });
-  }
-  return m;
-}
-
-// An icosahedron subdivided `levels` times onto the sphere of `radius` at `centre`.
-TriangleMesh sphereMesh(const Vec3d& centre, double radius, int levels)
-{
-  const double t = (1 + std::sqrt(5.0)) / 2;
-  std::vector<Vec3d> p = { { -1, t, 0 }, { 1, t, 0 }, { -1, -t, 0 }, { 1, -t, 0 }, { 0, -1, t },
-    { 0, 1, t }, { 0, -1, -t }, { 0, 1, -t }, { t, 0, -1 }, { t, 0, 1 }, { -t, 0, -1 },
-    { -t, 0, 1 } };
-  std::vector<std::array<std::uint32_t, 3>> f = { { 0, 11, 5 }, { 0, 5, 1 }, { 0, 1, 7 },
-    { 0, 7, 10 }, { 0, 10, 11 }, { 1, 5, 9 }, { 5, 11, 4 }, { 11, 10, 2 }, { 10, 7, 6 },
-    { 7, 1, 8 }, { 3, 9, 4 }, { 3, 4, 2 }, { 3, 2, 6 }, { 3, 6, 8 }, { 3, 8, 9 }, { 4, 9, 5 },
-    { 2, 4, 11 }, { 6, 2, 10 }, { 8, 6, 7 }, { 9, 8, 1 } };
-  auto unit = [](const Vec3d& v) { return v * (1.0 / std::sqrt(dot(v, v))); };
-  for (Vec3d& q : p)
-  {
-    q = unit(q);
-  }
-  for (int level = 0; level < levels; ++level)
-  {
-    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> middle;
-    auto mid = [&](std::uint32_t a, std::uint32_t b) {
-      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-      const auto found = middle.find(key);
-      if (found != middle.end())
-      {
-        return found->second;
-      }
-      p.push_back(unit((p[a] + p[b]) * 0.5));
-      return middle[key] = static_cast<std::uint32_t>(p.size() - 1);
-    };
-    std::vector<std::array<std::uint32_t, 3>> finer;
-    for (const auto& tri : f)
-    {
-      const std::uint32_t a = mid(tri[0], tri[1]), b = mid(tri[1], tri[2]), c = mid(tri[2], tri[0]);
-      finer.push_back({ tri[0], a, c });
-      finer.push_back({ tri[1], b, a });
-      finer.push_back({ tri[2], c, b });
-      finer.push_back({ a, b, c });
-    }
-    f = finer;
-  }
-  TriangleMesh m;
-  for (const Vec3d& q : p)
-  {
-    m.points.push_back(centre + q * radius);
-  }
-  m.triangles = f;
-  return m;
+  return test::boxMesh({ lo, hi });
 }
 
 std::string errorOf(const std::function<void()>& f)
@@ -169,7 +106,7 @@ TEST(MassProperties, ATurnedBoxsInertiaIsTheTurnedTensor)
 TEST(MassProperties, ASphereMeshApproachesTheSphere)
 {
   const MassProperties sphere = sphereMassProperties({ 1, 1, 1 }, 0.2, 800, "sphere");
-  const MassProperties m = meshMassProperties(sphereMesh({ 1, 1, 1 }, 0.2, 3), 800, "sphere");
+  const MassProperties m = meshMassProperties(test::icosphere({ 1, 1, 1 }, 0.2, 3), 800, "sphere");
   EXPECT_LT(m.volume, sphere.volume);
   EXPECT_GT(m.volume, 0.99 * sphere.volume);
   EXPECT_LT(m.inertia[0], sphere.inertia[0]);

@@ -2,6 +2,7 @@
 // against their exact fields, the sign independent of orientation, open surfaces refused unless
 // given a thickness, and bad input named.
 #include "SignedDistance.h"
+#include "TestScenes.h"
 
 #include <gtest/gtest.h>
 
@@ -10,74 +11,11 @@
 #include <string>
 
 using namespace pbf;
+using pbf::test::boxMesh;
+using pbf::test::icosphere;
 
 namespace
 {
-
-// A unit icosahedron subdivided `levels` times and pushed onto the sphere of `radius` about c:
-// every triangle's corners are on the sphere, so its faces lie at most r (1 - cos(theta / 2))
-// inside it, theta the largest edge's angle.
-TriangleMesh icosphere(const Vec3d& c, double radius, int levels)
-{
-  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Vec3d> p = { { -1, t, 0 }, { 1, t, 0 }, { -1, -t, 0 }, { 1, -t, 0 }, { 0, -1, t },
-    { 0, 1, t }, { 0, -1, -t }, { 0, 1, -t }, { t, 0, -1 }, { t, 0, 1 }, { -t, 0, -1 },
-    { -t, 0, 1 } };
-  std::vector<std::array<std::uint32_t, 3>> f = { { 0, 11, 5 }, { 0, 5, 1 }, { 0, 1, 7 },
-    { 0, 7, 10 }, { 0, 10, 11 }, { 1, 5, 9 }, { 5, 11, 4 }, { 11, 10, 2 }, { 10, 7, 6 },
-    { 7, 1, 8 }, { 3, 9, 4 }, { 3, 4, 2 }, { 3, 2, 6 }, { 3, 6, 8 }, { 3, 8, 9 }, { 4, 9, 5 },
-    { 2, 4, 11 }, { 6, 2, 10 }, { 8, 6, 7 }, { 9, 8, 1 } };
-  for (Vec3d& q : p)
-  {
-    q = q * (1.0 / length(q));
-  }
-  for (int level = 0; level < levels; ++level)
-  {
-    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> middle;
-    auto mid = [&](std::uint32_t a, std::uint32_t b) {
-      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-      auto it = middle.find(key);
-      if (it != middle.end())
-      {
-        return it->second;
-      }
-      const Vec3d m = (p[a] + p[b]) * 0.5;
-      p.push_back(m * (1.0 / length(m)));
-      return middle[key] = static_cast<std::uint32_t>(p.size() - 1);
-    };
-    std::vector<std::array<std::uint32_t, 3>> g;
-    for (const auto& tri : f)
-    {
-      const std::uint32_t a = mid(tri[0], tri[1]), b = mid(tri[1], tri[2]), d = mid(tri[2], tri[0]);
-      g.push_back({ tri[0], a, d });
-      g.push_back({ tri[1], b, a });
-      g.push_back({ tri[2], d, b });
-      g.push_back({ a, b, d });
-    }
-    f = g;
-  }
-  TriangleMesh mesh;
-  for (const Vec3d& q : p)
-  {
-    mesh.points.push_back(c + q * radius);
-  }
-  mesh.triangles = f;
-  return mesh;
-}
-
-TriangleMesh boxMesh(const Box& b)
-{
-  TriangleMesh m;
-  for (int k = 0; k < 8; ++k)
-  {
-    m.points.push_back({ k & 1 ? b.max.x : b.min.x, k & 2 ? b.max.y : b.min.y,
-      k & 4 ? b.max.z : b.min.z });
-  }
-  // Two triangles per face, outward: -x, +x, -y, +y, -z, +z.
-  m.triangles = { { 0, 4, 6 }, { 0, 6, 2 }, { 1, 3, 7 }, { 1, 7, 5 }, { 0, 1, 5 }, { 0, 5, 4 },
-    { 2, 6, 7 }, { 2, 7, 3 }, { 0, 2, 3 }, { 0, 3, 1 }, { 4, 5, 7 }, { 4, 7, 6 } };
-  return m;
-}
 
 // Largest |field - exact| over points on a lattice through the grid (between its nodes too).
 template <class Exact>

@@ -63,4 +63,10 @@ void expectBitIdentical(const Snapshot<Real>& a, const Snapshot<Real>& b)
 // it from the first step) and a sphere in the surge's way.
 Scene damBreakWithSolids();
 
+// A unit icosahedron subdivided `levels` times and pushed onto the sphere of `radius` about c,
+// its triangles facing out.
+TriangleMesh icosphere(const Vec3d& c, double radius, int levels);
+// The closed box b as 12 triangles facing out.
+TriangleMesh boxMesh(const Box& b);
+
 } // namespace pbf::test
