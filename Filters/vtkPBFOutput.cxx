@@ -116,6 +116,7 @@ void FillParticlesOf(const pbf::Stepper& stepper, bool pinned,
   auto velocity = NewOutputArray<RealArray<Real>>("velocity", 3, n, pinned);
   auto density = NewOutputArray<RealArray<Real>>("density", 1, n, pinned);
   auto lambda = NewOutputArray<RealArray<Real>>("lambda", 1, n, pinned);
+  auto pressure = NewOutputArray<RealArray<Real>>("pressure", 1, n, pinned);
   auto id = NewOutputArray<vtkIdTypeArray>("id", 1, n, pinned);
   if (n > 0)
   {
@@ -124,6 +125,7 @@ void FillParticlesOf(const pbf::Stepper& stepper, bool pinned,
     view.velocity = reinterpret_cast<pbf::Vec3<Real>*>(velocity->GetPointer(0));
     view.density = density->GetPointer(0);
     view.lambda = lambda->GetPointer(0);
+    view.pressure = pressure->GetPointer(0);
     view.id = reinterpret_cast<std::int64_t*>(id->GetPointer(0));
     stepper.readInto(view);
   }
@@ -140,6 +142,7 @@ void FillParticlesOf(const pbf::Stepper& stepper, bool pinned,
   vtkPointData* pointData = output->GetPointData();
   pointData->AddArray(density);
   pointData->AddArray(lambda);
+  pointData->AddArray(pressure);
   // Active scalars and vectors, so that a view colors by |velocity| on first show.
   pointData->SetScalars(velocity);
   pointData->SetVectors(velocity);

@@ -50,6 +50,7 @@ struct HostFluid
     f.v = v.data();
     f.density = density.data();
     f.lambda = lambda.data();
+    f.pressure = pressure.data();
     f.scratch = scratch.data();
     f.omega = omega.data();
     // XSPH's sum goes where delta p was: the solve is over when it is written.
@@ -114,8 +115,8 @@ struct HostFluid
     gatherMore(gather);
   }
 
-  HostParticles<Real> particles() { return { x, v, density, lambda, id }; }
-  ConstHostParticles<Real> particles() const { return { x, v, density, lambda, id }; }
+  HostParticles<Real> particles() { return { x, v, density, lambda, pressure, id }; }
+  ConstHostParticles<Real> particles() const { return { x, v, density, lambda, pressure, id }; }
 
   // The work arrays that follow the particle count (x, v and id are the state).
   void resizeWork(std::size_t n)
@@ -125,6 +126,7 @@ struct HostFluid
     omega.resize(n);
     density.resize(n);
     lambda.resize(n);
+    pressure.resize(n);
     keys.resize(n);
   }
 
@@ -141,7 +143,7 @@ struct HostFluid
   GridGeometry<Real> geometry;
 
   std::vector<Vec3<Real>> x, p, v, scratch, omega;
-  std::vector<Real> density, lambda;
+  std::vector<Real> density, lambda, pressure;
   std::vector<std::int64_t> id;
   std::vector<CellKey> keys;
   std::vector<std::uint32_t> cellOffsets, order, cursor;

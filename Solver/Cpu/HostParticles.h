@@ -23,6 +23,7 @@ struct HostParticles
   std::vector<Vec3<Real>>& v;
   std::vector<Real>& density;
   std::vector<Real>& lambda;
+  std::vector<Real>& pressure;
   std::vector<std::int64_t>& id;
 };
 
@@ -33,6 +34,7 @@ struct ConstHostParticles
   const std::vector<Vec3<Real>>& v;
   const std::vector<Real>& density;
   const std::vector<Real>& lambda;
+  const std::vector<Real>& pressure;
   const std::vector<std::int64_t>& id;
 };
 
@@ -44,6 +46,7 @@ void copyToSnapshot(const ConstHostParticles<Real>& p, Snapshot<Out>& out)
   out.velocity.resize(n);
   out.density.resize(n);
   out.lambda.resize(n);
+  out.pressure.resize(n);
   out.id = p.id;
   for (std::size_t i = 0; i < n; ++i)
   {
@@ -51,6 +54,7 @@ void copyToSnapshot(const ConstHostParticles<Real>& p, Snapshot<Out>& out)
     out.velocity[i] = Vec3<Out>::from(p.v[i]);
     out.density[i] = static_cast<Out>(p.density[i]);
     out.lambda[i] = static_cast<Out>(p.lambda[i]);
+    out.pressure[i] = static_cast<Out>(p.pressure[i]);
   }
 }
 
@@ -66,7 +70,7 @@ void loadFromSnapshot(const Snapshot<In>& state, const HostParticles<Real>& p)
   }
   const std::size_t n = state.id.size();
   if (state.position.size() != n || state.velocity.size() != n || state.density.size() != n ||
-    state.lambda.size() != n)
+    state.lambda.size() != n || state.pressure.size() != n)
   {
     throw InvalidInput("checkpoint arrays differ in length (" + std::to_string(n) + " ids)");
   }
@@ -74,6 +78,7 @@ void loadFromSnapshot(const Snapshot<In>& state, const HostParticles<Real>& p)
   p.v.resize(n);
   p.density.resize(n);
   p.lambda.resize(n);
+  p.pressure.resize(n);
   p.id = state.id;
   for (std::size_t i = 0; i < n; ++i)
   {
@@ -81,6 +86,7 @@ void loadFromSnapshot(const Snapshot<In>& state, const HostParticles<Real>& p)
     p.v[i] = Vec3<Real>::from(state.velocity[i]);
     p.density[i] = static_cast<Real>(state.density[i]);
     p.lambda[i] = static_cast<Real>(state.lambda[i]);
+    p.pressure[i] = static_cast<Real>(state.pressure[i]);
   }
 }
 

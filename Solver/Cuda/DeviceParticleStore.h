@@ -1,5 +1,5 @@
 // The particle arrays of a GPU stepper, for both (DeviceStepper, DeviceSubdomainStepper): the
-// per-particle part of StepBuffers (four Vec3 buffers, density, lambda, id, two key buffers, the
+// per-particle part of StepBuffers (four Vec3 buffers, density, lambda, pressure, id, two key buffers, the
 // neighbour masks), the arrays only one of them needs (stored volumes and |omega| for the single
 // GPU; alternates and index lists for a sub-domain's migration and ghosts), and adaptive mode's
 // block sums, in one allocation of `capacity` particles on the Device policy. The allocation is
@@ -27,7 +27,7 @@ struct ParticleArrays
 {
   bool masks = true;      // kNeighborRows words per particle (NeighborMasks.h)
   bool volumes = false;   // volume and |omega| stored by the passes that compute them
-  bool alternates = false; // density, lambda and id again: the sub-domain's gathers
+  bool alternates = false; // density, lambda, pressure and id again: the sub-domain's gathers
   bool moved = false;     // a float per particle: per-particle mask rebuilds (MovedSinceSort)
   int lists = 0;          // index lists (uint32 per particle): the sub-domain's selections
 };
@@ -51,7 +51,7 @@ public:
 
   static std::size_t bytesPerParticle(const ParticleArrays& a)
   {
-    const std::size_t scalars = 2 + (a.volumes ? 2 : 0) + (a.alternates ? 2 : 0);
+    const std::size_t scalars = 3 + (a.volumes ? 2 : 0) + (a.alternates ? 3 : 0);
     return 4 * sizeof(Vec3<Real>) + scalars * sizeof(Real) +
       (a.alternates ? 2 : 1) * sizeof(std::int64_t) + 2 * sizeof(CellKey) +
       (a.masks ? kNeighborRows * sizeof(std::uint32_t) : 0) + (a.moved ? sizeof(float) : 0) +
@@ -64,7 +64,7 @@ public:
 
   // Room for `needed` particles: when it must grow, to at least half again the capacity (so that
   // growing by steps reallocates O(log N) times) and 1024. The first `keep` particles of every
-  // Vec3 buffer and of density, lambda and id are copied into the new arrays on the device.
+  // Vec3 buffer and of density, lambda, pressure and id are copied into the new arrays on the device.
   void reserve(std::size_t needed, std::size_t keep)
   {
     if (needed <= capacity_ && capacity_ > 0)
@@ -94,6 +94,7 @@ public:
       }
       exec.copy(p.density, old.density, keep * sizeof(Real));
       exec.copy(p.lambda, old.lambda, keep * sizeof(Real));
+      exec.copy(p.pressure, old.pressure, keep * sizeof(Real));
       exec.copy(p.id, old.id, keep * sizeof(std::int64_t));
     }
     device_.synchronize();
@@ -130,6 +131,7 @@ public:
   {
     std::swap(p.density, p.densityAlt);
     std::swap(p.lambda, p.lambdaAlt);
+    std::swap(p.pressure, p.pressureAlt);
     std::swap(p.id, p.idAlt);
   }
 
@@ -143,6 +145,7 @@ public:
     }
     b.density = p.density;
     b.lambda = p.lambda;
+    b.pressure = p.pressure;
     b.volume = p.volume;
     b.omegaLength = p.omegaLength;
     b.id = p.id;
@@ -159,7 +162,8 @@ public:
   {
     Vec3<Real>* vec[4] = {};
     Real *density = nullptr, *lambda = nullptr, *volume = nullptr, *omegaLength = nullptr;
-    Real *densityAlt = nullptr, *lambdaAlt = nullptr;
+    Real *pressure = nullptr;
+    Real *densityAlt = nullptr, *lambdaAlt = nullptr, *pressureAlt = nullptr;
     std::int64_t *id = nullptr, *idAlt = nullptr;
     CellKey* keys[2] = {};
     std::uint32_t* masks = nullptr;
@@ -176,7 +180,7 @@ private:
   {
     std::size_t vec[4] = {};
     std::size_t density = 0, lambda = 0, volume = 0, omegaLength = 0;
-    std::size_t densityAlt = 0, lambdaAlt = 0, id = 0, idAlt = 0;
+    std::size_t pressure = 0, densityAlt = 0, lambdaAlt = 0, pressureAlt = 0, id = 0, idAlt = 0;
     std::size_t keys[2] = {};
     std::size_t masks = 0, moved = 0;
     std::size_t list[kMaxParticleLists] = {};
@@ -200,10 +204,12 @@ private:
     const std::size_t scalar = capacity * sizeof(Real);
     l.density = place(scalar);
     l.lambda = place(scalar);
+    l.pressure = place(scalar);
     l.volume = a.volumes ? place(scalar) : 0;
     l.omegaLength = a.volumes ? place(scalar) : 0;
     l.densityAlt = a.alternates ? place(scalar) : 0;
     l.lambdaAlt = a.alternates ? place(scalar) : 0;
+    l.pressureAlt = a.alternates ? place(scalar) : 0;
     l.id = place(capacity * sizeof(std::int64_t));
     l.idAlt = a.alternates ? place(capacity * sizeof(std::int64_t)) : 0;
     l.keys[0] = place(capacity * sizeof(CellKey));
@@ -232,10 +238,12 @@ private:
     }
     q.density = static_cast<Real*>(at(l.density));
     q.lambda = static_cast<Real*>(at(l.lambda));
+    q.pressure = static_cast<Real*>(at(l.pressure));
     q.volume = a.volumes ? static_cast<Real*>(at(l.volume)) : nullptr;
     q.omegaLength = a.volumes ? static_cast<Real*>(at(l.omegaLength)) : nullptr;
     q.densityAlt = a.alternates ? static_cast<Real*>(at(l.densityAlt)) : nullptr;
     q.lambdaAlt = a.alternates ? static_cast<Real*>(at(l.lambdaAlt)) : nullptr;
+    q.pressureAlt = a.alternates ? static_cast<Real*>(at(l.pressureAlt)) : nullptr;
     q.id = static_cast<std::int64_t*>(at(l.id));
     q.idAlt = a.alternates ? static_cast<std::int64_t*>(at(l.idAlt)) : nullptr;
     q.keys[0] = static_cast<CellKey*>(at(l.keys[0]));

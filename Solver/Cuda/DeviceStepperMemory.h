@@ -188,6 +188,7 @@ void DeviceStepper<Real, Device>::copyInto(const SnapshotView<Out>& out) const
     copy(out.velocity, buffers_.vec[roles_.v], sizeof(Vec3<Real>));
     copy(out.density, buffers_.density, sizeof(Real));
     copy(out.lambda, buffers_.lambda, sizeof(Real));
+    copy(out.pressure, buffers_.pressure, sizeof(Real));
     copy(out.id, buffers_.id, sizeof(std::int64_t));
     device_->synchronize();
   }
@@ -201,12 +202,13 @@ void DeviceStepper<Real, Device>::copyOut(Snapshot<Out>& out) const
   out.velocity.resize(n_);
   out.density.resize(n_);
   out.lambda.resize(n_);
+  out.pressure.resize(n_);
   out.id.resize(n_);
   if constexpr (std::is_same<Out, Real>::value)
   {
     // Same precision (checkpoints): straight into the snapshot's vectors.
     copyInto(SnapshotView<Real>{ out.position.data(), out.velocity.data(), out.density.data(),
-      out.lambda.data(), out.id.data() });
+      out.lambda.data(), out.pressure.data(), out.id.data() });
   }
   else
   {
@@ -218,6 +220,7 @@ void DeviceStepper<Real, Device>::copyOut(Snapshot<Out>& out) const
       out.velocity[i] = Vec3<Out>::from(same.velocity[i]);
       out.density[i] = static_cast<Out>(same.density[i]);
       out.lambda[i] = static_cast<Out>(same.lambda[i]);
+      out.pressure[i] = static_cast<Out>(same.pressure[i]);
     }
     out.id = std::move(same.id);
   }
@@ -237,7 +240,7 @@ void DeviceStepper<Real, Device>::loadState(const Snapshot<In>& state)
   }
   const std::size_t n = state.id.size();
   if (state.position.size() != n || state.velocity.size() != n || state.density.size() != n ||
-    state.lambda.size() != n)
+    state.lambda.size() != n || state.pressure.size() != n)
   {
     throw InvalidInput("checkpoint arrays differ in length (" + std::to_string(n) + " ids)");
   }
@@ -258,6 +261,7 @@ void DeviceStepper<Real, Device>::loadState(const Snapshot<In>& state)
     device_->upload(buffers_.vec[roles_.v], state.velocity.data(), n * sizeof(Vec3<Real>));
     device_->upload(buffers_.density, state.density.data(), n * sizeof(Real));
     device_->upload(buffers_.lambda, state.lambda.data(), n * sizeof(Real));
+    device_->upload(buffers_.pressure, state.pressure.data(), n * sizeof(Real));
     device_->upload(buffers_.id, state.id.data(), n * sizeof(std::int64_t));
   }
   captureGraphs();

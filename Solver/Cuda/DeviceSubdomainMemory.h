@@ -45,6 +45,7 @@ DeviceSubdomainStepper<Real, Device>::hostState() const
   s.v.resize(n_);
   s.density.resize(n_);
   s.lambda.resize(n_);
+  s.pressure.resize(n_);
   s.id.resize(n_);
   if (n_ > 0)
   {
@@ -52,6 +53,7 @@ DeviceSubdomainStepper<Real, Device>::hostState() const
     device_->download(s.v.data(), vec_[vBuffer_], n_ * sizeof(Vec3<Real>));
     device_->download(s.density.data(), density_, n_ * sizeof(Real));
     device_->download(s.lambda.data(), lambda_, n_ * sizeof(Real));
+    device_->download(s.pressure.data(), pressure_, n_ * sizeof(Real));
     device_->download(s.id.data(), id_, n_ * sizeof(std::int64_t));
   }
   device_->synchronize();
@@ -63,7 +65,7 @@ template <class In>
 void DeviceSubdomainStepper<Real, Device>::loadState(const Snapshot<In>& state)
 {
   HostState s;
-  loadFromSnapshot(state, HostParticles<Real>{ s.x, s.v, s.density, s.lambda, s.id });
+  loadFromSnapshot(state, HostParticles<Real>{ s.x, s.v, s.density, s.lambda, s.pressure, s.id });
   device_->activate();
   device_->synchronize();
   const std::size_t n = s.id.size();
@@ -77,6 +79,7 @@ void DeviceSubdomainStepper<Real, Device>::loadState(const Snapshot<In>& state)
     device_->upload(vec_[vBuffer_], s.v.data(), n * sizeof(Vec3<Real>));
     device_->upload(density_, s.density.data(), n * sizeof(Real));
     device_->upload(lambda_, s.lambda.data(), n * sizeof(Real));
+    device_->upload(pressure_, s.pressure.data(), n * sizeof(Real));
     device_->upload(id_, s.id.data(), n * sizeof(std::int64_t));
   }
   device_->synchronize();
@@ -128,6 +131,8 @@ void DeviceSubdomainStepper<Real, Device>::adoptStore()
   lambda_ = p.lambda;
   densityAlt_ = p.densityAlt;
   lambdaAlt_ = p.lambdaAlt;
+  pressure_ = p.pressure;
+  pressureAlt_ = p.pressureAlt;
   id_ = p.id;
   idAlt_ = p.idAlt;
   keys_[0] = p.keys[0];

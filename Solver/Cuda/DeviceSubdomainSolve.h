@@ -269,6 +269,7 @@ void DeviceSubdomainStepper<Real, Device>::keepOwned(const Vec3<Real>* x,
   subdomain::gather<Real>(exec, n, ownedList_, v, vec_[toV]);
   subdomain::gather<Real>(exec, n, ownedList_, density_, densityAlt_);
   subdomain::gather<Real>(exec, n, ownedList_, lambda_, lambdaAlt_);
+  subdomain::gather<Real>(exec, n, ownedList_, pressure_, pressureAlt_);
   subdomain::gather<Real>(exec, n, ownedList_, id_, idAlt_);
   store_->swapAlternates();
   adoptStore();
@@ -300,6 +301,8 @@ void DeviceSubdomainStepper<Real, Device>::evaluateAtRest()
     false,
     detail::DensityPass{},
     detail::ListedParticles{ ownedList_ });
+  // No step has corrected these positions: no pressure yet.
+  exec.fillZero(pressure_, static_cast<std::size_t>(n_) * sizeof(Real));
   keepOwned(vec_[r.x], vec_[r.v], r.p, r.free);
   device_->synchronize();
   checkLists();

@@ -376,9 +376,9 @@ private:
   struct HostState
   {
     std::vector<Vec3<Real>> x, v;
-    std::vector<Real> density, lambda;
+    std::vector<Real> density, lambda, pressure;
     std::vector<std::int64_t> id;
-    ConstHostParticles<Real> view() const { return { x, v, density, lambda, id }; }
+    ConstHostParticles<Real> view() const { return { x, v, density, lambda, pressure, id }; }
   };
 
   using Clock = std::chrono::steady_clock;
@@ -414,6 +414,7 @@ private:
     }
     b.density = density_;
     b.lambda = lambda_;
+    b.pressure = pressure_;
     b.id = id_;
     b.keys[0] = keys_[0];
     b.keys[1] = keys_[1];
@@ -607,6 +608,7 @@ private:
   int xBuffer_ = 0, vBuffer_ = 1;
   Vec3<Real>* vec_[4] = {};
   Real *density_ = nullptr, *lambda_ = nullptr, *densityAlt_ = nullptr, *lambdaAlt_ = nullptr;
+  Real *pressure_ = nullptr, *pressureAlt_ = nullptr;
   AdaptiveState* adaptive_ = nullptr; // adaptive mode: this rank's reduction
   unsigned long long* healthBits_ = nullptr; // health(): three maxima as double bits
   double* blockSums_ = nullptr;

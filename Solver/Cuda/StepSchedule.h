@@ -99,6 +99,7 @@ struct StepBuffers
   Vec3<Real>* vec[4];
   Real* density;
   Real* lambda;            // also the sort's values (the permutation) until density is evaluated
+  Real* pressure;          // the step's pressure (recordPressure)
   Real* volume;            // m / rho_i for the vorticity passes; may be null (FluidView::volume)
   Real* omegaLength;       // |omega_i| for the confinement; may be null
   std::int64_t* id;
@@ -245,6 +246,7 @@ FluidView<Real, MaskedNeighbors<Real>> solverView(const StepBuffers<Real>& b,
   FluidView<Real, MaskedNeighbors<Real>> f{};
   f.density = b.density;
   f.lambda = b.lambda;
+  f.pressure = b.pressure;
   f.grid = MaskedNeighbors<Real>{ GridView<Real>{ k.geometry, b.cellOffsets, sortedKeys }, b.masks,
     b.stride, k.schedule.enabled != 0 };
   f.c = k.c;
@@ -549,6 +551,8 @@ void enqueueEvaluateAtRest(Exec& exec, const StepBuffers<Real>& b, const StepCon
   f.p = A;
   detail::firstPassOnPositions(exec, DensityStage<Real>{}, b, k, n, f, 0, false, detail::DensityPass{});
   exec.copy(B, C, static_cast<std::size_t>(n) * sizeof(Vec3<Real>));
+  // No step has corrected these positions: no pressure yet.
+  exec.fillZero(b.pressure, static_cast<std::size_t>(n) * sizeof(Real));
 }
 
 // Sorts the positions x (n particles) into cell order on a grid of their own, as statistics()

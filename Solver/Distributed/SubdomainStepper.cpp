@@ -102,6 +102,7 @@ void SubdomainStepper<Real>::append(const ParticleBatch& batch)
   }
   fluid_.density.resize(fluid_.x.size());
   fluid_.lambda.resize(fluid_.x.size());
+  fluid_.pressure.resize(fluid_.x.size());
   cut();
   evaluateAtRest();
 }
@@ -117,6 +118,8 @@ void SubdomainStepper<Real>::evaluateAtRest()
   const FluidView<Real> f = fluid_.view();
   forOwned([&](std::uint32_t i) { densityAndLambda(i, f); });
   dropGhosts();
+  // No step has corrected these positions: no pressure yet.
+  std::fill(fluid_.pressure.begin(), fluid_.pressure.end(), Real(0));
 }
 
 template <class Real>
@@ -155,6 +158,7 @@ void SubdomainStepper<Real>::migrate(bool byPrediction)
       fluid_.id[kept] = fluid_.id[i];
       fluid_.density[kept] = fluid_.density[i];
       fluid_.lambda[kept] = fluid_.lambda[i];
+      fluid_.pressure[kept] = fluid_.pressure[i];
       ++kept;
       continue;
     }
@@ -165,6 +169,7 @@ void SubdomainStepper<Real>::migrate(bool byPrediction)
     put(b, fluid_.id[i]);
     put(b, fluid_.density[i]);
     put(b, fluid_.lambda[i]);
+    put(b, fluid_.pressure[i]);
   }
   fluid_.x.resize(kept);
   fluid_.p.resize(kept);
@@ -172,6 +177,7 @@ void SubdomainStepper<Real>::migrate(bool byPrediction)
   fluid_.id.resize(kept);
   fluid_.density.resize(kept);
   fluid_.lambda.resize(kept);
+  fluid_.pressure.resize(kept);
   const std::vector<Bytes> in = communicator_.exchange(out);
   for (const Bytes& b : in)
   {
@@ -183,6 +189,7 @@ void SubdomainStepper<Real>::migrate(bool byPrediction)
       fluid_.id.push_back(take<std::int64_t>(b, offset));
       fluid_.density.push_back(take<Real>(b, offset));
       fluid_.lambda.push_back(take<Real>(b, offset));
+      fluid_.pressure.push_back(take<Real>(b, offset));
       ++exchange_.migrated;
     }
   }
@@ -234,6 +241,7 @@ void SubdomainStepper<Real>::receiveGhosts()
   exchange_.ghosts = n - owned;
   fluid_.density.resize(n);
   fluid_.lambda.resize(n);
+  fluid_.pressure.resize(n);
   fluid_.scratch.resize(n);
   fluid_.omega.resize(n);
   fluid_.keys.resize(n);
@@ -344,6 +352,7 @@ void SubdomainStepper<Real>::dropGhosts()
   keep(fluid_.id);
   keep(fluid_.density);
   keep(fluid_.lambda);
+  keep(fluid_.pressure);
   ghostFrom_.assign(owned, -1);
 }
 

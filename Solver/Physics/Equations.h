@@ -22,6 +22,7 @@ struct Coefficients
 {
   Kernels<Real> kernels;
   Real mass;                // m, calibrated so the initial lattice reads rho_0
+  Real pressureScale;       // rho_0 G: lambda / dt^2 to pressure (recordPressure)
   Real inverseRestDensity;  // 1 / rho_0
   Real massOverRho0;        // m / rho_0: scales the constraint gradient (eq. 8)
   Real relaxation;          // epsilon (eq. 11) times the bulk denominator
@@ -46,6 +47,7 @@ struct Coefficients
     Coefficients c;
     c.kernels = Kernels<Real>::make(h);
     c.mass = static_cast<Real>(m);
+    c.pressureScale = static_cast<Real>(p.restDensity * lattice.gradientMoment);
     c.inverseRestDensity = static_cast<Real>(1.0 / p.restDensity);
     c.massOverRho0 = static_cast<Real>(m / p.restDensity);
     c.relaxation = static_cast<Real>(p.relaxation * lattice.gradientSum);
@@ -121,6 +123,9 @@ struct FluidView
   // and a square root per pair and give the same bits.
   Real* volume;
   Real* omegaLength;
+  // Optional (null: not recorded): the pressure each particle's corrections of this step stand
+  // for (recordPressure), written by positionCorrection.
+  Real* pressure;
   Neighbors grid;
   Coefficients<Real> c;
   const StepTime<Real>* time; // this step's dt and what follows from it
@@ -353,6 +358,26 @@ PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real, N
   f.lambda[i] = -C * f.c.jacobiRelaxation / (sumGradJ2 + dot(gradI, gradI) + f.c.relaxation);
 }
 
+// The pressure p_i that the step's corrections of particle i stand for [Pa]. SPH's symmetric
+// pressure acceleration, -sum_j m (p_i + p_j) / rho_0^2 grad W_ij, moves a particle by dt^2 times
+// it in a step; eq. 14 moves it by (m / rho_0) sum_j (lambda_i + lambda_j) grad W_ij. The two
+// agree term by term when p_i = -rho_0 lambda_i / dt^2, summed over the projections that were
+// applied (a stopped solve applies none after it stops). That sum is then scaled by the
+// lattice's gradient moment G (LatticeCalibration::gradientMoment): the discrete gradient
+// reads G times a smooth field's, so water at rest holds itself up with 1 / G times rho_0 g d.
+// s_corr's push is not part of it: it is an artificial pressure between pairs, not a
+// particle's. The first projection (f.tensile) starts the sum.
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE void recordPressure(
+  std::uint32_t i, const FluidView<Real, Neighbors>& f, Real lambdaI)
+{
+  if (f.pressure)
+  {
+    const Real p = -f.c.pressureScale * lambdaI * f.time->inverseDt * f.time->inverseDt;
+    f.pressure[i] = f.tensile ? p : f.pressure[i] + p;
+  }
+}
+
 // Eq. 13 (s_corr, the artificial pressure against clustering) and eq. 14 (delta p_i). s_corr
 // enters in the step's first projection only, with this step's coefficient (StepTime::tensile).
 template <class Real, class Neighbors>
@@ -396,6 +421,7 @@ PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real,
     delta += solidShare(n, b, lambdaI, tensile);
   });
   f.scratch[i] = delta * f.c.massOverRho0;
+  recordPressure(i, f, lambdaI);
 }
 
 // What particle i pushes each solid with in this projection: the solid's share of its delta p_i

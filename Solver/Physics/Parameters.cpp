@@ -113,6 +113,7 @@ LatticeCalibration calibrateLattice(const Parameters& p)
   double gradient2 = 0.0;
   double tensile = 0.0;     // below a surface site: sites with j <= 0, pushing along +y
   double secondMoment = 0.0;
+  double firstMoment = 0.0;
   for (int i = -reach; i <= reach; ++i)
   {
     for (int j = -reach; j <= reach; ++j)
@@ -127,6 +128,7 @@ LatticeCalibration calibrateLattice(const Parameters& p)
         const Vec3d g = kernels.spikyGradient(r, r2);
         gradient2 += dot(g, g);
         secondMoment += w * r2;
+        firstMoment += dot(r, g);
         if (j <= 0 && r2 < kernels.h2 && r2 > 0.0)
         {
           tensile += std::pow(w / wDeltaQ, p.sCorrN) * -g.y;
@@ -142,6 +144,7 @@ LatticeCalibration calibrateLattice(const Parameters& p)
   c.gradientSum = massOverRho0 * massOverRho0 * gradient2;
   c.tensileSurfacePush = massOverRho0 * tensile;
   c.xsphSecondMoment = massOverRho0 * secondMoment / 6.0;
+  c.gradientMoment = -massOverRho0 * firstMoment / 3.0;
   return c;
 }
 

@@ -154,6 +154,11 @@ struct LatticeCalibration
   // beta h^2 = (1/6) sum_j (m / rho_0) W_ij |r_ij|^2 [m^2]: the XSPH sum of a smooth velocity
   // field is beta h^2 laplace(v), so a blend c per step is a viscosity c beta h^2 / dt.
   double xsphSecondMoment = 0;
+  // G = -(1/3) sum_j (m / rho_0) r_ij . grad W_ij: SPH's gradient of a linear field on the
+  // lattice is G times the exact one (G = 1 for the continuous kernel). A pressure that holds
+  // the fluid up against gravity through the discrete gradient is 1 / G times rho_0 g d, so
+  // the reported pressure is G times the corrections' (Equations.h's recordPressure).
+  double gradientMoment = 0;
   // The Jacobi projection's largest gain on the lattice, max over wave vectors k of
   // |G(k)|^2 / D, G(k) = sum_j grad W_ij sin(k . r_ij), D = sum_j |grad W_ij|^2: a correction
   // pattern of wave vector k is multiplied by 1 - omega |G(k)|^2 / D per projection, so omega

@@ -20,6 +20,8 @@ struct Snapshot
   std::vector<Vec3<Real>> velocity;
   std::vector<Real> density; // rho_i from the last constraint evaluation [kg/m^3]
   std::vector<Real> lambda;  // lambda_i from the last constraint evaluation
+  std::vector<Real> pressure; // p_i of the last step's corrections [Pa] (Equations.h's
+                              // recordPressure); 0 before a particle's first step
   std::vector<std::int64_t> id;
 };
 
@@ -32,6 +34,7 @@ struct SnapshotView
   Vec3<Real>* velocity = nullptr;
   Real* density = nullptr;
   Real* lambda = nullptr;
+  Real* pressure = nullptr;
   std::int64_t* id = nullptr;
 };
 

@@ -486,6 +486,7 @@ std::size_t SimulationCheckpoint::bytes() const
     [this](const auto& s) {
       return s.position.size() * sizeof(s.position[0]) + s.velocity.size() * sizeof(s.velocity[0]) +
         s.density.size() * sizeof(s.density[0]) + s.lambda.size() * sizeof(s.lambda[0]) +
+        s.pressure.size() * sizeof(s.pressure[0]) +
         s.id.size() * sizeof(s.id[0]) + layersEmitted.size() * sizeof(std::int64_t) +
         bodyStates.size() * sizeof(RigidState) + bodyLoads.size() * sizeof(SolidLoad);
     },

@@ -60,6 +60,7 @@ void readThroughSnapshot(const Stepper& stepper, const SnapshotView<Real>& out)
   copy(snapshot.velocity, out.velocity);
   copy(snapshot.density, out.density);
   copy(snapshot.lambda, out.lambda);
+  copy(snapshot.pressure, out.pressure);
   copy(snapshot.id, out.id);
 }
 

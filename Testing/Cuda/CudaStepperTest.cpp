@@ -142,6 +142,8 @@ TEST(CudaStepper, OneStepMatchesSerialInDoublePrecision)
   const Outcome serial = run("dam_break", Backend::Serial, Precision::Double, 0.02, 1);
   const Outcome gpu = run("dam_break", Backend::CUDA, Precision::Double, 0.02, 1);
   EXPECT_LE(test::maxRelativePositionError(gpu.state, serial.state), 1e-12);
+  // The pressure is lambda's sum over the projections, rounded alike: 1e-9 of its largest value.
+  EXPECT_LE(test::maxRelativePressureError(gpu.state, serial.state), 1e-9);
   // Statistics are computed on the GPU: the same formulas, summed in another order (1e-15
   // relative), so 1e-9 relative for the quantities that vary continuously with the positions.
   const Statistics& g = gpu.statistics;

@@ -47,7 +47,8 @@ void expectBitIdentical(const Snapshot<double>& a, const Snapshot<double>& b)
     differ += std::memcmp(&a.position[i], &b.position[j], sizeof(Vec3d)) != 0 ||
       std::memcmp(&a.velocity[i], &b.velocity[j], sizeof(Vec3d)) != 0 ||
       std::memcmp(&a.density[i], &b.density[j], sizeof(double)) != 0 ||
-      std::memcmp(&a.lambda[i], &b.lambda[j], sizeof(double)) != 0;
+      std::memcmp(&a.lambda[i], &b.lambda[j], sizeof(double)) != 0 ||
+      std::memcmp(&a.pressure[i], &b.pressure[j], sizeof(double)) != 0;
   }
   EXPECT_EQ(differ, 0u) << "particles with a different bit";
 }

@@ -180,7 +180,8 @@ bool Sane(vtkPolyData* data, std::string& why)
   }
   for (vtkDataArray* array :
     { data->GetPoints()->GetData(), data->GetPointData()->GetArray("velocity"),
-      data->GetPointData()->GetArray("density"), data->GetPointData()->GetArray("lambda") })
+      data->GetPointData()->GetArray("density"), data->GetPointData()->GetArray("lambda"),
+      data->GetPointData()->GetArray("pressure") })
   {
     const vtkIdType values = array->GetNumberOfValues();
     for (vtkIdType k = 0; k < values; ++k)

@@ -44,6 +44,7 @@ def check_structure(source, time, precision):
            "%s precision points are %s" % (precision, data.GetPoints().GetData().GetClassName()))
     point_data = data.GetPointData()
     for name, components, kind in (("density", 1, real), ("lambda", 1, real),
+                                   ("pressure", 1, real),
                                    ("velocity", 3, real), ("id", 1, "vtkIdTypeArray")):
         array = point_data.GetArray(name)
         expect(array is not None, "point array %s is missing" % name)
@@ -118,5 +119,11 @@ expect(speed.max() < 4.0, "max speed %.3f m/s" % speed.max())
 expect(later["velocity"][:, 1].mean() < -0.05,
        "the column is not falling: mean v_y = %.3f m/s" % later["velocity"][:, 1].mean())
 expect(numpy.count_nonzero(later["lambda"]) > 0, "lambda is zero everywhere")
+# The pressure is the step's corrections' (recordPressure): none before the first step, and never
+# negative where the constraint is unilateral (lambda <= 0 wherever it acts).
+expect(numpy.all(initial["pressure"] == 0), "frame 0 has a pressure before any step")
+expect(T.finite(later["pressure"]) and numpy.all(later["pressure"] >= 0),
+       "pressure at frame 6 is negative or not finite (min %g)" % later["pressure"].min())
+expect(numpy.count_nonzero(later["pressure"]) > 0, "pressure is zero everywhere at frame 6")
 
 T.passed("Arrays")

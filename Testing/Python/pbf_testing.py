@@ -163,7 +163,7 @@ def particles_of(data):
         "step": int(field_value(data, "StepCount")),
         "frame": int(field_value(data, "Frame")),
     }
-    for name in ("density", "lambda", "velocity"):
+    for name in ("density", "lambda", "pressure", "velocity"):
         result[name] = numpy_support.vtk_to_numpy(point_data.GetArray(name))[order].copy()
     return result
 
@@ -172,7 +172,7 @@ def expect_identical(a, b, what):
     """Bit-identical frames: same ids, and every array equal element by element."""
     expect(a["n"] == b["n"], "%s: %d particles vs %d" % (what, a["n"], b["n"]))
     expect(numpy.array_equal(a["id"], b["id"]), "%s: the particle ids differ" % what)
-    for name in ("points", "velocity", "density", "lambda"):
+    for name in ("points", "velocity", "density", "lambda", "pressure"):
         if not numpy.array_equal(a[name], b[name]):
             worst = numpy.max(numpy.abs(a[name].astype(float) - b[name].astype(float)))
             raise TestFailure("%s: %s differs (max |difference| %g)" % (what, name, worst))

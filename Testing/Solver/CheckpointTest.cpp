@@ -29,7 +29,8 @@ bool sameBits(const Simulation& a, const Simulation& b)
     std::memcmp(x.position.data(), y.position.data(), n * sizeof(x.position[0])) == 0 &&
     std::memcmp(x.velocity.data(), y.velocity.data(), n * sizeof(x.velocity[0])) == 0 &&
     std::memcmp(x.density.data(), y.density.data(), n * sizeof(x.density[0])) == 0 &&
-    std::memcmp(x.lambda.data(), y.lambda.data(), n * sizeof(x.lambda[0])) == 0;
+    std::memcmp(x.lambda.data(), y.lambda.data(), n * sizeof(x.lambda[0])) == 0 &&
+    std::memcmp(x.pressure.data(), y.pressure.data(), n * sizeof(x.pressure[0])) == 0;
 }
 
 } // namespace

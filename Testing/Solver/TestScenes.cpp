@@ -100,6 +100,28 @@ double maxRelativePositionError(const Snapshot<double>& a, const Snapshot<double
   return worst;
 }
 
+double maxRelativePressureError(const Snapshot<double>& a, const Snapshot<double>& b)
+{
+  const auto index = indexById(b);
+  double scale = 0, worst = 0;
+  for (double p : b.pressure)
+  {
+    scale = std::max(scale, std::abs(p));
+  }
+  for (std::size_t i = 0; i < a.id.size(); ++i)
+  {
+    const auto it = index.find(a.id[i]);
+    if (it == index.end())
+    {
+      ADD_FAILURE() << "particle id " << a.id[i] << " missing";
+      return INFINITY;
+    }
+    const double error = std::abs(a.pressure[i] - b.pressure[it->second]) / scale;
+    worst = std::isnan(error) ? INFINITY : std::max(worst, error);
+  }
+  return worst;
+}
+
 Snapshot<double> joined(const std::vector<Snapshot<double>>& parts)
 {
   Snapshot<double> all;
@@ -109,6 +131,7 @@ Snapshot<double> joined(const std::vector<Snapshot<double>>& parts)
     all.velocity.insert(all.velocity.end(), part.velocity.begin(), part.velocity.end());
     all.density.insert(all.density.end(), part.density.begin(), part.density.end());
     all.lambda.insert(all.lambda.end(), part.lambda.begin(), part.lambda.end());
+    all.pressure.insert(all.pressure.end(), part.pressure.begin(), part.pressure.end());
     all.id.insert(all.id.end(), part.id.begin(), part.id.end());
   }
   return all;

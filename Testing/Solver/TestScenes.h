@@ -44,6 +44,10 @@ std::map<std::int64_t, std::size_t> indexById(const Snapshot<double>& snapshot);
 // failure for a count that differs, an id twice in a, or an id of a missing from b.
 double maxRelativePositionError(const Snapshot<double>& a, const Snapshot<double>& b);
 
+// Largest |p_a - p_b| over particles matched by id, over b's largest |p| (the pressure's scale:
+// a particle's own pressure may be 0). Infinity for a NaN or a particle missing from b.
+double maxRelativePressureError(const Snapshot<double>& a, const Snapshot<double>& b);
+
 // The ranks' states one after the other, as one state (a decomposed run's particles).
 Snapshot<double> joined(const std::vector<Snapshot<double>>& parts);
 
@@ -57,6 +61,7 @@ void expectBitIdentical(const Snapshot<Real>& a, const Snapshot<Real>& b)
   EXPECT_EQ(std::memcmp(a.velocity.data(), b.velocity.data(), n * sizeof(a.velocity[0])), 0);
   EXPECT_EQ(std::memcmp(a.density.data(), b.density.data(), n * sizeof(a.density[0])), 0);
   EXPECT_EQ(std::memcmp(a.lambda.data(), b.lambda.data(), n * sizeof(a.lambda[0])), 0);
+  EXPECT_EQ(std::memcmp(a.pressure.data(), b.pressure.data(), n * sizeof(a.pressure[0])), 0);
 }
 
 // The dam break with a box solid cutting into the column (its fluid removed, the rest touching
