@@ -427,15 +427,7 @@ void SubdomainStepper<Real>::findNeighbours()
 template <class Real>
 std::vector<double> SubdomainStepper<Real>::sumOverRanks(const std::vector<double>& mine)
 {
-  std::vector<double> total(mine.size(), 0.0);
-  for (const std::vector<double>& r : allGather(communicator_, mine))
-  {
-    for (std::size_t k = 0; k < total.size(); ++k)
-    {
-      total[k] += r[k];
-    }
-  }
-  return total;
+  return sumInRankOrder(communicator_, mine);
 }
 
 template <class Real>

@@ -34,6 +34,24 @@ std::vector<std::vector<double>> allGather(Communicator& communicator, const std
   return all;
 }
 
+std::vector<double> sumInRankOrder(Communicator& communicator, const std::vector<double>& mine)
+{
+  std::vector<double> total(mine.size(), 0.0);
+  for (const std::vector<double>& r : allGather(communicator, mine))
+  {
+    if (r.size() != total.size())
+    {
+      throw std::runtime_error("sumInRankOrder: a rank sent " + std::to_string(r.size()) +
+        " values, this one " + std::to_string(total.size()));
+    }
+    for (std::size_t k = 0; k < total.size(); ++k)
+    {
+      total[k] += r[k];
+    }
+  }
+  return total;
+}
+
 namespace
 {
 

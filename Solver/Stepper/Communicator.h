@@ -103,6 +103,9 @@ public:
 // rank gets the same bits whatever the timing.
 std::vector<std::vector<double>> allGather(Communicator& communicator, const std::vector<double>& mine);
 
+// Collective: the values summed over the ranks in rank order (every rank sends as many).
+std::vector<double> sumInRankOrder(Communicator& communicator, const std::vector<double>& mine);
+
 // Appends and reads plain values (particle fields) in a byte buffer.
 template <class T>
 void put(Bytes& buffer, const T& value)

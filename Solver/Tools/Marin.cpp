@@ -1,6 +1,6 @@
 #include "Marin.h"
 
-#include "Kernels.h"
+#include "Probes.h"
 #include "Scene.h"
 
 #include <cmath>
@@ -67,35 +67,16 @@ double waterHeight(const Simulation& simulation, const Gauge& gauge, double wet)
   Snapshot<double> state;
   simulation.stepper().read(state);
   const Parameters& p = simulation.parameters();
-  const double h = p.smoothingLength(), s = p.particleSpacing;
-  const Kernels<double> kernels = Kernels<double>::make(h);
-  const double volume = calibratedParticleMass(p) / p.restDensity;
-  // The particles within h of the gauge's line, then the fraction along it.
-  std::vector<Vec3d> near;
-  for (const Vec3d& x : state.position)
-  {
-    const double dx = x.x - gauge.x, dz = x.z - gauge.z;
-    if (dx * dx + dz * dz < h * h)
-    {
-      near.push_back(x);
-    }
-  }
-  const double dy = 0.25 * s;
-  double wetted = 0;
-  for (double y = p.domain.min.y + 0.5 * dy; y < p.domain.max.y; y += dy)
-  {
-    const Vec3d q{ gauge.x, y, gauge.z };
-    double fraction = 0;
-    for (const Vec3d& x : near)
-    {
-      const Vec3d r = q - x;
-      fraction += volume * kernels.poly6(dot(r, r));
-    }
-    // The floor halves the fraction of the lowest layer (no mirror images here): count the
-    // bottom s / 2 as wet whenever the layer above it is.
-    wetted += fraction > wet || (y < p.domain.min.y + 0.5 * s && fraction > 0.5 * wet) ? dy : 0.0;
-  }
-  return wetted;
+  // The gauge is a probe on the floor (Surface/Probes.h): what a Probes input reads in ParaView.
+  const ParticleSums sums(p, state.position.data(), state.velocity.data(), state.pressure.data(),
+    state.position.size());
+  const Vec3d probe{ gauge.x, p.domain.min.y, gauge.z };
+  std::vector<Vec3d> points = gaugeColumn(p, probe);
+  points.insert(points.begin(), probe);
+  std::vector<double> values;
+  sums.at(points, values);
+  return readProbe(p, probe, values.data(), values.data() + kProbeSums, points.size() - 1, wet)
+    .waterHeight;
 }
 
 MarinRun runMarin(const Parameters& parameters, Backend backend, Precision precision,

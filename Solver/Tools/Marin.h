@@ -30,10 +30,11 @@ struct TimeSeries
 // A measured record: a first line of '#' (the set-up and the source), a header "t,value", rows.
 TimeSeries readGaugeRecord(const std::string& csvPath);
 
-// The water height at the gauge: along the vertical line through it, the length over which the
-// fluid fraction sum_j (m / rho_0) W_poly6(|y - x_j|, h) exceeds `wet` (1/2 unless a study asks
-// for another; sampled every s / 4). Air pockets and drops above the free surface count only for
-// what they occupy, as a wave gauge's wire measures the wetted length.
+// The water height at the gauge: a probe on the floor below it (Surface/Probes.h's readProbe):
+// along the vertical line, the length over which the fluid fraction
+// sum_j (m / rho_0) W_poly6(|y - x_j|, h) exceeds `wet` (1/2 unless a study asks for another;
+// sampled every s / 4). Air pockets and drops above the free surface count only for what they
+// occupy, as a wave gauge's wire measures the wetted length.
 constexpr double kWetFraction = 0.5;
 double waterHeight(const Simulation& simulation, const Gauge& gauge, double wet = kWetFraction);
 
