@@ -4,11 +4,11 @@
 #include "vtkAbstractArray.h"
 #include "vtkAppendPolyData.h"
 #include "vtkCellArray.h"
-#include "vtkCubeSource.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
 #include "vtkFloatArray.h"
 #include "vtkIdTypeArray.h"
+#include "vtkIntArray.h"
 #include "vtkNew.h"
 #include "vtkOutlineSource.h"
 #include "vtkPointData.h"
@@ -17,6 +17,7 @@
 #include "vtkSphereSource.h"
 #include "vtkStringArray.h"
 #include "vtkTable.h"
+#include "vtkTessellatedBoxSource.h"
 #include "vtkTransform.h"
 #include "vtkTransformPolyDataFilter.h"
 #include "vtkTypeInt64Array.h"
@@ -30,6 +31,7 @@
 #include "SurfaceExtraction.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <initializer_list>
 #include <limits>
@@ -504,21 +506,45 @@ vtkSmartPointer<vtkPolyData> vtkPBFOutput::Surface(
 
 //------------------------------------------------------------------------------
 vtkSmartPointer<vtkPolyData> vtkPBFOutput::DomainOutline(const pbf::Box& box,
-  const pbf::Scene& scene, const std::vector<pbf::SolidPose>& poses)
+  const pbf::Scene& scene, const std::vector<pbf::SolidPose>& poses, double spacing)
 {
   vtkNew<vtkAppendPolyData> all;
+  // Each piece with a point array `Solid`: the index of the solid it draws, -1 for the outline.
+  const auto tagged = [&all](vtkAlgorithm* piece, int solid) {
+    piece->Update();
+    vtkNew<vtkPolyData> copy;
+    copy->ShallowCopy(piece->GetOutputDataObject(0));
+    vtkNew<vtkIntArray> index;
+    index->SetName("Solid");
+    index->SetNumberOfTuples(copy->GetNumberOfPoints());
+    index->FillValue(solid);
+    copy->GetPointData()->AddArray(index);
+    all->AddInputData(copy);
+  };
   vtkNew<vtkOutlineSource> outline;
   outline->SetBounds(box.min.x, box.max.x, box.min.y, box.max.y, box.min.z, box.max.z);
-  all->AddInputConnection(outline->GetOutputPort());
+  tagged(outline, -1);
   for (std::size_t k = 0; k < scene.solids.size(); ++k)
   {
     const pbf::SolidRegion& solid = scene.solids[k];
     vtkNew<vtkAppendPolyData> shape;
     if (solid.kind == pbf::SolidRegion::Kind::Box)
     {
-      vtkNew<vtkCubeSource> cube;
+      vtkNew<vtkTessellatedBoxSource> cube;
       cube->SetBounds(solid.box.min.x, solid.box.max.x, solid.box.min.y, solid.box.max.y,
         solid.box.min.z, solid.box.max.z);
+      // The longest edge of the part within the domain, cut every spacing or so (at most 100
+      // times: a floor slab far wider than the tank stays light).
+      const auto within = [](double lo, double hi, double domainLo, double domainHi) {
+        return std::min(hi, domainHi) - std::max(lo, domainLo);
+      };
+      const double longest =
+        std::max({ within(solid.box.min.x, solid.box.max.x, box.min.x, box.max.x),
+          within(solid.box.min.y, solid.box.max.y, box.min.y, box.max.y),
+          within(solid.box.min.z, solid.box.max.z, box.min.z, box.max.z), 0.0 });
+      const double cuts = spacing > 0 ? std::ceil(longest / spacing) : 1.0;
+      cube->SetLevel(static_cast<int>(std::min(std::max(cuts - 1.0, 0.0), 99.0)));
+      cube->QuadsOn();
       shape->AddInputConnection(cube->GetOutputPort());
     }
     else if (solid.kind == pbf::SolidRegion::Kind::Sphere)
@@ -530,8 +556,9 @@ vtkSmartPointer<vtkPolyData> vtkPBFOutput::DomainOutline(const pbf::Box& box,
       sphere->SetPhiResolution(32);
       shape->AddInputConnection(sphere->GetOutputPort());
     }
-    else if (!solid.file.empty())
+    else if (!solid.mesh.triangles.empty())
     {
+      // A mesh file's or the Obstacles port's surface.
       vtkNew<vtkPoints> points;
       for (const pbf::Vec3d& p : solid.mesh.points)
       {
@@ -566,7 +593,7 @@ vtkSmartPointer<vtkPolyData> vtkPBFOutput::DomainOutline(const pbf::Box& box,
       transform->SetMatrix(matrix);
     }
     placed->SetTransform(transform);
-    all->AddInputConnection(placed->GetOutputPort());
+    tagged(placed, static_cast<int>(k));
   }
 
   all->Update();

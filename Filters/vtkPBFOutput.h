@@ -54,11 +54,13 @@ public:
   static vtkSmartPointer<vtkTable> DiagnosticsTable(
     const std::map<int, pbf::FrameRow>& rows, bool loadImbalance);
 
-  // The 12 edges of the domain and the surfaces of the scene's own obstacles (the JSON's boxes,
-  // spheres and mesh files: those of the Obstacles port are the user's to show), with field data
-  // Scene.
+  // The 12 edges of the domain and the surfaces of every solid (the scene's boxes, spheres and
+  // mesh files, and the Obstacles port's), each placed at its pose, with field data Scene and a
+  // point array Solid (the solid's index in the scene, -1 on the outline). A
+  // box's faces are cut in squares of about `spacing` (the part within the domain), so that a
+  // point array sampled at the points (the pressure) varies over a face.
   static vtkSmartPointer<vtkPolyData> DomainOutline(const pbf::Box& box, const pbf::Scene& scene,
-    const std::vector<pbf::SolidPose>& poses = {});
+    const std::vector<pbf::SolidPose>& poses, double spacing);
 
   // The fluid's surface (port 3): its triangles, Normals, velocity (the active vectors) and
   // density (the active scalars), and field data SurfaceTriangles, SurfaceMilliseconds,

@@ -13,6 +13,7 @@
 #include "vtkTable.h"
 
 #include "vtkPBFOutput.h"
+#include "vtkPBFProbes.h"
 
 #include "ParameterTable.h"
 #include "Parameters.h"
@@ -66,12 +67,14 @@ vtkPBFSimulation::vtkPBFSimulation()
   this->DecomposeAcrossRanks = true;
   this->Precision = PRECISION_SINGLE;
 
-  // Port 0 is optional: without an input the algorithm is a source. Port 1: the obstacles.
-  this->SetNumberOfInputPorts(2);
+  // Port 0 is optional: without an input the algorithm is a source. Port 1: the obstacles;
+  // port 2: the probes.
+  this->SetNumberOfInputPorts(3);
   // Port 0: the particles of the frame; port 1: the diagnostics table; port 2: the outline of
-  // the domain (the tank), so that a view shows and frames the whole of it from frame 0 on;
-  // port 3: the fluid's surface, when asked for.
-  this->SetNumberOfOutputPorts(4);
+  // the domain (the tank) with the solids where they stand, so that a view shows and frames the
+  // whole of it from frame 0 on; port 3: the fluid's surface, when asked for; port 4: the
+  // probes' table.
+  this->SetNumberOfOutputPorts(5);
 }
 
 //------------------------------------------------------------------------------
@@ -127,6 +130,13 @@ int vtkPBFSimulation::FillInputPortInformation(int port, vtkInformation* info)
     info->Set(vtkAlgorithm::INPUT_IS_REPEATABLE(), 1);
     return 1;
   }
+  if (port == 2)
+  {
+    // The probes: the points of any dataset.
+    info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkDataSet");
+    info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
+    return 1;
+  }
   if (port != 0)
   {
     return 0;
@@ -145,7 +155,7 @@ void vtkPBFSimulation::RemoveAllObstacles()
 //------------------------------------------------------------------------------
 int vtkPBFSimulation::FillOutputPortInformation(int port, vtkInformation* info)
 {
-  if (port == 1)
+  if (port == 1 || port == 4)
   {
     info->Set(vtkDataObject::DATA_TYPE_NAME(), "vtkTable");
     return 1;
@@ -226,12 +236,13 @@ int vtkPBFSimulation::RequestUpdateExtent(
   // that a collective upstream filter sees the same request everywhere; only piece 0 simulates.
   // The fluid's points are the initial state, read at their first time, so playing the animation
   // does not re-execute them; the obstacles are read at the frame's time, so that one that moves
-  // with time (a reader's time steps) is seen where it is (vtkPBFObstacleMotion.h).
+  // with time (a reader's time steps) is seen where it is (vtkPBFObstacleMotion.h); the probes
+  // likewise.
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
   const bool timed = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
   const double frameTime =
     timed ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()) : 0.0;
-  for (int port = 0; port < 2; ++port)
+  for (int port = 0; port < 3; ++port)
   {
     for (int c = 0; c < this->GetNumberOfInputConnections(port); ++c)
     {
@@ -243,7 +254,7 @@ int vtkPBFSimulation::RequestUpdateExtent(
         inInfo->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) > 0)
       {
         inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP(),
-          port == 1 && timed ? frameTime
+          port > 0 && timed ? frameTime
                              : inInfo->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS())[0]);
       }
       else
@@ -262,6 +273,7 @@ int vtkPBFSimulation::RequestData(
   const int result = this->RequestFrame(request, inputVector, outputVector);
   this->RequestDomain(outputVector);
   const int surface = this->RequestSurface(outputVector);
+  this->RequestProbes(inputVector, outputVector);
   return result && surface;
 }
 
@@ -356,17 +368,21 @@ void vtkPBFSimulation::RequestDomain(vtkInformationVector* outputVector)
   vtkPolyData* domain = vtkPolyData::GetData(outputVector, 2);
   vtkPolyData* particles = vtkPolyData::GetData(outputVector, 0);
   const pbf::Simulation* live = internals.Playback.live();
-  // Built once a run, or at every frame while a solid moves (keyframes or a body the fluid
-  // moves), where the solids stand at the frame.
-  const std::vector<pbf::SolidPose> poses =
-    live ? live->solidPoses(live->time()) : std::vector<pbf::SolidPose>();
+  // Built once a run without solids; with solids, at every frame, where they stand at the frame
+  // and with the pressure the frame's particles put on them.
+  const bool solids = live && !live->scene().solids.empty();
   if (live &&
-    (!poses.empty() || !(internals.DomainBuilt && internals.DomainKey == internals.Playback.key())))
+    (solids || !(internals.DomainBuilt && internals.DomainKey == internals.Playback.key())))
   {
-    internals.Domain =
-      vtkPBFOutput::DomainOutline(live->parameters().domain, live->scene(), poses);
+    internals.Domain = vtkPBFOutput::DomainOutline(live->parameters().domain, live->scene(),
+      live->solidPoses(live->time()), live->parameters().particleSpacing);
     internals.DomainKey = internals.Playback.key();
     internals.DomainBuilt = true;
+    if (solids)
+    {
+      vtkPBFAddSurfacePressure(internals.Domain, particles, live->parameters(),
+        live->surfaceSolids(live->time()), internals.DecomposedRanks());
+    }
   }
   // One outline for the whole run: rank 0's (the others would only draw it again).
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
@@ -420,6 +436,46 @@ int vtkPBFSimulation::RequestSurface(vtkInformationVector* outputVector)
   surface->GetInformation()->Set(
     vtkDataObject::DATA_TIME_STEP(), shown->Get(vtkDataObject::DATA_TIME_STEP()));
   return 1;
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFSimulation::RequestProbes(
+  vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkTable* table = vtkTable::GetData(outputVector, 4);
+  vtkPolyData* particles = vtkPolyData::GetData(outputVector, 0);
+  vtkPBFSimulationInternals& internals = *this->Internals;
+  const pbf::Simulation* live = internals.Playback.live();
+  vtkDataSet* probes = this->GetNumberOfInputConnections(2) > 0
+    ? vtkDataSet::GetData(inputVector[2]->GetInformationObject(0))
+    : nullptr;
+  // One table for the whole run: rank 0's (a decomposed run's ranks all sum their particles).
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  const bool first = !controller || controller->GetLocalProcessId() == 0;
+  table->Initialize();
+  if (probes && live)
+  {
+    std::vector<vtkIdType> outside;
+    vtkSmartPointer<vtkTable> rows = vtkPBFProbeTable(
+      probes, particles, live->parameters(), internals.DecomposedRanks(), outside);
+    if (first)
+    {
+      table->ShallowCopy(rows);
+    }
+    const std::string said = vtkPBFDescribeProbes(probes, outside);
+    if (first && !outside.empty() && said != internals.ProbesOutsideSaid)
+    {
+      vtkWarningMacro(<< "Probes: " << said
+                      << " outside the domain: their rows read NaN (the run goes on)");
+    }
+    internals.ProbesOutsideSaid = said;
+  }
+  vtkInformation* shown = particles->GetInformation();
+  if (shown->Has(vtkDataObject::DATA_TIME_STEP()))
+  {
+    table->GetInformation()->Set(
+      vtkDataObject::DATA_TIME_STEP(), shown->Get(vtkDataObject::DATA_TIME_STEP()));
+  }
 }
 
 //------------------------------------------------------------------------------

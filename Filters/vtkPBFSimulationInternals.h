@@ -116,6 +116,14 @@ public:
   // it has one (pvbatch under mpiexec, a pvserver), so that a rank whose GPU faults stops every
   // rank with its error (Distributed/RankFailure.h).
   std::unique_ptr<pbf::distributed::Communicator> Ranks;
+  // Ranks when the live run is decomposed (its key has ranks > 1), null otherwise: the ranks that
+  // sum the particles a probe or a solid's surface reads.
+  pbf::distributed::Communicator* DecomposedRanks()
+  {
+    return this->Playback.key().ranks > 1 ? this->Ranks.get() : nullptr;
+  }
+  // The probes outside the domain last warned about (vtkPBFDescribeProbes), said once.
+  std::string ProbesOutsideSaid;
 
   // CUDA is probed once: a device does not come and go while ParaView runs.
   bool CudaProbed = false;

@@ -1,5 +1,6 @@
 #include "Probes.h"
 
+#include "Boundary.h"
 #include "CellSort.h"
 #include "Grid.h"
 #include "Kernels.h"
@@ -50,44 +51,92 @@ template ParticleSums::ParticleSums(
 template ParticleSums::ParticleSums(
   const Parameters&, const Vec3<double>*, const Vec3<double>*, const double*, std::size_t);
 
+template <class Visit>
+void ParticleSums::forEachNear(const Vec3d& q, Visit&& visit) const
+{
+  const GridGeometry<double> grid = makeGridGeometry<double>(parameters_.domain, h_);
+  const int cx = grid.clampedCell(q.x, origin_.x, nx_);
+  const int cy = grid.clampedCell(q.y, origin_.y, ny_);
+  const int cz = grid.clampedCell(q.z, origin_.z, nz_);
+  for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, nz_ - 1); ++z)
+  {
+    for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, ny_ - 1); ++y)
+    {
+      for (int x = std::max(cx - 1, 0); x <= std::min(cx + 1, nx_ - 1); ++x)
+      {
+        const std::size_t cell = (static_cast<std::size_t>(z) * ny_ + y) * nx_ + x;
+        for (std::uint32_t k = cellOffsets_[cell]; k < cellOffsets_[cell + 1]; ++k)
+        {
+          visit(k);
+        }
+      }
+    }
+  }
+}
+
 void ParticleSums::at(const std::vector<Vec3d>& points, std::vector<double>& out) const
 {
   const Kernels<double> kernels = Kernels<double>::make(h_);
-  const GridGeometry<double> grid = makeGridGeometry<double>(parameters_.domain, h_);
   for (const Vec3d& q : points)
   {
     double sums[kProbeSums] = {};
     if (insideDomain(parameters_, q))
     {
-      const int cx = grid.clampedCell(q.x, origin_.x, nx_);
-      const int cy = grid.clampedCell(q.y, origin_.y, ny_);
-      const int cz = grid.clampedCell(q.z, origin_.z, nz_);
-      for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, nz_ - 1); ++z)
-      {
-        for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, ny_ - 1); ++y)
+      forEachNear(q, [&](std::uint32_t k) {
+        const Vec3d r = q - x_[k];
+        const double r2 = dot(r, r);
+        if (r2 < h2_)
         {
-          for (int x = std::max(cx - 1, 0); x <= std::min(cx + 1, nx_ - 1); ++x)
+          const double w = volume_ * kernels.poly6(r2);
+          sums[0] += w;
+          for (std::size_t c = 0; c < 4; ++c)
           {
-            const std::size_t cell = (static_cast<std::size_t>(z) * ny_ + y) * nx_ + x;
-            for (std::uint32_t k = cellOffsets_[cell]; k < cellOffsets_[cell + 1]; ++k)
-            {
-              const Vec3d r = q - x_[k];
-              const double r2 = dot(r, r);
-              if (r2 < h2_)
-              {
-                const double w = volume_ * kernels.poly6(r2);
-                sums[0] += w;
-                for (std::size_t c = 0; c < 4; ++c)
-                {
-                  sums[1 + c] += w * values_[4 * k + c];
-                }
-              }
-            }
+            sums[1 + c] += w * values_[4 * k + c];
           }
         }
-      }
+      });
     }
     out.insert(out.end(), sums, sums + kProbeSums);
+  }
+}
+
+void ParticleSums::onSolids(const SurfaceSolids& solids, const std::vector<Vec3d>& points,
+  const std::vector<int>& solidOf, std::vector<double>& out) const
+{
+  const BoundaryTableData data = makeBoundaryTable(parameters_);
+  const std::vector<double> packed = data.packed<double>();
+  const BoundaryTable<double> table = data.view(packed.data());
+  const double pressToForce =
+    2.0 * volume_ * volume_ / calibrateLattice(parameters_).gradientMoment;
+  const double pi = 3.14159265358979323846;
+  const double kernel2D = 4.0 / (pi * h2_);
+  for (std::size_t q = 0; q < points.size(); ++q)
+  {
+    const int o = solidOf[q];
+    double sum = 0;
+    if (o >= 0 && static_cast<std::size_t>(o) < solids.views.size() &&
+      insideDomain(parameters_, points[q]))
+    {
+      const DistanceGridView<double>& solid = solids.views[static_cast<std::size_t>(o)];
+      Vec3d gradient;
+      solid.at(points[q], &gradient);
+      const double g = length(gradient);
+      const Vec3d n = g > 0 ? gradient * (1.0 / g) : Vec3d{ 0, 0, 0 };
+      forEachNear(points[q], [&](std::uint32_t k) {
+        const Vec3d r = x_[k] - points[q];
+        const double along = dot(r, n);
+        const double t2 = dot(r, r) - along * along;
+        const double d = solid.at(x_[k], nullptr);
+        if (t2 < h2_ && d < h_)
+        {
+          // The table's spiky sum is negative (it points into the solid): pressing is -spiky.
+          const double force = -pressToForce * sampleBoundary(table, d).spiky * values_[4 * k];
+          const double fade = 1.0 - t2 / h2_;
+          sum += force * kernel2D * fade * fade * fade;
+        }
+      });
+    }
+    out.push_back(sum);
   }
 }
 

@@ -6,6 +6,7 @@
 #pragma once
 
 #include "Parameters.h"
+#include "SurfaceTypes.h"
 #include "Vec3.h"
 
 #include <cstddef>
@@ -32,7 +33,24 @@ public:
   // The kProbeSums sums at each point, appended to `out` (points outside the domain read 0).
   void at(const std::vector<Vec3d>& points, std::vector<double>& out) const;
 
+  // The pressure on the solids' surfaces [Pa], one value per point appended to `out`: points[k]
+  // lies on solid solidOf[k] (an index into solids.views, where the solids stand now; -1: on
+  // none, 0). It is what the boundary model pushes the solid with (Equations.h's solidLoads),
+  // spread over its surface: particle i presses solid o along its normal with
+  // F_i = (m / rho_0)^2 2 b_spiky(d_i) p_i / G (the step's load written with the particle's
+  // pressure, recordPressure; s_corr's small push aside), d_i its distance to the solid, and
+  // the surface point q gets sum_i F_i K(t_i), t_i the distance from q to x_i along the surface
+  // (across q's normal) and K(t) = 4 / (pi h^2) (1 - t^2 / h^2)^3 the 2D kernel of unit
+  // integral: so the pressure integrates over the surface to the solid's load. Additive over
+  // the ranks like at()'s sums.
+  void onSolids(const SurfaceSolids& solids, const std::vector<Vec3d>& points,
+    const std::vector<int>& solidOf, std::vector<double>& out) const;
+
 private:
+  // visit(k) for the particles (cell order) in the 27 cells about q.
+  template <class Visit>
+  void forEachNear(const Vec3d& q, Visit&& visit) const;
+
   Parameters parameters_;
   double h_ = 0, h2_ = 0, volume_ = 0;
   std::vector<Vec3d> x_;

@@ -23,9 +23,9 @@ INTERVAL = 1.0 / 60.0
 # resuming from checkpoints with the default automatic steps.
 SETTINGS = dict(ParticleSpacing=T.QUICK_SPACING, NumberOfFrames=FRAMES, SubstepsPerFrame=SUBSTEPS,
                 TimeStepping="Fixed")
-# One checkpoint of the quick dam break: position, velocity (3 floats each), density, lambda
-# (1 float each) and the id (8 bytes) per particle.
-CHECKPOINT_BYTES = T.QUICK_PARTICLES * (12 + 12 + 4 + 4 + 8)
+# One checkpoint of the quick dam break: position, velocity (3 floats each), density, lambda,
+# pressure (1 float each) and the id (8 bytes) per particle.
+CHECKPOINT_BYTES = T.QUICK_PARTICLES * (12 + 12 + 4 + 4 + 4 + 8)
 
 
 def how(data):

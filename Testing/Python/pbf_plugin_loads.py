@@ -90,19 +90,20 @@ def check_proxy(proxy, label):
            representation.GetAttribute("type") in ("Point Gaussian", "Points"),
            "%s: no RepresentationType hint that shows particles" % label)
 
-    # Four output ports: the particles; the diagnostics table, which Apply shows in no view
+    # Five output ports: the particles; the diagnostics table, which Apply shows in no view
     # (a chart opened on Apply would split the layout and draw a single row), a Line Chart
     # View plots it when its eye is clicked (pbf_diagnostics.py checks what Apply does); the
     # domain's outline, shown with the particles so that the camera frames the tank; the
-    # surface, which Apply does not show either (the particles stay the default display).
+    # surface, which Apply does not show either (the particles stay the default display); the
+    # probes' table, not shown either (Plot Data Over Time draws it).
     ports = [sm.GetOutputPortName(i) for i in range(sm.GetNumberOfOutputPorts())]
-    expect(ports == ["Particles", "Diagnostics", "Domain", "Surface"],
+    expect(ports == ["Particles", "Diagnostics", "Domain", "Surface", "Probes"],
            "%s: output ports %s" % (label, ports))
     views = [hints.GetNestedElement(i) for i in range(hints.GetNumberOfNestedElements())
              if hints.GetNestedElement(i).GetName() == "View"]
     expect([(v.GetAttribute("type"), v.GetAttribute("port")) for v in views] ==
-           [("None", "1"), ("None", "3")],
-           "%s: the diagnostics' and surface's View hints are %s, not None"
+           [("None", "1"), ("None", "3"), ("None", "4")],
+           "%s: the diagnostics', surface's and probes' View hints are %s, not None"
            % (label, [(v.GetAttribute("type"), v.GetAttribute("port")) for v in views]))
 
     # SceneFile: the GUI's file dialog, filtered to JSON scenes.
