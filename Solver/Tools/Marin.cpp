@@ -3,6 +3,7 @@
 #include "Probes.h"
 #include "Scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -28,6 +29,63 @@ double TimeSeries::at(double time) const
   }
   const double w = t[k] > t[k - 1] ? (time - t[k - 1]) / (t[k] - t[k - 1]) : 0.0;
   return value[k - 1] + w * (value[k] - value[k - 1]);
+}
+
+std::vector<TimeSeries> readRecordColumns(const std::string& csvPath)
+{
+  std::ifstream in(csvPath);
+  if (!in)
+  {
+    throw InvalidInput("record \"" + csvPath + "\": cannot be opened");
+  }
+  std::vector<TimeSeries> columns;
+  std::string line;
+  while (std::getline(in, line))
+  {
+    if (line.empty() || line[0] == '#' || line[0] == 't')
+    {
+      continue;
+    }
+    std::istringstream row(line);
+    std::vector<double> values;
+    std::string cell;
+    while (std::getline(row, cell, ','))
+    {
+      values.push_back(std::stod(cell));
+    }
+    if (values.size() < 2 || (!columns.empty() && values.size() != columns.size() + 1))
+    {
+      throw InvalidInput("record \"" + csvPath + "\": bad row \"" + line + "\"");
+    }
+    columns.resize(values.size() - 1);
+    for (std::size_t c = 0; c < columns.size(); ++c)
+    {
+      columns[c].t.push_back(values[0]);
+      columns[c].value.push_back(values[c + 1]);
+    }
+  }
+  if (columns.empty() || columns[0].t.size() < 2)
+  {
+    throw InvalidInput("record \"" + csvPath + "\": fewer than 2 rows");
+  }
+  return columns;
+}
+
+std::vector<double> boxPressure(const Simulation& simulation)
+{
+  Snapshot<double> state;
+  simulation.stepper().read(state);
+  const ParticleSums sums(simulation.parameters(), state.position.data(), state.velocity.data(),
+    state.pressure.data(), state.position.size());
+  std::vector<Vec3d> sensors;
+  for (double y : kSensorHeights)
+  {
+    sensors.push_back(Vec3d{ kSensorX, y, kSensorZ });
+  }
+  std::vector<double> pressure;
+  sums.onSolids(simulation.surfaceSolids(simulation.time()), sensors,
+    std::vector<int>(sensors.size(), 0), pressure);
+  return pressure;
 }
 
 TimeSeries readGaugeRecord(const std::string& csvPath)
@@ -119,6 +177,13 @@ MarinRun runMarin(const Parameters& parameters, Backend backend, Precision preci
     run.h2.value.push_back(waterHeight(simulation, kGaugeH2, wet));
     run.h4.t.push_back(t);
     run.h4.value.push_back(waterHeight(simulation, kGaugeH4, wet));
+    const std::vector<double> pressure = boxPressure(simulation);
+    run.pressure.resize(pressure.size());
+    for (std::size_t k = 0; k < pressure.size(); ++k)
+    {
+      run.pressure[k].t.push_back(t);
+      run.pressure[k].value.push_back(pressure[k]);
+    }
   }
   return run;
 }
@@ -158,6 +223,46 @@ double rms(const TimeSeries& simulated, const TimeSeries& record)
 }
 
 } // namespace
+
+ImpactComparison compareImpact(const TimeSeries& simulated, const TimeSeries& record)
+{
+  ImpactComparison c;
+  const auto firstImpact = [](const TimeSeries& s, double& peak, double& when) {
+    for (std::size_t k = 0; k < s.t.size() && s.t[k] < 1.0; ++k)
+    {
+      if (s.value[k] > peak)
+      {
+        peak = s.value[k];
+        when = s.t[k];
+      }
+    }
+  };
+  firstImpact(simulated, c.peak, c.peakTime);
+  firstImpact(record, c.peakExperiment, c.peakTimeExperiment);
+  c.arrival = firstCrossing(simulated, kImpactPressure);
+  c.arrivalExperiment = firstCrossing(record, kImpactPressure);
+  // The record's mean over windows as long as the run's sampling interval, centred on each
+  // simulated sample.
+  const double window = simulated.t.size() > 1 ? simulated.t[1] - simulated.t[0] : 0.0;
+  for (std::size_t k = 0; k < simulated.t.size() && simulated.t[k] < 1.0; ++k)
+  {
+    double sum = 0;
+    int n = 0;
+    for (std::size_t r = 0; r < record.t.size(); ++r)
+    {
+      if (std::abs(record.t[r] - simulated.t[k]) <= 0.5 * window)
+      {
+        sum += record.value[r];
+        ++n;
+      }
+    }
+    if (n > 0)
+    {
+      c.peakExperimentAveraged = std::max(c.peakExperimentAveraged, sum / n);
+    }
+  }
+  return c;
+}
 
 MarinComparison compareMarin(const MarinRun& run, const TimeSeries& recordH2,
   const TimeSeries& recordH4, const TimeSeries* recordH2Arrival)

@@ -1,7 +1,8 @@
 // pbf_marin: the MARIN dam break with a box (Data/marin_dam_break.json) at one or more spacings.
-// Prints, per spacing, the particle count, the first arrival at gauge H2 against the record's and
-// the RMS height error at H2 and H4; optionally writes the simulated heights as CSV (t, H2, H4 per
-// spacing) for Utilities/validation/plots.py. Documentation/Validation.md has the figures.
+// Prints, per spacing, the particle count, the first arrival at gauge H2 against the record's, the
+// RMS height error at H2 and H4, and the first impact on the box's pressure sensors P1-P4 against
+// the record's; optionally writes the simulated series as CSV (t, then H2, H4, P1-P4 per spacing)
+// for Utilities/validation/plots.py. Documentation/Validation.md has the figures.
 #include "Marin.h"
 
 #include "ToolOptions.h"
@@ -17,7 +18,7 @@ using namespace pbf::validation;
 int main(int argc, char** argv)
 {
   const std::map<std::string, std::string> keys = {
-    { "records", "folder of marin_2005_H2.csv and marin_2005_H4.csv (required)" },
+    { "records", "folder of marin_2005_H2.csv, _H4.csv and _pressure.csv (required)" },
     { "spacings", "comma-separated particle spacings [m] (default 0.02)" },
     { "until", "simulated time [s] (default 6)" },
     { "sample", "gauge sampling interval [s] (default 0.01)" },
@@ -36,6 +37,7 @@ int main(int argc, char** argv)
     const TimeSeries h2 = readGaugeRecord(folder + "/marin_2005_H2.csv");
     const TimeSeries h4 = readGaugeRecord(folder + "/marin_2005_H4.csv");
     const TimeSeries h2Arrival = readGaugeRecord(folder + "/marin_2005_H2_arrival.csv");
+    const std::vector<TimeSeries> pressureRecord = readRecordColumns(folder + "/marin_2005_pressure.csv");
     const std::vector<double> spacings = toolReals(options, "spacings", 0.02);
     const double until = toolReal(options, "until", 6.0);
     const double sample = toolReal(options, "sample", 0.01);
@@ -60,6 +62,14 @@ int main(int argc, char** argv)
       std::printf("%.4g,%zu,%s,%.4f,%.4f,%+.4f,%.4f,%.4f,%.1f\n", s, runs.back().particles,
         toString(options.backend), c.arrivalH2, c.arrivalH2Experiment,
         c.arrivalH2 / c.arrivalH2Experiment - 1.0, c.rmsH2, c.rmsH4, seconds);
+      for (std::size_t k = 0; k < runs.back().pressure.size() && k < pressureRecord.size(); ++k)
+      {
+        const ImpactComparison i = compareImpact(runs.back().pressure[k], pressureRecord[k]);
+        std::printf("  P%zu: first impact peak %.0f Pa at %.3f s (record %.0f Pa at %.3f s; "
+                    "averaged over %g s: %.0f Pa), above %.0f Pa from %.3f s (record %.3f s)\n",
+          k + 1, i.peak, i.peakTime, i.peakExperiment, i.peakTimeExperiment, sample,
+          i.peakExperimentAveraged, kImpactPressure, i.arrival, i.arrivalExperiment);
+      }
       std::fflush(stdout);
     }
     if (options.extra.count("csv"))
@@ -72,7 +82,8 @@ int main(int argc, char** argv)
       std::fprintf(out, "t");
       for (const MarinRun& r : runs)
       {
-        std::fprintf(out, ",H2_%g,H4_%g", r.spacing, r.spacing);
+        std::fprintf(out, ",H2_%g,H4_%g,P1_%g,P2_%g,P3_%g,P4_%g", r.spacing, r.spacing, r.spacing,
+          r.spacing, r.spacing, r.spacing);
       }
       std::fprintf(out, "\n");
       for (std::size_t k = 0; k < runs.front().h2.t.size(); ++k)
@@ -81,6 +92,10 @@ int main(int argc, char** argv)
         for (const MarinRun& r : runs)
         {
           std::fprintf(out, ",%.5f,%.5f", r.h2.value[k], r.h4.value[k]);
+          for (const TimeSeries& p : r.pressure)
+          {
+            std::fprintf(out, ",%.1f", p.value[k]);
+          }
         }
         std::fprintf(out, "\n");
       }
