@@ -3,6 +3,8 @@
 #include "vtkCellArray.h"
 #include "vtkCleanPolyData.h"
 #include "vtkDataSet.h"
+#include "vtkFieldData.h"
+#include "vtkStringArray.h"
 #include "vtkDataSetSurfaceFilter.h"
 #include "vtkIdList.h"
 #include "vtkNew.h"
@@ -162,4 +164,23 @@ std::string vtkPBFFileVersions(const std::vector<std::string>& files)
       std::to_string(error ? 0 : time.time_since_epoch().count());
   }
   return versions;
+}
+
+//------------------------------------------------------------------------------
+vtkPBFBodyTag vtkPBFBodyTagOf(vtkDataSet* obstacle)
+{
+  vtkPBFBodyTag tag;
+  vtkFieldData* fields = obstacle ? obstacle->GetFieldData() : nullptr;
+  vtkDataArray* density = fields ? fields->GetArray("PBFBodyDensity") : nullptr;
+  if (density && density->GetNumberOfTuples() > 0)
+  {
+    tag.Tagged = true;
+    tag.Density = density->GetComponent(0, 0);
+    auto* name = vtkStringArray::SafeDownCast(fields->GetAbstractArray("PBFBodyName"));
+    if (name && name->GetNumberOfValues() > 0)
+    {
+      tag.Name = name->GetValue(0);
+    }
+  }
+  return tag;
 }

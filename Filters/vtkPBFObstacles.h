@@ -32,4 +32,13 @@ std::vector<std::string> vtkPBFSceneMeshFiles(const std::string& sceneFile);
 // edited scene file is.
 std::string vtkPBFFileVersions(const std::vector<std::string>& files);
 
+// What vtkPBFRigidBody wrote into an obstacle's field data: a body's density and name.
+struct vtkPBFBodyTag
+{
+  bool Tagged = false; // PBFBodyDensity is there: the obstacle is a body
+  double Density = 0;  // [kg/m^3], as typed (checked where the run is built)
+  std::string Name;    // empty: the simulation names it
+};
+vtkPBFBodyTag vtkPBFBodyTagOf(vtkDataSet* obstacle);
+
 #endif

@@ -159,6 +159,12 @@ pbf::PlaybackKey vtkPBFSimulationInternals::MakeKey(const vtkPBFSettings& settin
     std::ostringstream solids;
     solids << obstacles.size() << " thickness " << settings.ObstacleThickness
            << this->ObstacleMotion.Key();
+    // A body's density and name (vtkPBFRigidBody) are part of the run.
+    for (vtkDataSet* obstacle : obstacles)
+    {
+      const vtkPBFBodyTag tag = vtkPBFBodyTagOf(obstacle);
+      solids << " body " << tag.Density << " " << tag.Name;
+    }
     key.obstacles = solids.str();
   }
 
@@ -220,6 +226,22 @@ std::unique_ptr<pbf::Simulation> vtkPBFSimulationInternals::Build(const vtkPBFSe
     vtkDataSet* shape = c < obstacles.size() && obstacles[c] ? this->ObstacleMotion.Reference(c) : nullptr;
     scene.solids.push_back(vtkPBFSolidFromInput(shape, settings.ObstacleThickness, name));
     scene.solids.back().motion = this->ObstacleMotion.MotionOf(c);
+    // Marked by vtkPBFRigidBody: a body the fluid moves (its density checked here, by name).
+    const vtkPBFBodyTag tag = vtkPBFBodyTagOf(obstacles[c]);
+    if (tag.Tagged)
+    {
+      pbf::SolidRegion& solid = scene.solids.back();
+      const std::string called = tag.Name.empty() ? name : tag.Name;
+      if (!(tag.Density > 0) || !std::isfinite(tag.Density))
+      {
+        std::ostringstream text;
+        text << called << ": Density = " << tag.Density
+             << ": a rigid body's density must be a positive number [kg/m^3]";
+        throw pbf::InvalidInput(text.str());
+      }
+      solid.density = tag.Density;
+      solid.name = called;
+    }
   }
   // Decomposed, every rank builds the whole fluid (from the whole input, which
   // RequestUpdateExtent asks for on every rank) and keeps its slab.
@@ -398,7 +420,15 @@ void vtkPBFSimulationInternals::UpdateObstacleMotion(std::size_t connections)
   const std::size_t first = live->solidMotions().size() - connections;
   for (std::size_t c = 0; c < connections; ++c)
   {
-    live->setSolidMotion(first + c, this->ObstacleMotion.MotionOf(c));
+    const pbf::SolidMotion motion = this->ObstacleMotion.MotionOf(c);
+    if (motion.moves() && live->scene().solids[first + c].density > 0)
+    {
+      throw pbf::InvalidInput(live->solidName(first + c) +
+        ": a rigid body (Position Based Fluids Rigid Body) whose input moves: a body moves only "
+        "as the fluid pushes it; animate the obstacle without the rigid body filter, or stop its "
+        "input's animation");
+    }
+    live->setSolidMotion(first + c, motion);
   }
 }
 

@@ -68,7 +68,46 @@ public:
     }
     const FluidView<Real>& f = f_;
     const FluidView<Real>& pass = p.tensile ? first_ : f_;
-    owner_.forEach([&](std::uint32_t i) { positionCorrection(i, pass); });
+    if (loadsOpen_ && fluid_.parameters.mirrorWalls)
+    {
+      // Each particle's terms per wall, then as one force at the particle's foot on the wall.
+      const std::size_t firstWall = fluid_.obstacles.size();
+      const Real scale = -pass.c.massOverRho0 * pass.c.mass * pass.time->inverseDt *
+        pass.time->inverseDt;
+      const Real wall[kWalls] = { pass.c.boxMin.x, pass.c.boxMax.x, pass.c.boxMin.y,
+        pass.c.boxMax.y, pass.c.boxMin.z, pass.c.boxMax.z };
+      owner_.forEachInBlocks(kLoadBlock, [&](std::size_t b, std::uint32_t i) {
+        Vec3<Real> pressed[kWalls] = {};
+        bool any = false;
+        positionCorrection(i, pass,
+          [&](const Vec3<Real>& term, const WallMirrors<Real>& mirrors, const Vec3<Real>&,
+            const Vec3<Real>&, int ix, int iy, int iz) {
+            wallShares(term, mirrors, ix, iy, iz, pass.c,
+              [&](int w, const Vec3<Real>& part) { pressed[w] += part; });
+            any = true;
+          });
+        if (!any)
+        {
+          return;
+        }
+        const auto add = loadAdder(b, firstWall);
+        for (int w = 0; w < static_cast<int>(kWalls); ++w)
+        {
+          Vec3<Real> foot = pass.p[i];
+          (w / 2 == 0 ? foot.x : w / 2 == 1 ? foot.y : foot.z) = wall[w];
+          const Vec3<Real> force = pressed[w] * scale;
+          add(w, force, cross(foot, force));
+        }
+      });
+    }
+    else
+    {
+      owner_.forEach([&](std::uint32_t i) { positionCorrection(i, pass); });
+    }
+    if (loadsOpen_)
+    {
+      finishLoads();
+    }
     if (fluid_.parameters.chebyshevRho > 0)
     {
       // Chebyshev's positions two projections back (Chebyshev.h) live in omega's array, which
@@ -96,48 +135,29 @@ public:
   }
 
   // Summed in fixed blocks of particles, then the blocks in order, then the ranks in order: the
-  // same bits whatever the number of threads, as compression() sums.
+  // same bits whatever the number of threads, as compression() sums. Per solid, then per mirror
+  // wall (2 a + 0 for the low wall of axis a, + 1 for the high): the solids' here, the walls' in
+  // the correction that follows (its mirror images' terms, positionCorrection's onWall), and the
+  // blocks are reduced after it (finishLoads).
   void sumLoads(const Projection& p)
   {
-    const std::size_t solids = fluid_.obstacles.size();
-    if (stopped_ || solids == 0)
+    loadsOpen_ = false;
+    const std::size_t loads = loadCount();
+    if (stopped_ || loads == 0)
     {
       return;
     }
-    constexpr std::size_t block = 4096;
-    const std::size_t blocks = (owner_.ownedCount() + block - 1) / block;
-    constexpr std::size_t values = 6; // force and torque
-    blockLoads_.assign(blocks * solids * values, 0.0);
+    const std::size_t blocks = (owner_.ownedCount() + kLoadBlock - 1) / kLoadBlock;
+    blockLoads_.assign(blocks * loads * kLoadValues, 0.0);
+    loadsOpen_ = true;
+    if (fluid_.obstacles.empty())
+    {
+      return;
+    }
     const FluidView<Real>& f = p.tensile ? first_ : f_;
-    owner_.forEachInBlocks(block, [&](std::size_t b, std::uint32_t i) {
-      solidLoads(i, f, [&](int o, const Vec3<Real>& force, const Vec3<Real>& torque) {
-        double* sum = &blockLoads_[(b * solids + static_cast<std::size_t>(o)) * values];
-        sum[0] += force.x;
-        sum[1] += force.y;
-        sum[2] += force.z;
-        sum[3] += torque.x;
-        sum[4] += torque.y;
-        sum[5] += torque.z;
-      });
-    });
-    std::vector<double> mine(solids * values, 0.0);
-    for (std::size_t b = 0; b < blocks; ++b)
-    {
-      for (std::size_t k = 0; k < mine.size(); ++k)
-      {
-        mine[k] += blockLoads_[b * mine.size() + k];
-      }
-    }
-    const std::vector<double> all = owner_.sumOverRanks(mine);
-    report_.loads.resize(solids);
-    for (std::size_t o = 0; o < solids; ++o)
-    {
-      const double* v = &all[o * values];
-      report_.loads[o].force += Vec3d{ v[0], v[1], v[2] };
-      report_.loads[o].torque += Vec3d{ v[3], v[4], v[5] };
-    }
+    owner_.forEachInBlocks(kLoadBlock,
+      [&](std::size_t b, std::uint32_t i) { solidLoads(i, f, loadAdder(b, 0)); });
   }
-
   template <class Body>
   void whileCompressed(int first, int end, Body&& body)
   {
@@ -187,7 +207,56 @@ private:
   FluidView<Real> f_{};
   FluidView<Real> first_{}; // the first projection's view, which adds s_corr
   bool stopped_ = false;
-  std::vector<double> blockLoads_; // per block, per solid: force and torque
+  // The loads: the solids', then with mirror walls the six walls'.
+  std::size_t loadCount() const
+  {
+    return fluid_.obstacles.size() + (fluid_.parameters.mirrorWalls ? kWalls : 0);
+  }
+
+  // add(o, force, torque) into block b's sums of load first + o.
+  auto loadAdder(std::size_t b, std::size_t first)
+  {
+    return [this, b, first](int o, const Vec3<Real>& force, const Vec3<Real>& torque) {
+      const std::size_t k = b * loadCount() + first + static_cast<std::size_t>(o);
+      double* sum = &blockLoads_[k * kLoadValues];
+      sum[0] += force.x;
+      sum[1] += force.y;
+      sum[2] += force.z;
+      sum[3] += torque.x;
+      sum[4] += torque.y;
+      sum[5] += torque.z;
+    };
+  }
+
+  // The blocks in order, then the ranks in order, added to the step's loads.
+  void finishLoads()
+  {
+    const std::size_t loads = loadCount();
+    const std::size_t blocks = blockLoads_.size() / (loads * kLoadValues);
+    std::vector<double> mine(loads * kLoadValues, 0.0);
+    for (std::size_t b = 0; b < blocks; ++b)
+    {
+      for (std::size_t k = 0; k < mine.size(); ++k)
+      {
+        mine[k] += blockLoads_[b * mine.size() + k];
+      }
+    }
+    const std::vector<double> all = owner_.sumOverRanks(mine);
+    report_.loads.resize(loads);
+    for (std::size_t o = 0; o < loads; ++o)
+    {
+      const double* v = &all[o * kLoadValues];
+      report_.loads[o].force += Vec3d{ v[0], v[1], v[2] };
+      report_.loads[o].torque += Vec3d{ v[3], v[4], v[5] };
+    }
+    loadsOpen_ = false;
+  }
+
+  static constexpr std::size_t kWalls = 6;
+  static constexpr std::size_t kLoadBlock = 512; // small enough to share out evenly
+  static constexpr std::size_t kLoadValues = 6; // force and torque
+  std::vector<double> blockLoads_; // per block, per load: force and torque
+  bool loadsOpen_ = false;         // this projection's loads are being summed
 };
 
 } // namespace pbf

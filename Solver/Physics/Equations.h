@@ -248,7 +248,9 @@ PBF_HD PBF_INLINE WallMirrors<Real> nearWalls(const Vec3<Real>& p, const Coeffic
   return m;
 }
 
-// Calls visit(image) for each reflection of q in the walls of m (not q itself), in the order of
+// Calls visit(image, ix, iy, iz) for each reflection of q in the walls of m (not q itself): ia is 0
+// where the image is not reflected along axis a, else 1 + the slot of m.wall[a] it is reflected
+// in. In the order of
 // three nested loops over x, y, z (z innermost). A reflection is never closer to a particle on the
 // fluid's side of a wall than q is, so the passes visit q's reflections only when q itself lies
 // within h: most candidates, and every candidate of a particle that sees no wall, pay one test
@@ -276,7 +278,7 @@ PBF_HD PBF_INLINE void forEachReflection(const WallMirrors<Real>& m, const Vec3<
     image.x = ix == 0 ? q.x : Real(2) * (ix == 1 ? m.wall[0][0] : m.wall[0][1]) - q.x;
     image.y = iy == 0 ? q.y : Real(2) * (iy == 1 ? m.wall[1][0] : m.wall[1][1]) - q.y;
     image.z = iz == 0 ? q.z : Real(2) * (iz == 1 ? m.wall[2][0] : m.wall[2][1]) - q.z;
-    visit(image);
+    visit(image, ix, iy, iz);
   }
 }
 
@@ -285,7 +287,7 @@ template <class Real, class Add>
 PBF_HD PBF_INLINE void forEachReflectionWithin(
   const WallMirrors<Real>& m, const Vec3<Real>& p, const Vec3<Real>& q, Real h2, Add&& add)
 {
-  forEachReflection(m, q, [&](const Vec3<Real>& image) {
+  forEachReflection(m, q, [&](const Vec3<Real>& image, int, int, int) {
     const Vec3<Real> r = p - image;
     const Real r2 = dot(r, r);
     if (r2 < h2)
@@ -378,10 +380,22 @@ PBF_HD PBF_INLINE void recordPressure(
   }
 }
 
+// positionCorrection's default: nothing is done with the mirror walls' terms.
+struct NoWallTerms
+{
+  template <class... Any>
+  PBF_HD PBF_INLINE void operator()(const Any&...) const
+  {
+  }
+};
+
 // Eq. 13 (s_corr, the artificial pressure against clustering) and eq. 14 (delta p_i). s_corr
 // enters in the step's first projection only, with this step's coefficient (StepTime::tensile).
-template <class Real, class Neighbors>
-PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real, Neighbors>& f)
+// onWall(term, mirrors, p_i, image, ix, iy, iz) hears each mirror image's term of delta p_i (before
+// m / rho_0) with forEachReflection's arguments: what the walls' loads are made of (wallShares).
+template <class Real, class Neighbors, class OnWall = NoWallTerms>
+PBF_HD PBF_INLINE void positionCorrection(
+  std::uint32_t i, const FluidView<Real, Neighbors>& f, OnWall&& onWall = OnWall{})
 {
   const Vec3<Real> pi = f.p[i];
   const WallMirrors<Real> mirrors = nearWalls(pi, f.c);
@@ -403,7 +417,9 @@ PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real,
         {
           sCorr = -tensile * power(f.c.kernels.poly6Within(d2) * f.c.inverseWDeltaQ, f.c.sCorrN);
         }
-        delta += f.c.kernels.spikyGradientWithin(d, d2) * (lambdaI + lambdaJ + sCorr);
+        const Vec3<Real> term = f.c.kernels.spikyGradientWithin(d, d2) * (lambdaI + lambdaJ + sCorr);
+        delta += term;
+        return term;
       };
       // The particle itself needs no test: its gradient at r = 0 is exactly zero
       // (spikyGradientWithin), so it adds a zero to a sum that started at +0.
@@ -411,7 +427,14 @@ PBF_HD PBF_INLINE void positionCorrection(std::uint32_t i, const FluidView<Real,
       if (reflections)
       {
         // A particle's own reflections count: they are the wall's share next to it.
-        forEachReflectionWithin(mirrors, pi, pj, f.c.kernels.h2, add);
+        forEachReflection(mirrors, pj, [&](const Vec3<Real>& image, int ix, int iy, int iz) {
+          const Vec3<Real> d = pi - image;
+          const Real d2 = dot(d, d);
+          if (d2 < f.c.kernels.h2)
+          {
+            onWall(add(d, d2), mirrors, pi, image, ix, iy, iz);
+          }
+        });
       }
     }
   });
@@ -440,6 +463,35 @@ PBF_HD PBF_INLINE void solidLoads(std::uint32_t i, const FluidView<Real, Neighbo
     const Vec3<Real> force = solidShare(n, b, lambdaI, tensile) * scale;
     add(static_cast<int>(&solid - f.obstacles), force, cross(pi, force));
   });
+}
+
+// Which walls a mirror image's term of delta p_i belongs to (positionCorrection's onWall): add(wall,
+// part) with wall = 2 a + 0 for the low wall of axis a, + 1 for the high one. A term reflected in
+// one wall is that wall's; one reflected in an edge or a corner gives each of its walls the
+// component along the wall's normal and an equal share of the rest. As a force on the wall the
+// parts are scaled by -m (m / rho_0) / dt^2 (the reaction, as solidLoads has it for a solid).
+template <class Real, class Add>
+PBF_HD PBF_INLINE void wallShares(const Vec3<Real>& term, const WallMirrors<Real>& mirrors, int ix,
+  int iy, int iz, const Coefficients<Real>& c, Add&& add)
+{
+  const int slot[3] = { ix, iy, iz };
+  const Real along[3] = { term.x, term.y, term.z };
+  const Real lo[3] = { c.boxMin.x, c.boxMin.y, c.boxMin.z };
+  const int walls = (ix > 0) + (iy > 0) + (iz > 0);
+  for (int a = 0; a < 3; ++a)
+  {
+    if (slot[a] == 0)
+    {
+      continue;
+    }
+    Real share[3];
+    for (int b = 0; b < 3; ++b)
+    {
+      share[b] = b == a ? along[b] : (slot[b] > 0 ? Real(0) : along[b] / Real(walls));
+    }
+    add(2 * a + (mirrors.wall[a][slot[a] - 1] == lo[a] ? 0 : 1),
+      Vec3<Real>{ share[0], share[1], share[2] });
+  }
 }
 
 // Algorithm 1, lines 17-19: apply delta p_i and resolve collisions (Jacobi update).
@@ -541,7 +593,7 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
       // An image is never closer than its neighbour (both on the fluid's side of the wall).
       const Vec3<Real> vj = f.v[j];
       const Real volume = volumeOf(j, f);
-      forEachReflection(mirrors, pj, [&](const Vec3<Real>& image) {
+      forEachReflection(mirrors, pj, [&](const Vec3<Real>& image, int, int, int) {
         const Vec3<Real> ri = pi - image;
         const Real ri2 = dot(ri, ri);
         if (ri2 < f.c.kernels.h2)

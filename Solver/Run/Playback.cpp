@@ -293,7 +293,7 @@ void Playback::recordFrame(int frame, FrameReached& reached)
     {
       row.loads.push_back(
         { impulse.force * (1.0 / pendingSeconds_), impulse.torque * (1.0 / pendingSeconds_) });
-      row.loadNames.push_back(live_->solidName(row.loadNames.size()));
+      row.loadNames.push_back(live_->loadName(row.loadNames.size()));
     }
   }
   row.maxSpeed = statistics.maxSpeed;

@@ -192,6 +192,9 @@ public:
 
   // What errors and tables call solid k: its name, or "obstacles[k]".
   std::string solidName(std::size_t k) const;
+  // What the loads' columns call load k (StepReport::loads): solid k's name, then the mirror
+  // walls "tank -x", "tank +x", "tank -y" (the floor), "tank +y", "tank -z", "tank +z".
+  std::string loadName(std::size_t k) const;
   const std::vector<Body>& bodies() const { return bodies_; }
   // Where every solid is at `time`: a prescribed one by its keyframes, a body where its state
   // has it now; empty when none moves (each stands where its field was made).

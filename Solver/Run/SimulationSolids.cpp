@@ -120,6 +120,14 @@ std::string Simulation::solidName(std::size_t k) const
                                         : scene_.solids[k].name;
 }
 
+std::string Simulation::loadName(std::size_t k) const
+{
+  static const char* const walls[6] = { "tank -x", "tank +x", "tank -y", "tank +y", "tank -z",
+    "tank +z" };
+  const std::size_t solids = scene_.solids.size();
+  return k < solids ? solidName(k) : walls[(k - solids) % 6];
+}
+
 void Simulation::moveBodies(double dt)
 {
   for (Body& body : bodies_)
@@ -134,10 +142,25 @@ void Simulation::addLoads(const std::vector<SolidLoad>& loads,
   const std::vector<SolidPose>& poses, double dt, AdvanceReport& report)
 {
   // The stepper's torques are about the world's origin: about the centre c, torque - c x force.
+  // A solid's centre is its centre of mass; a wall's, the middle of its face of the domain.
+  const Box& domain = parameters_.domain;
+  const auto centreOf = [&](std::size_t k) {
+    if (k < solidCentres_.size())
+    {
+      return k < poses.size() ? poses[k].toWorld(solidCentres_[k]) : solidCentres_[k];
+    }
+    const std::size_t wall = k - solidCentres_.size();
+    double middle[3] = { 0.5 * (domain.min.x + domain.max.x), 0.5 * (domain.min.y + domain.max.y),
+      0.5 * (domain.min.z + domain.max.z) };
+    const double lo[3] = { domain.min.x, domain.min.y, domain.min.z };
+    const double hi[3] = { domain.max.x, domain.max.y, domain.max.z };
+    middle[wall / 2] = wall % 2 == 0 ? lo[wall / 2] : hi[wall / 2];
+    return Vec3d{ middle[0], middle[1], middle[2] };
+  };
   report.impulses.resize(loads.size());
   for (std::size_t k = 0; k < loads.size(); ++k)
   {
-    const Vec3d centre = k < poses.size() ? poses[k].toWorld(solidCentres_[k]) : solidCentres_[k];
+    const Vec3d centre = centreOf(k);
     report.impulses[k].force += loads[k].force * dt;
     report.impulses[k].torque += (loads[k].torque - cross(centre, loads[k].force)) * dt;
   }

@@ -83,8 +83,9 @@ struct StepReport
   // Adaptive mode: mean of max(rho_i / rho_0 - 1, 0) at the last evaluation, the one that ended
   // the loop. NaN in fixed mode, which computes no reduction inside a step (see statistics()).
   double densityError = 0;
-  // One per solid obstacle, in the order of setObstacles, over every rank; empty where the
-  // stepper has no solids or does not sum their loads yet (the CUDA steppers).
+  // One per solid obstacle, in the order of setObstacles, then with mirror walls one per wall of
+  // the domain (-x, +x, -y, +y, -z, +z), over every rank; empty where the stepper has neither or
+  // does not sum loads yet (the CUDA steppers).
   std::vector<SolidLoad> loads;
 };
 

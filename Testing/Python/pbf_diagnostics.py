@@ -19,6 +19,10 @@ INTERVAL = 1.0 / 60.0
 COLUMNS = ["Time", "Frame", "AverageDensityError", "MaxDensityError", "AverageNeighbors",
            "SolverIterations", "MillisecondsPerStep", "Substeps", "MinTimeStep", "MaxTimeStep",
            "MaxSpeed", "KineticEnergy", "Particles", "Backend"]
+# Then the loads on the tank's six mirror walls (a CPU backend sums them; Backend Auto here is
+# the CPU without a GPU).
+COLUMNS += [what + " tank " + wall for wall in ("-x", "+x", "-y", "+y", "-z", "+z")
+            for what in ("Force", "Torque")]
 DETERMINISTIC = [c for c in COLUMNS if c != "MillisecondsPerStep"]
 
 # Automatic time steps (the default) and the fixed count of projections, so that every step's

@@ -42,17 +42,20 @@ source = PositionBasedFluids(SceneFile=path, ParticleSpacing=S, NumberOfFrames=F
                              Backend="CPU (OpenMP)")
 particles = T.output_at(source, FRAMES * INTERVAL)
 names = particles.GetFieldData().GetAbstractArray("ObstacleNames")
-expect(names is not None and names.GetNumberOfValues() == 5, "ObstacleNames: %s" % names)
-expect([names.GetValue(k) for k in range(5)] == ["floor", "west", "east", "south", "north"],
-       "names %s" % [names.GetValue(k) for k in range(5)])
+# The five solids, then the tank's six mirror walls (out of the water's reach here: no load).
+WALLS = ["tank -x", "tank +x", "tank -y", "tank +y", "tank -z", "tank +z"]
+expect(names is not None and names.GetNumberOfValues() == 11, "ObstacleNames: %s" % names)
+expect([names.GetValue(k) for k in range(11)] == ["floor", "west", "east", "south", "north"] + WALLS,
+       "names %s" % [names.GetValue(k) for k in range(names.GetNumberOfValues())])
 force = particles.GetFieldData().GetArray("ObstacleForce")
-expect(force.GetNumberOfTuples() == 5 and force.GetNumberOfComponents() == 3,
+expect(force.GetNumberOfTuples() == 11 and force.GetNumberOfComponents() == 3,
        "ObstacleForce has %d tuples of %d" % (force.GetNumberOfTuples(), force.GetNumberOfComponents()))
 expect(particles.GetFieldData().GetArray("ObstacleTorque") is not None, "no ObstacleTorque")
 
 table = T.diagnostics(source)
-for name in ("floor", "west", "east", "south", "north"):
+for name in ["floor", "west", "east", "south", "north"] + WALLS:
     expect("Force " + name in table and "Torque " + name in table, "no load columns for %s" % name)
+expect(numpy.all(table["Force tank -y"][1:] == 0), "the tank's floor, out of reach, has a load")
 floor = table["Force floor"]
 expect(floor.shape == (FRAMES + 1, 3), "Force floor has shape %s" % (floor.shape,))
 expect(numpy.all(numpy.isnan(floor[0])), "frame 0 has a load: %s" % floor[0])
