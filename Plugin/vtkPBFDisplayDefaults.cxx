@@ -7,11 +7,13 @@
 #include "vtkPVDataInformation.h"
 #include "vtkObjectFactory.h"
 #include "vtkSMPVRepresentationProxy.h"
+#include "vtkSMProperty.h"
 #include "vtkSMPropertyHelper.h"
 #include "vtkSMProxy.h"
 #include "vtkSMProxyManager.h"
 #include "vtkSMSessionProxyManager.h"
 #include "vtkSMSourceProxy.h"
+#include "vtkSMStringListDomain.h"
 #include "vtkSMTransferFunctionManager.h"
 #include "vtkSMTransferFunctionProxy.h"
 #include "vtkSmartPointer.h"
@@ -19,7 +21,9 @@
 
 #include <algorithm>
 #include <cstring>
+#include <iterator>
 #include <string>
+#include <vector>
 #include <vector>
 
 namespace
@@ -221,13 +225,25 @@ void vtkPBFDisplayDefaults::Adopt(vtkSMProxy* display, vtkSMSessionProxyManager*
   {
     if (!fromState)
     {
+      // Every series the chart offers (the loads' columns too, named after the scene's
+      // obstacles and the tank's walls, with their components), else the filter's own columns.
+      std::vector<std::string> series;
+      auto* offered = vtkSMStringListDomain::SafeDownCast(
+        display->GetProperty("SeriesVisibility")->FindDomain("vtkSMChartSeriesSelectionDomain"));
+      for (unsigned int k = 0; offered && k < offered->GetNumberOfStrings(); ++k)
+      {
+        series.emplace_back(offered->GetString(k));
+      }
+      if (series.empty())
+      {
+        series.assign(std::begin(DiagnosticsColumns), std::end(DiagnosticsColumns));
+      }
       vtkSMPropertyHelper visibility(display, "SeriesVisibility");
       unsigned int element = 0;
-      for (const char* column : DiagnosticsColumns)
+      for (const std::string& column : series)
       {
-        const bool shown = std::strcmp(column, "AverageDensityError") == 0 ||
-          std::strcmp(column, "MaxDensityError") == 0;
-        visibility.Set(element++, column);
+        const bool shown = column == "AverageDensityError" || column == "MaxDensityError";
+        visibility.Set(element++, column.c_str());
         visibility.Set(element++, shown ? "1" : "0");
       }
       display->UpdateVTKObjects();
