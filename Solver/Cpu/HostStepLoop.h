@@ -70,35 +70,7 @@ public:
     const FluidView<Real>& pass = p.tensile ? first_ : f_;
     if (loadsOpen_ && fluid_.parameters.mirrorWalls)
     {
-      // Each particle's terms per wall, then as one force at the particle's foot on the wall.
-      const std::size_t firstWall = fluid_.obstacles.size();
-      const Real scale = -pass.c.massOverRho0 * pass.c.mass * pass.time->inverseDt *
-        pass.time->inverseDt;
-      const Real wall[kWalls] = { pass.c.boxMin.x, pass.c.boxMax.x, pass.c.boxMin.y,
-        pass.c.boxMax.y, pass.c.boxMin.z, pass.c.boxMax.z };
-      owner_.forEachInBlocks(kLoadBlock, [&](std::size_t b, std::uint32_t i) {
-        Vec3<Real> pressed[kWalls] = {};
-        bool any = false;
-        positionCorrection(i, pass,
-          [&](const Vec3<Real>& term, const WallMirrors<Real>& mirrors, const Vec3<Real>&,
-            const Vec3<Real>&, int ix, int iy, int iz) {
-            wallShares(term, mirrors, ix, iy, iz, pass.c,
-              [&](int w, const Vec3<Real>& part) { pressed[w] += part; });
-            any = true;
-          });
-        if (!any)
-        {
-          return;
-        }
-        const auto add = loadAdder(b, firstWall);
-        for (int w = 0; w < static_cast<int>(kWalls); ++w)
-        {
-          Vec3<Real> foot = pass.p[i];
-          (w / 2 == 0 ? foot.x : w / 2 == 1 ? foot.y : foot.z) = wall[w];
-          const Vec3<Real> force = pressed[w] * scale;
-          add(w, force, cross(foot, force));
-        }
-      });
+      correctSummingWallLoads(pass);
     }
     else
     {
@@ -207,6 +179,40 @@ private:
   FluidView<Real> f_{};
   FluidView<Real> first_{}; // the first projection's view, which adds s_corr
   bool stopped_ = false;
+  // positionCorrection of every owned particle, its mirror images' terms summed per wall into the
+  // load blocks: each particle's terms per wall, then as one force at its foot on the wall.
+  void correctSummingWallLoads(const FluidView<Real>& pass)
+  {
+    const std::size_t firstWall = fluid_.obstacles.size();
+    const Real scale = -pass.c.massOverRho0 * pass.c.mass * pass.time->inverseDt *
+      pass.time->inverseDt;
+    const Real wall[kWalls] = { pass.c.boxMin.x, pass.c.boxMax.x, pass.c.boxMin.y,
+      pass.c.boxMax.y, pass.c.boxMin.z, pass.c.boxMax.z };
+    owner_.forEachInBlocks(kLoadBlock, [&](std::size_t b, std::uint32_t i) {
+      Vec3<Real> pressed[kWalls] = {};
+      bool any = false;
+      positionCorrection(i, pass,
+        [&](const Vec3<Real>& term, const WallMirrors<Real>& mirrors, const Vec3<Real>&,
+          const Vec3<Real>&, int ix, int iy, int iz) {
+          wallShares(term, mirrors, ix, iy, iz, pass.c,
+            [&](int w, const Vec3<Real>& part) { pressed[w] += part; });
+          any = true;
+        });
+      if (!any)
+      {
+        return;
+      }
+      const auto add = loadAdder(b, firstWall);
+      for (int w = 0; w < static_cast<int>(kWalls); ++w)
+      {
+        Vec3<Real> foot = pass.p[i];
+        (w / 2 == 0 ? foot.x : w / 2 == 1 ? foot.y : foot.z) = wall[w];
+        const Vec3<Real> force = pressed[w] * scale;
+        add(w, force, cross(foot, force));
+      }
+    });
+  }
+
   // The loads: the solids', then with mirror walls the six walls'.
   std::size_t loadCount() const
   {

@@ -20,11 +20,8 @@ ParticleSums::ParticleSums(const Parameters& parameters, const Vec3<Real>* x,
   h_ = parameters.smoothingLength();
   h2_ = h_ * h_;
   volume_ = calibratedParticleMass(parameters) / parameters.restDensity;
-  const GridGeometry<double> grid = makeGridGeometry<double>(parameters.domain, h_);
-  nx_ = grid.nx;
-  ny_ = grid.ny;
-  nz_ = grid.nz;
-  origin_ = grid.origin;
+  grid_ = makeGridGeometry<double>(parameters.domain, h_);
+  const GridGeometry<double>& grid = grid_;
   std::vector<CellKey> keys(n);
   for (std::size_t i = 0; i < n; ++i)
   {
@@ -54,17 +51,17 @@ template ParticleSums::ParticleSums(
 template <class Visit>
 void ParticleSums::forEachNear(const Vec3d& q, Visit&& visit) const
 {
-  const GridGeometry<double> grid = makeGridGeometry<double>(parameters_.domain, h_);
-  const int cx = grid.clampedCell(q.x, origin_.x, nx_);
-  const int cy = grid.clampedCell(q.y, origin_.y, ny_);
-  const int cz = grid.clampedCell(q.z, origin_.z, nz_);
-  for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, nz_ - 1); ++z)
+  const GridGeometry<double>& g = grid_;
+  const int cx = g.clampedCell(q.x, g.origin.x, g.nx);
+  const int cy = g.clampedCell(q.y, g.origin.y, g.ny);
+  const int cz = g.clampedCell(q.z, g.origin.z, g.nz);
+  for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, g.nz - 1); ++z)
   {
-    for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, ny_ - 1); ++y)
+    for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, g.ny - 1); ++y)
     {
-      for (int x = std::max(cx - 1, 0); x <= std::min(cx + 1, nx_ - 1); ++x)
+      for (int x = std::max(cx - 1, 0); x <= std::min(cx + 1, g.nx - 1); ++x)
       {
-        const std::size_t cell = (static_cast<std::size_t>(z) * ny_ + y) * nx_ + x;
+        const std::size_t cell = (static_cast<std::size_t>(z) * g.ny + y) * g.nx + x;
         for (std::uint32_t k = cellOffsets_[cell]; k < cellOffsets_[cell + 1]; ++k)
         {
           visit(k);

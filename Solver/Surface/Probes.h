@@ -5,6 +5,7 @@
 // a decomposed run reads what one rank would.
 #pragma once
 
+#include "Grid.h"
 #include "Parameters.h"
 #include "SurfaceTypes.h"
 #include "Vec3.h"
@@ -56,8 +57,7 @@ private:
   std::vector<Vec3d> x_;
   std::vector<double> values_; // per particle, in cell order: p, v.x, v.y, v.z
   std::vector<std::uint32_t> cellOffsets_;
-  int nx_ = 1, ny_ = 1, nz_ = 1;
-  Vec3d origin_{ 0, 0, 0 };
+  GridGeometry<double> grid_{}; // cells h wide over the domain, made once
 };
 
 // A probe's reading.
