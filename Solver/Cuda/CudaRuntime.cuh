@@ -276,6 +276,80 @@ __global__ void __launch_bounds__(kReduceThreads) compressionFinalKernel(
   }
 }
 
+// The solids' loads (KernelExecutor::sumLoads): block (b, o) sums load o over the particles of its
+// lanes (StepSchedule.h) in a fixed tree; blockSums[(o kLoadBlocks + b) kLoadValues + v].
+template <class F>
+__global__ void __launch_bounds__(kReduceThreads) loadBlocksKernel(
+  std::uint32_t n, const AdaptiveState* state, double* blockSums, F f)
+{
+  __shared__ double shared[kLoadValues][kReduceThreads];
+  if (state && state->done)
+  {
+    return;
+  }
+  const int o = static_cast<int>(blockIdx.y);
+  double acc[kLoadValues] = {};
+  const std::uint32_t stride = static_cast<std::uint32_t>(kLoadBlocks) * kReduceThreads;
+  for (std::uint32_t i = blockIdx.x * kReduceThreads + threadIdx.x; i < n; i += stride)
+  {
+    f(i, o, acc);
+    if (i >= n - stride)
+    {
+      break; // i + stride would wrap around 2^32
+    }
+  }
+  for (int v = 0; v < kLoadValues; ++v)
+  {
+    shared[v][threadIdx.x] = acc[v];
+  }
+  __syncthreads();
+  for (int v = 0; v < kLoadValues; ++v)
+  {
+    treeSum(shared[v]);
+  }
+  if (threadIdx.x < kLoadValues)
+  {
+    blockSums[(static_cast<std::size_t>(o) * gridDim.x + blockIdx.x) * kLoadValues + threadIdx.x] =
+      shared[threadIdx.x][0];
+  }
+}
+
+// Block o adds load o's block sums, in a fixed tree, to loads[o kLoadValues + v]. F, the blocks'
+// functor, only gives each translation unit an instance of its own.
+template <class F>
+__global__ void __launch_bounds__(kReduceThreads) loadFinalKernel(
+  const AdaptiveState* state, const double* blockSums, double* loads)
+{
+  __shared__ double shared[kLoadValues][kReduceThreads];
+  if (state && state->done)
+  {
+    return;
+  }
+  const std::size_t o = blockIdx.x;
+  constexpr std::size_t blocks = kLoadBlocks;
+  double acc[kLoadValues] = {};
+  for (std::size_t b = threadIdx.x; b < blocks; b += kReduceThreads)
+  {
+    for (int v = 0; v < kLoadValues; ++v)
+    {
+      acc[v] += blockSums[(o * blocks + b) * kLoadValues + v];
+    }
+  }
+  for (int v = 0; v < kLoadValues; ++v)
+  {
+    shared[v][threadIdx.x] = acc[v];
+  }
+  __syncthreads();
+  for (int v = 0; v < kLoadValues; ++v)
+  {
+    treeSum(shared[v]);
+  }
+  if (threadIdx.x < kLoadValues)
+  {
+    loads[o * kLoadValues + threadIdx.x] += shared[threadIdx.x][0];
+  }
+}
+
 // A captured step's next projection runs only if this reduction did not end the solve. A kernel
 // of its own, launched only into graphs, so that the stage-by-stage step calls no device runtime
 // function: that is the step compute-sanitizer's racecheck checks (2025.3.1 dies with SIGSEGV
@@ -451,6 +525,22 @@ public:
       setBranchKernel<Real><<<1, 1, 0, stream_>>>(state, next.handle);
       check(cudaGetLastError(), "kernel launch (branch)");
     }
+  }
+
+  template <class F>
+  void sumLoads(std::uint32_t n, int count, const AdaptiveState* state, double* blockSums,
+    double* loads, F f)
+  {
+    if (count <= 0)
+    {
+      return;
+    }
+    loadBlocksKernel<<<dim3(kLoadBlocks, static_cast<unsigned>(count)), kReduceThreads, 0,
+      stream_>>>(n, state, blockSums, f);
+    check(cudaGetLastError(), "kernel launch (loads)");
+    loadFinalKernel<F><<<static_cast<unsigned>(count), kReduceThreads, 0, stream_>>>(
+      state, blockSums, loads);
+    check(cudaGetLastError(), "kernel launch (loads)");
   }
 
   // The indices i in [0, n) with pred(i), ascending, into out; their number into *count (device

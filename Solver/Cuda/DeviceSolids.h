@@ -1,5 +1,6 @@
 // The solid obstacles (Physics/Boundary.h) of a GPU stepper in one block of device memory: the
-// grids' views, the boundary table (poly6, spiky, spiky2, tensile), then each grid's nodes. Laid
+// grids' views, the boundary table (poly6, spiky, spiky2, tensile), the loads' sums (StepConstants'
+// loads and loadBlockSums), then each grid's nodes. Laid
 // out here once for both GPU steppers (DeviceStepperScans.h, DeviceSubdomainSolids.h), on their
 // device policy.
 #pragma once
@@ -32,6 +33,8 @@ void* replaceSolids(Device& device, void* old, const std::vector<DistanceGrid>& 
   constants.obstacles = nullptr;
   constants.obstacleCount = 0;
   constants.boundary = BoundaryTable<Real>{};
+  constants.loads = nullptr;
+  constants.loadBlockSums = nullptr;
   if (obstacles.empty())
   {
     return nullptr;
@@ -40,7 +43,11 @@ void* replaceSolids(Device& device, void* old, const std::vector<DistanceGrid>& 
   const std::vector<Real> table = t.packed<Real>();
   auto aligned = [](std::size_t bytes) { return (bytes + 255) / 256 * 256; };
   const std::size_t viewBytes = aligned(obstacles.size() * sizeof(DistanceGridView<Real>));
-  std::size_t total = viewBytes + aligned(table.size() * sizeof(Real));
+  const std::size_t loadsAt = viewBytes + aligned(table.size() * sizeof(Real));
+  const std::size_t loadBytes = aligned(obstacles.size() * kLoadValues * sizeof(double));
+  const std::size_t blockSumsAt = loadsAt + loadBytes;
+  std::size_t total = blockSumsAt +
+    aligned(obstacles.size() * std::size_t(kLoadBlocks) * kLoadValues * sizeof(double));
   std::vector<std::size_t> nodesAt;
   for (const DistanceGrid& g : obstacles)
   {
@@ -61,8 +68,12 @@ void* replaceSolids(Device& device, void* old, const std::vector<DistanceGrid>& 
   device.upload(base, placedViews.data(), placedViews.size() * sizeof(DistanceGridView<Real>));
   Real* onDevice = reinterpret_cast<Real*>(base + viewBytes);
   device.upload(onDevice, table.data(), table.size() * sizeof(Real));
+  auto exec = device.executor();
+  exec.fillZero(base + loadsAt, loadBytes);
   device.synchronize();
   constants.obstacles = reinterpret_cast<const DistanceGridView<Real>*>(base);
+  constants.loads = reinterpret_cast<double*>(base + loadsAt);
+  constants.loadBlockSums = reinterpret_cast<double*>(base + blockSumsAt);
   constants.obstacleCount = static_cast<int>(obstacles.size());
   constants.boundary = t.view(onDevice);
   return block;

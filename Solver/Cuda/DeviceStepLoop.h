@@ -97,6 +97,11 @@ public:
     {
       exec_.fillZero(b_.adaptive, sizeof(AdaptiveState));
     }
+    if (k_.loads)
+    {
+      exec_.fillZero(k_.loads,
+        static_cast<std::size_t>(k_.obstacleCount) * kLoadValues * sizeof(double));
+    }
     // Projection k runs when the reduction before it says so (proceed[k]).
     branches_.resize(static_cast<std::size_t>(k_.iterations) + 1);
     for (int k = 0; k <= k_.iterations; ++k)
@@ -118,8 +123,11 @@ public:
       mayStop ? k_.tolerance : -1.0, (*proceed_)[p.iteration + 1]);
   }
 
-  // The CUDA stepper does not sum the solids' loads yet (StepReport::loads stays empty).
-  void sumLoads(const Projection&) {}
+  // Into k.loads, which lastStep() reads back.
+  void sumLoads(const Projection& p)
+  {
+    detail::loadsPass(exec_, k_, n_, view(p.iteration), adaptive_ ? b_.adaptive : nullptr);
+  }
 
   // With a fixed count the last correction also updates the velocity (line 21); in adaptive
   // mode no correction knows it is the last, and finishSolve does.

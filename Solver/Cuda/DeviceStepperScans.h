@@ -75,19 +75,39 @@ StepReport DeviceStepper<Real, Device>::lastStep() const
   {
     return report;
   }
-  if (constants_.tolerance <= 0)
+  const bool adaptive = constants_.tolerance > 0;
+  // Fixed mode computes no reduction inside a step, as on the CPU.
+  report.iterations = constants_.iterations;
+  report.densityError = std::numeric_limits<double>::quiet_NaN();
+  const std::size_t solids = static_cast<std::size_t>(constants_.obstacleCount);
+  if (!adaptive && solids == 0)
   {
-    // Fixed mode computes no reduction inside a step, as on the CPU.
-    report.iterations = constants_.iterations;
-    report.densityError = std::numeric_limits<double>::quiet_NaN();
     return report;
   }
   device_->activate();
   AdaptiveState state{};
-  device_->download(&state, buffers_.adaptive, sizeof state);
+  std::vector<double> loads(solids * kLoadValues);
+  if (adaptive)
+  {
+    device_->download(&state, buffers_.adaptive, sizeof state);
+  }
+  if (solids > 0)
+  {
+    device_->download(loads.data(), constants_.loads, loads.size() * sizeof(double));
+  }
   device_->synchronize();
-  report.iterations = state.iterations;
-  report.densityError = state.densityError;
+  if (adaptive)
+  {
+    report.iterations = state.iterations;
+    report.densityError = state.densityError;
+  }
+  report.loads.resize(solids);
+  for (std::size_t o = 0; o < solids; ++o)
+  {
+    const double* v = &loads[o * kLoadValues];
+    report.loads[o].force = Vec3d{ v[0], v[1], v[2] };
+    report.loads[o].torque = Vec3d{ v[3], v[4], v[5] };
+  }
   return report;
 }
 

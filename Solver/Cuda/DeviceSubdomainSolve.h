@@ -57,6 +57,11 @@ public:
     positions_[1] = s_.vec_[r_.free];
     auto exec = device_.executor();
     exec.fillZero(s_.maxMoved_, static_cast<std::size_t>(k_.iterations) * sizeof(unsigned long long));
+    if (k_.loads)
+    {
+      exec.fillZero(k_.loads,
+        static_cast<std::size_t>(k_.obstacleCount) * kLoadValues * sizeof(double));
+    }
   }
 
   void densityAndLambda(const Projection& p)
@@ -78,8 +83,17 @@ public:
       c.within(s_.parameters_.densityErrorTolerance, s_.parameters_.maxDensityErrorTolerance);
   }
 
-  // The GPU sub-domain does not sum the solids' loads yet (StepReport::loads stays empty).
-  void sumLoads(const Projection&) {}
+  // This rank's owned particles' share, into k.loads; the ranks' are added after the solve.
+  void sumLoads(const Projection& p)
+  {
+    if (stopped_)
+    {
+      return;
+    }
+    auto exec = device_.executor();
+    detail::loadsPass(
+      exec, k_, n_, view(p.iteration), nullptr, detail::ListedParticles{ s_.ownedList_ });
+  }
 
   // Chebyshev's blend reads each owned particle's own positions two projections back, which
   // the other position buffer still holds (StepSchedule.h's correctionPass). The last
@@ -114,6 +128,7 @@ public:
   // runs here for the positions reached.
   void finishSolve()
   {
+    finishLoads();
     if (k_.tolerance > 0)
     {
       s_.report_.iterations = performed_;
@@ -168,6 +183,28 @@ public:
   }
 
 private:
+  // The step's loads: every rank's sums added in rank order, as the CPU sub-domain adds them.
+  void finishLoads()
+  {
+    const std::size_t solids = static_cast<std::size_t>(k_.obstacleCount);
+    s_.report_.loads.clear();
+    if (solids == 0)
+    {
+      return;
+    }
+    std::vector<double> mine(solids * kLoadValues);
+    device_.download(mine.data(), k_.loads, mine.size() * sizeof(double));
+    device_.synchronize();
+    const std::vector<double> all = distributed::sumInRankOrder(s_.communicator_, mine);
+    s_.report_.loads.resize(solids);
+    for (std::size_t o = 0; o < solids; ++o)
+    {
+      const double* v = &all[o * kLoadValues];
+      s_.report_.loads[o].force = Vec3d{ v[0], v[1], v[2] };
+      s_.report_.loads[o].torque = Vec3d{ v[3], v[4], v[5] };
+    }
+  }
+
   // pass(executor, buffers, count, particles) over the border particles on the border stream,
   // the fields a (and b) of the send lists on their way out, the same pass over the interior
   // beside them, then the neighbours' fields into the ghost slots before the next pass.

@@ -26,6 +26,14 @@
 //                                        next (a Branch) is set to whether the solve goes on
 //   Branch, branch() -> Branch           a condition for one body of runIfChain, off unless a
 //                                        reduction sets it (Exec::noBranch() names none)
+//   sumLoads(n, count, state, blockSums, loads, f)   loads[o * kLoadValues + v] += the sum over
+//                                        i in [0, n) of what f(i, o, acc) adds to acc[v], for
+//                                        o in [0, count): per load, kLoadBlocks blocks of 256
+//                                        lanes, particle i in lane i % 256 of block
+//                                        (i / 256) % kLoadBlocks, each block's lanes added in a
+//                                        fixed tree, then the blocks' sums likewise (blockSums:
+//                                        kLoadValues per block and load); nothing once state
+//                                        (may be null) is done
 //   runIfChain(branches, first, end, body)   body(exec', k) for k = first, first + 1, ... < end,
 //                                        each only when branches[k] is set and every body before
 //                                        it ran: while the step is captured, CUDA graph conditional
@@ -78,6 +86,12 @@ struct ConfinementStage {};
 // Adaptive mode's mean compression is summed in blocks of this many particles, in order (on the
 // device each block in a fixed tree, then the block sums by one block): the same on every run.
 constexpr int kCompressionBlock = 4096;
+
+// The solids' loads (StepLoop.h's sumLoads) are summed by this many blocks of 256 lanes, whatever
+// the particle count (their partial sums then fit beside the solids, DeviceSolids.h): a force and
+// a torque, kLoadValues doubles per block and solid.
+constexpr int kLoadBlocks = 512;
+constexpr int kLoadValues = 6;
 
 struct AdaptiveState
 {
@@ -138,6 +152,10 @@ struct StepConstants
   const DistanceGridView<Real>* obstacles;
   int obstacleCount;
   BoundaryTable<Real> boundary;
+  // Per solid, beside them: the step's force and torque about the world's origin (kLoadValues
+  // each), summed over its projections, and their block sums (sumLoads).
+  double* loads;
+  double* loadBlockSums;
 };
 
 // The constants of a step for given parameters: skin is how far beyond h the masks reach, as a
@@ -497,6 +515,34 @@ void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   {
     correctionPassOf<false>(exec, b, n, f, iteration, last, state, omega, visit);
   }
+}
+
+// What the fluid pushes each solid with in this projection (Equations.h's solidLoads, the same
+// terms the correction that follows adds), into b.loads. The sums for solid o read a view of that
+// solid alone, so that each particle looks up o's field only and the terms are added per solid.
+template <class Real, class Exec, class Visit = AllParticles>
+void loadsPass(Exec& exec, const StepConstants<Real>& k, std::uint32_t n,
+  const FluidView<Real, MaskedNeighbors<Real>>& f, const AdaptiveState* state,
+  Visit visit = Visit{})
+{
+  if (k.obstacleCount == 0 || !k.loads)
+  {
+    return;
+  }
+  exec.sumLoads(n, k.obstacleCount, state, k.loadBlockSums, k.loads,
+    [=] PBF_HD(std::uint32_t k, int o, double* acc) {
+      FluidView<Real, MaskedNeighbors<Real>> one = f;
+      one.obstacles = f.obstacles + o;
+      one.obstacleCount = 1;
+      solidLoads(visit(k), one, [&](int, const Vec3<Real>& force, const Vec3<Real>& torque) {
+        acc[0] += static_cast<double>(force.x);
+        acc[1] += static_cast<double>(force.y);
+        acc[2] += static_cast<double>(force.z);
+        acc[3] += static_cast<double>(torque.x);
+        acc[4] += static_cast<double>(torque.y);
+        acc[5] += static_cast<double>(torque.z);
+      });
+    });
 }
 
 // Adaptive mode, after the projections: the corrected positions, in positions[state->iterations

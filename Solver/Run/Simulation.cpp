@@ -62,7 +62,7 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   const std::vector<DistanceGrid> solids = solidFields(scene_.solids, parameters_);
   motions_ = pbf::solidMotions(scene_.solids);
   solidReach_ = solidReaches(scene_.solids, motions_);
-  makeBodies(backend);
+  makeBodies();
   const std::vector<SolidPose> poses = solidPoses(0.0);
   const ParticleBatch initial =
     solids.empty() ? given : outsideSolids(given, solids, poses, seededInsideSolids_);

@@ -215,7 +215,7 @@ public:
 private:
   void stepOnce(double dt, double end, AdvanceReport& report); // `end`: time() after it
   // The scene's obstacles with a density (InvalidInput naming one that cannot be a body).
-  void makeBodies(Backend backend);
+  void makeBodies();
   // The bodies over a step of dt by their last loads, gravity and the tank's walls.
   void moveBodies(double dt);
   // A step's loads (StepReport::loads) into the report's impulses and the bodies' last loads.

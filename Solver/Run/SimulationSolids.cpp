@@ -8,7 +8,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <string>
 
 namespace pbf
@@ -68,7 +67,7 @@ void Simulation::setSolidMotion(std::size_t solid, SolidMotion motion)
   }
 }
 
-void Simulation::makeBodies(Backend backend)
+void Simulation::makeBodies()
 {
   for (std::size_t k = 0; k < scene_.solids.size(); ++k)
   {
@@ -76,14 +75,6 @@ void Simulation::makeBodies(Backend backend)
     if (solid.density == 0)
     {
       continue; // static or prescribed; any other density is a body's, checked below
-    }
-    if (backend == Backend::CUDA)
-    {
-      std::ostringstream text;
-      text << solidName(k) << ".density = " << solid.density
-           << ": bodies the fluid moves run on the Serial and CPU (OpenMP) backends for now; "
-              "choose one of them";
-      throw InvalidInput(text.str());
     }
     Body body;
     body.solid = k;

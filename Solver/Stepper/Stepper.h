@@ -84,8 +84,8 @@ struct StepReport
   // the loop. NaN in fixed mode, which computes no reduction inside a step (see statistics()).
   double densityError = 0;
   // One per solid obstacle, in the order of setObstacles, then with mirror walls one per wall of
-  // the domain (-x, +x, -y, +y, -z, +z), over every rank; empty where the stepper has neither or
-  // does not sum loads yet (the CUDA steppers).
+  // the domain (-x, +x, -y, +y, -z, +z), over every rank; empty where the stepper has neither.
+  // The GPU steppers sum the solids' loads only (no walls').
   std::vector<SolidLoad> loads;
 };
 

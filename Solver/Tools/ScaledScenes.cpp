@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace pbf
 {
@@ -22,6 +23,25 @@ Scene scaledDamBreak(double particles, double spacing)
   scene.domain.min = { -halfX, 0, -halfZ };
   scene.domain.max = { halfX, 4.0 / 3.0 * layers * spacing, halfZ };
   return scene;
+}
+
+void addFloatingBoxes(Scene& scene, int count, double spacing)
+{
+  const double side = 8 * spacing;
+  const double z0 = scene.domain.min.z;
+  const double pitch = (scene.domain.max.z - z0) / std::max(count, 1);
+  const double x = 0.5 * (scene.domain.min.x + scene.domain.max.x);
+  for (int k = 0; k < count; ++k)
+  {
+    SolidRegion box;
+    box.kind = SolidRegion::Kind::Box;
+    const double z = z0 + (k + 0.5) * pitch;
+    box.box = { { x - 0.5 * side, spacing, z - 0.5 * side },
+      { x + 0.5 * side, spacing + side, z + 0.5 * side } };
+    box.density = 500;
+    box.name = "box " + std::to_string(k);
+    scene.solids.push_back(box);
+  }
 }
 
 } // namespace pbf

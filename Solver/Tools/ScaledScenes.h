@@ -14,4 +14,9 @@ namespace pbf
 // the origin so that float positions round as little as possible in the wide tanks.
 Scene scaledDamBreak(double particles, double spacing);
 
+// `count` boxes of half the water's density (bodies the fluid moves) added to a scaled dam break:
+// cubes of 8 spacings resting just above the floor in a row across the tank's middle (along z),
+// in the surge's way.
+void addFloatingBoxes(Scene& scene, int count, double spacing);
+
 } // namespace pbf

@@ -12,6 +12,7 @@
 #include "RefinedBench.h"
 #include "Scene.h"
 #include "ScaledScenes.h"
+#include "Simulation.h"
 #include "Stepper.h"
 #include "ToolOptions.h"
 
@@ -224,6 +225,41 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
   return r;
 }
 
+// --bodies N: the same scene run as users run it, through Simulation with fixed steps, with N
+// boxes the fluid moves (addFloatingBoxes; 0: none, the path's own baseline). Each step reads the
+// loads back and places the bodies before the next, so the host waits on the device every step:
+// timed on the host's steady clock, that wait included.
+Result bodiesBenchmark(const ToolOptions& options, double particles, int warmup, int steps,
+  int bodies)
+{
+  Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
+  addFloatingBoxes(scene, bodies, options.parameters.particleSpacing);
+  Parameters parameters = withSceneDomain(options.parameters, scene);
+  parameters.timeStepping = TimeStepping::Fixed;
+  const auto setup0 = std::chrono::steady_clock::now();
+  Simulation simulation(scene, parameters, options.backend, options.precision);
+  Result r;
+  r.backend = toString(options.backend);
+  r.precision = toString(options.precision);
+  r.iterations = parameters.solverIterations;
+  r.particles = simulation.stepper().size();
+  r.steps = steps;
+  r.neighbors = std::to_string(bodies) + " bod" + (bodies == 1 ? "y" : "ies");
+  r.device = simulation.stepper().description();
+  simulation.advance(static_cast<std::uint64_t>(warmup));
+  r.setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - setup0).count();
+  std::vector<double> ms;
+  for (int s = 0; s < steps; ++s)
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    simulation.advance(1);
+    ms.push_back(
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  summarize(ms, simulation.stepper(), r);
+  return r;
+}
+
 std::string quoted(const std::string& text)
 {
   std::string out = "\"";
@@ -314,7 +350,7 @@ std::vector<double> parseCounts(const std::string& text)
 void refuseTheOtherBenchmarksOptions(const ToolOptions& options, bool refined)
 {
   const std::vector<std::string> widenedOnly = { "particles", "sweep", "steps", "warmup",
-    "neighbors", "skin", "graphs", "block", "solid", "json", "label" };
+    "neighbors", "skin", "graphs", "block", "solid", "bodies", "json", "label" };
   const std::vector<std::string> refinedOnly = { "until", "frame", "modes", "csv" };
   for (const std::string& key : refined ? widenedOnly : refinedOnly)
   {
@@ -363,6 +399,8 @@ int main(int argc, char** argv)
     { "frame", "--refined: frame interval [s] (default 1/60)" },
     { "modes", "--refined: comma-separated of fixed, fixed4, defaults (default all three)" },
     { "csv", "--refined: a folder for one CSV of frames per run" },
+    { "bodies", "N >= 0: run through Simulation with N floating boxes in the surge's way (what "
+                "bodies cost; the loads read back every step), instead of the bare stepper" },
     { "solid", "1: a sphere solid in the surge's way, 2: the MARIN box, 3: the sphere rolling "
                "at 1 m/s (what a solid costs; default 0: none)" },
   };
@@ -406,6 +444,12 @@ int main(int argc, char** argv)
     {
       throw InvalidInput("--steps must be >= 1 and --warmup >= 0");
     }
+    const int bodies = std::stoi(extra("bodies", "-1"));
+    if (options.extra.count("bodies") && (bodies < 0 || solid != "0"))
+    {
+      throw InvalidInput("--bodies = " + options.extra["bodies"] +
+        ": must be a count >= 0, and not with --solid");
+    }
 
     std::printf("pbf_bench: dam break widened to N particles, %d warm-up + %d timed steps; %s\n",
       warmup, steps, describe(options.parameters).c_str());
@@ -416,8 +460,10 @@ int main(int argc, char** argv)
     std::vector<Result> results;
     for (double count : counts)
     {
-      results.push_back(benchmark(
-        options, count, warmup, steps, neighbors, skin, graphs, block, std::stoi(solid)));
+      results.push_back(bodies >= 0
+          ? bodiesBenchmark(options, count, warmup, steps, bodies)
+          : benchmark(
+              options, count, warmup, steps, neighbors, skin, graphs, block, std::stoi(solid)));
       printRow(results.back());
     }
     if (!results.empty())

@@ -27,6 +27,8 @@ struct DecomposedOutcome
   std::uint64_t migrated = 0;      // particles received by any rank, over all steps
   std::uint64_t ghosts = 0;        // ghosts received by any rank, over all steps
   int cutsMoved = 0;               // steps that began with a new cut (rank 0's count)
+  std::vector<std::vector<SolidLoad>> loads; // rank 0's lastStep().loads after each step
+  bool loadsAgreeOnEveryRank = true; // every rank reported rank 0's loads, bit for bit
 };
 
 using DecomposedFactory = std::function<std::unique_ptr<distributed::DecomposedStepper>(
@@ -40,6 +42,7 @@ inline DecomposedOutcome runDecomposed(int ranks, const PresetFluid& setup, int 
   std::vector<Snapshot<double>> parts(static_cast<std::size_t>(ranks));
   std::vector<std::uint64_t> migrated(static_cast<std::size_t>(ranks), 0);
   std::vector<std::uint64_t> ghosts(static_cast<std::size_t>(ranks), 0);
+  std::vector<std::vector<std::vector<SolidLoad>>> loads(static_cast<std::size_t>(ranks));
   DecomposedOutcome outcome;
   distributed::runThreadCluster(ranks, [&](distributed::Communicator& communicator) {
     const auto r = static_cast<std::size_t>(communicator.rank());
@@ -53,6 +56,7 @@ inline DecomposedOutcome runDecomposed(int ranks, const PresetFluid& setup, int 
       stepper->step();
       migrated[r] += stepper->lastExchange().migrated;
       ghosts[r] += stepper->lastExchange().ghosts;
+      loads[r].push_back(stepper->lastStep().loads);
       if (r == 0)
       {
         outcome.cutsMoved += stepper->lastExchange().cutMoved ? 1 : 0;
@@ -71,10 +75,22 @@ inline DecomposedOutcome runDecomposed(int ranks, const PresetFluid& setup, int 
     stepper->read(parts[r]);
   });
   outcome.state = joined(parts);
+  outcome.loads = loads[0];
   for (std::size_t r = 0; r < parts.size(); ++r)
   {
     outcome.migrated += migrated[r];
     outcome.ghosts += ghosts[r];
+    for (std::size_t s = 0; s < loads[r].size(); ++s)
+    {
+      for (std::size_t o = 0; o < loads[r][s].size(); ++o)
+      {
+        const SolidLoad& a = loads[r][s][o];
+        const SolidLoad& b = loads[0][s].at(o);
+        outcome.loadsAgreeOnEveryRank = outcome.loadsAgreeOnEveryRank &&
+          a.force.x == b.force.x && a.force.y == b.force.y && a.force.z == b.force.z &&
+          a.torque.x == b.torque.x && a.torque.y == b.torque.y && a.torque.z == b.torque.z;
+      }
+    }
   }
   return outcome;
 }

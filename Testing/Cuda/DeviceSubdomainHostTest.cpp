@@ -81,8 +81,9 @@ std::vector<SolidPose> poseAfterStep(const SolidMotion& motion, const Parameters
   return { motion.at((s + 1) * p.timeStep) };
 }
 
+// loads, when given, receives each step's load on the solid.
 Snapshot<double> serialWithSolid(const PresetFluid& setup, const DistanceGrid& solid, int steps,
-  const SolidMotion& motion = {})
+  const SolidMotion& motion = {}, std::vector<SolidLoad>* loads = nullptr)
 {
   auto serial = makeStepper(Backend::Serial, Precision::Double, setup.parameters, setup.fluid);
   serial->setObstacles({ solid });
@@ -93,6 +94,10 @@ Snapshot<double> serialWithSolid(const PresetFluid& setup, const DistanceGrid& s
       serial->setObstaclePoses(poseAfterStep(motion, setup.parameters, s));
     }
     serial->step();
+    if (loads)
+    {
+      loads->push_back(serial->lastStep().loads.at(0));
+    }
   }
   Snapshot<double> state;
   serial->read(state);
@@ -339,7 +344,8 @@ TEST(DeviceSubdomainOnHost, SolidsMatchTheSerialBackend)
   // A sphere just beyond the column's face, within h of its front particles from the start.
   const PresetFluid setup = presetFluid("dam_break", 0.04);
   const DistanceGrid sphere = sphereDistance({ 0.5, 0.1, 0.3 }, 0.09, 0.02, 0.08);
-  const Snapshot<double> reference = serialWithSolid(setup, sphere, 10);
+  std::vector<SolidLoad> loads;
+  const Snapshot<double> reference = serialWithSolid(setup, sphere, 10, {}, &loads);
   const DecomposedFactory plain = onHost<double>();
   const DecomposedFactory withSphere = [&](distributed::Communicator& communicator,
                                          const PresetFluid& fluid) {
@@ -358,6 +364,22 @@ TEST(DeviceSubdomainOnHost, SolidsMatchTheSerialBackend)
     const DecomposedOutcome many = runDecomposed(ranks, setup, 10, withSphere, true);
     EXPECT_LE(maxRelativePositionError(many.state, reference), 1e-9) << ranks << " ranks";
     EXPECT_GT(many.ghosts, 0u) << ranks << " ranks: no ghosts";
+    // Every rank's share of the sphere's load, added in rank order: the serial load to the
+    // positions' rounding (1e-9 of the largest force) and the same on every rank.
+    ASSERT_EQ(many.loads.size(), loads.size());
+    double largest = 0;
+    for (const SolidLoad& load : loads)
+    {
+      largest = std::max(largest, length(load.force));
+    }
+    ASSERT_GT(largest, 0.0) << "the fluid never pressed the sphere";
+    for (std::size_t s = 0; s < loads.size(); ++s)
+    {
+      ASSERT_EQ(many.loads[s].size(), 1u);
+      EXPECT_LE(length(many.loads[s][0].force - loads[s].force), 1e-9 * largest) << s;
+      EXPECT_LE(length(many.loads[s][0].torque - loads[s].torque), 1e-9 * largest) << s;
+    }
+    EXPECT_TRUE(many.loadsAgreeOnEveryRank) << ranks << " ranks";
   }
 }
 

@@ -143,6 +143,62 @@ public:
     }
   }
 
+  // The solids' loads summed as the kernels sum them (CudaRuntime.cuh's loadBlocksKernel): per
+  // load, kLoadBlocks blocks of 256 lanes, each lane's particles in order, the lanes of a block
+  // added in a tree, then the blocks' sums as 256 lanes in a tree.
+  template <class F>
+  void sumLoads(std::uint32_t n, int count, const cuda::AdaptiveState* state, double*,
+    double* loads, F f)
+  {
+    if (state && state->done)
+    {
+      return;
+    }
+    constexpr std::size_t threads = 256;
+    constexpr std::size_t blocks = cuda::kLoadBlocks;
+    constexpr int values = cuda::kLoadValues;
+    const auto tree = [](std::vector<double>& lanes) {
+      for (std::size_t width = threads / 2; width > 0; width >>= 1)
+      {
+        for (std::size_t t = 0; t < width; ++t)
+        {
+          lanes[t] += lanes[t + width];
+        }
+      }
+      return lanes[0];
+    };
+    for (int o = 0; o < count; ++o)
+    {
+      std::vector<double> acc(blocks * threads * values, 0.0);
+      for (std::uint32_t i = 0; i < n; ++i)
+      {
+        f(i, o, &acc[(i % (blocks * threads)) * values]);
+      }
+      std::vector<double> blockSums(blocks * values);
+      for (std::size_t b = 0; b < blocks; ++b)
+      {
+        for (int v = 0; v < values; ++v)
+        {
+          std::vector<double> lanes(threads);
+          for (std::size_t t = 0; t < threads; ++t)
+          {
+            lanes[t] = acc[(b * threads + t) * values + v];
+          }
+          blockSums[b * values + v] = tree(lanes);
+        }
+      }
+      for (int v = 0; v < values; ++v)
+      {
+        std::vector<double> lanes(threads, 0.0);
+        for (std::size_t b = 0; b < blocks; ++b)
+        {
+          lanes[b % threads] += blockSums[b * values + v];
+        }
+        loads[o * values + v] += tree(lanes);
+      }
+    }
+  }
+
   template <class Pred>
   void selectIf(std::uint32_t n, Pred pred, std::uint32_t* out, std::uint32_t* count)
   {

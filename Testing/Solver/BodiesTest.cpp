@@ -139,12 +139,6 @@ TEST(Bodies, BadBodiesAreInvalidInputNamingThem)
   shell.solids[0].mesh.triangles = { { 0, 1, 2 } };
   EXPECT_NE(errorOf(shell).find("box: a shell (thickness > 0) encloses no solid"), std::string::npos)
     << errorOf(shell);
-  // Checked before the backend is: on any machine.
-  const std::string cuda = errorOf(floatingBox(0.5), Backend::CUDA);
-  EXPECT_NE(cuda.find("box.density = 500: bodies the fluid moves run on the Serial and CPU (OpenMP) "
-                      "backends"),
-    std::string::npos)
-    << cuda;
   Scene moved = floatingBox(0.5);
   moved.solids[0].density = std::nan("");
   EXPECT_NE(errorOf(moved).find("box: density = nan"), std::string::npos) << errorOf(moved);
