@@ -47,22 +47,56 @@ struct DistanceGridView
   // farther than h from the solid, whose grid is padded by h).
   PBF_HD PBF_INLINE Real at(Vec3<Real> q, Vec3<Real>* gradient) const
   {
-    if (moving)
+    const Real value = atInGridFrame(toGridFrame(q), gradient);
+    if (gradient)
     {
-      const Vec3<Real> d = q - translation;
-      q = { rotation[0] * d.x + rotation[3] * d.y + rotation[6] * d.z,
-        rotation[1] * d.x + rotation[4] * d.y + rotation[7] * d.z,
-        rotation[2] * d.x + rotation[5] * d.y + rotation[8] * d.z };
-    }
-    const Real value = atInGridFrame(q, gradient);
-    if (moving && gradient)
-    {
-      const Vec3<Real> l = *gradient;
-      *gradient = { rotation[0] * l.x + rotation[1] * l.y + rotation[2] * l.z,
-        rotation[3] * l.x + rotation[4] * l.y + rotation[5] * l.z,
-        rotation[6] * l.x + rotation[7] * l.y + rotation[8] * l.z };
+      *gradient = toWorldDirection(*gradient);
     }
     return value;
+  }
+
+  // The field and its gradient at q where q lies on the grid; false beyond it, where the solid is
+  // farther than h (the grid is padded by h), without reading a node: a particle pays the lookup
+  // of the solids near it only, however many the scene holds.
+  PBF_HD PBF_INLINE bool within(const Vec3<Real>& q, Real* value, Vec3<Real>* gradient) const
+  {
+    const Vec3<Real> local = toGridFrame(q);
+    const Real u[3] = { (local.x - origin.x) * inverseCell, (local.y - origin.y) * inverseCell,
+      (local.z - origin.z) * inverseCell };
+    // Written so that a NaN coordinate counts as on the grid, where at() clamps it.
+    if (u[0] < Real(0) || u[1] < Real(0) || u[2] < Real(0) || u[0] > Real(nx - 1) ||
+      u[1] > Real(ny - 1) || u[2] > Real(nz - 1))
+    {
+      return false;
+    }
+    *value = atInGridFrame(local, gradient);
+    *gradient = toWorldDirection(*gradient);
+    return true;
+  }
+
+  // A world point in the grid's frame (itself when the solid never moves).
+  PBF_HD PBF_INLINE Vec3<Real> toGridFrame(const Vec3<Real>& q) const
+  {
+    if (!moving)
+    {
+      return q;
+    }
+    const Vec3<Real> d = q - translation;
+    return { rotation[0] * d.x + rotation[3] * d.y + rotation[6] * d.z,
+      rotation[1] * d.x + rotation[4] * d.y + rotation[7] * d.z,
+      rotation[2] * d.x + rotation[5] * d.y + rotation[8] * d.z };
+  }
+
+  // A direction of the grid's frame in the world's.
+  PBF_HD PBF_INLINE Vec3<Real> toWorldDirection(const Vec3<Real>& l) const
+  {
+    if (!moving)
+    {
+      return l;
+    }
+    return { rotation[0] * l.x + rotation[1] * l.y + rotation[2] * l.z,
+      rotation[3] * l.x + rotation[4] * l.y + rotation[5] * l.z,
+      rotation[6] * l.x + rotation[7] * l.y + rotation[8] * l.z };
   }
 
   // The field at q given in the grid's own frame.

@@ -148,7 +148,11 @@ PBF_HD PBF_INLINE void forEachNearSolid(
   for (int o = 0; o < f.obstacleCount; ++o)
   {
     Vec3<Real> gradient;
-    const Real d = f.obstacles[o].at(q, &gradient);
+    Real d;
+    if (!f.obstacles[o].within(q, &d, &gradient))
+    {
+      continue;
+    }
     const Real g = length(gradient);
     if (d < f.c.kernels.h && g > Real(0))
     {
@@ -174,7 +178,11 @@ PBF_HD PBF_INLINE Vec3<Real> collideWithObstacles(Vec3<Real> q, const FluidView<
   for (int o = 0; o < f.obstacleCount; ++o)
   {
     Vec3<Real> gradient;
-    const Real d = f.obstacles[o].at(q, &gradient);
+    Real d;
+    if (!f.obstacles[o].within(q, &d, &gradient))
+    {
+      continue; // beyond the grid, outside the solid
+    }
     const Real g = length(gradient);
     if (d < Real(0) && g > Real(0))
     {

@@ -108,6 +108,7 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   {
     solidCentres_.push_back(solidCentre(solid));
   }
+  checkBodiesStartApart();
   nextId_ = static_cast<std::int64_t>(initial.position.size());
 
   // The divergence limits, from the initial state and the scene.
@@ -390,7 +391,7 @@ void Simulation::stepOnce(double dt, double end, AdvanceReport& report)
   {
     stepper_->setTimeStep(dt);
   }
-  moveBodies(dt);
+  moveBodies(dt, end);
   // The constraints hold at the step's end, with the solids where they are then.
   const std::vector<SolidPose> poses = solidPoses(end);
   if (!poses.empty())

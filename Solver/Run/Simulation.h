@@ -5,6 +5,7 @@
 
 #include "MassProperties.h"
 #include "Parameters.h"
+#include "BodyContact.h"
 #include "RigidBody.h"
 #include "Scene.h"
 #include "SignedDistance.h"
@@ -216,8 +217,13 @@ private:
   void stepOnce(double dt, double end, AdvanceReport& report); // `end`: time() after it
   // The scene's obstacles with a density (InvalidInput naming one that cannot be a body).
   void makeBodies();
-  // The bodies over a step of dt by their last loads, gravity and the tank's walls.
-  void moveBodies(double dt);
+  // The bodies over a step of dt to `end` by their last loads and gravity, kept apart from each
+  // other and the other solids (where they are at `end`) and inside the tank.
+  void moveBodies(double dt, double end);
+  // Solid k for BodyContact.h at `poses` (solidPoses or empty: as sampled).
+  ContactSide contactSide(std::size_t k, const std::vector<SolidPose>& poses);
+  // InvalidInput naming a body that starts through a wall of the tank or inside another solid.
+  void checkBodiesStartApart();
   // A step's loads (StepReport::loads) into the report's impulses and the bodies' last loads.
   void addLoads(const std::vector<SolidLoad>& loads, const std::vector<SolidPose>& poses,
     double dt, AdvanceReport& report);
@@ -250,6 +256,10 @@ private:
   std::vector<SolidMotion> motions_; // per solid of the scene, pivots given
   std::vector<DistanceGrid> solidFields_; // per solid, as the stepper was given them
   std::vector<double> solidReach_;   // per solid: its farthest point from its pivot [m]
+  // With bodies, per solid: what of it touches another, and its bounds' centre and half
+  // diagonal (as sampled), for the contacts between solids.
+  std::vector<ContactHull> hulls_;
+  std::vector<Box> bounds_;
   std::uint64_t lastGoodStep_ = 0;
   double lastGoodSpeed_ = 0; // max speed at lastGoodStep_; NaN when not known (after restore)
 };

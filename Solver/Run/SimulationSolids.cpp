@@ -2,12 +2,14 @@
 // and where they stand.
 #include "Simulation.h"
 
+#include "BodyContact.h"
 #include "MassProperties.h"
 #include "RigidBody.h"
 #include "Solids.h"
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <string>
 
 namespace pbf
@@ -119,13 +121,113 @@ std::string Simulation::loadName(std::size_t k) const
   return k < solids ? solidName(k) : walls[(k - solids) % 6];
 }
 
-void Simulation::moveBodies(double dt)
+void Simulation::moveBodies(double dt, double end)
 {
   for (Body& body : bodies_)
   {
-    body.state = keepInside(advanceRigid(body.state, body.mass, body.load.force,
-                              body.load.torque, parameters_.gravity, dt),
-      body.mass, body.hull, parameters_.domain);
+    body.state = advanceRigid(
+      body.state, body.mass, body.load.force, body.load.torque, parameters_.gravity, dt);
+  }
+  // Each body against every solid after it, in the scene's order (the result does not depend on
+  // anything else); the sides are placed anew for each pair, as the one before may have moved them.
+  const std::vector<SolidPose> fixed = posesAt(motions_, end);
+  for (const Body& body : bodies_)
+  {
+    for (std::size_t k = 0; k < scene_.solids.size(); ++k)
+    {
+      const bool bodyK = scene_.solids[k].density != 0;
+      if (k == body.solid || (bodyK && k < body.solid))
+      {
+        continue; // itself, or a pair of bodies met from the first of them
+      }
+      ContactSide a = contactSide(body.solid, fixed);
+      ContactSide b = contactSide(k, fixed);
+      separate(a, b);
+    }
+  }
+  for (Body& body : bodies_)
+  {
+    body.state = keepInside(body.state, body.mass, body.hull, parameters_.domain);
+  }
+}
+
+ContactSide Simulation::contactSide(std::size_t k, const std::vector<SolidPose>& poses)
+{
+  ContactSide side;
+  side.hull = &hulls_[k];
+  const Box& b = bounds_[k];
+  side.reach = 0.5 * length(b.max - b.min);
+  side.centre = (b.min + b.max) * 0.5;
+  for (Body& body : bodies_)
+  {
+    if (body.solid == k)
+    {
+      side.body = &body.state;
+      side.mass = &body.mass;
+      side.pose = poseOf(body.state, body.mass);
+      side.centre = body.state.centre;
+      side.reach = body.reach;
+    }
+  }
+  if (!side.body && k < poses.size())
+  {
+    side.pose = poses[k];
+    side.centre = side.pose.toWorld(side.centre);
+  }
+  const DistanceGridView<double> view = solidFields_[k].view<double>(solidFields_[k].phi.data());
+  side.field = side.pose.moving ? placed(view, side.pose) : view;
+  return side;
+}
+
+void Simulation::checkBodiesStartApart()
+{
+  if (bodies_.empty())
+  {
+    return;
+  }
+  for (std::size_t k = 0; k < scene_.solids.size(); ++k)
+  {
+    hulls_.push_back(surfaceHull(scene_.solids[k], parameters_.particleSpacing));
+    bounds_.push_back(solidBounds(scene_.solids[k], solidName(k)));
+  }
+  const std::vector<SolidPose> poses = posesAt(motions_, 0.0);
+  const Box& d = parameters_.domain;
+  // A thousandth of a spacing: a body placed on the floor or against another touches, it is not
+  // through.
+  const double tolerance = 1e-3 * parameters_.particleSpacing;
+  for (const Body& body : bodies_)
+  {
+    const Box& b = bounds_[body.solid];
+    const double through[6] = { d.min.x - b.min.x, b.max.x - d.max.x, d.min.y - b.min.y,
+      b.max.y - d.max.y, d.min.z - b.min.z, b.max.z - d.max.z };
+    static const char* const walls[6] = { "-x", "+x", "-y", "+y", "-z", "+z" };
+    for (int w = 0; w < 6; ++w)
+    {
+      if (through[w] > tolerance)
+      {
+        std::ostringstream text;
+        text << solidName(body.solid) << ": a body starts " << through[w] << " m through the tank's "
+             << walls[w] << " wall; place it inside the domain";
+        throw InvalidInput(text.str());
+      }
+    }
+    for (std::size_t k = 0; k < scene_.solids.size(); ++k)
+    {
+      if (k == body.solid)
+      {
+        continue;
+      }
+      ContactSide a = contactSide(body.solid, poses);
+      ContactSide other = contactSide(k, poses);
+      const double depth = deepestContact(a, other);
+      if (depth > tolerance)
+      {
+        std::ostringstream text;
+        text << solidName(body.solid) << ": a body starts " << depth << " m inside "
+             << solidName(k) << "; move them apart";
+        throw InvalidInput(text.str());
+      }
+    }
   }
 }
 

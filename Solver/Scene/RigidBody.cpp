@@ -89,9 +89,14 @@ RigidState restingState(const MassProperties& m)
 
 Vec3d angularVelocity(const RigidState& s, const MassProperties& m)
 {
-  // I_world^-1 L = R I^-1 R^T L.
+  return inverseInertiaTimes(s, m, s.angularMomentum);
+}
+
+Vec3d inverseInertiaTimes(const RigidState& s, const MassProperties& m, const Vec3d& v)
+{
+  // I_world^-1 v = R I^-1 R^T v.
   const Matrix r = s.orientation.matrix();
-  return times(r, times(inverse(m.inertia), transposeTimes(r, s.angularMomentum)));
+  return times(r, times(inverse(m.inertia), transposeTimes(r, v)));
 }
 
 RigidState advanceRigid(const RigidState& s, const MassProperties& m, const Vec3d& force,

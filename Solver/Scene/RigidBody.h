@@ -25,6 +25,8 @@ RigidState restingState(const MassProperties& m);
 
 // The angular velocity of a state, I_world^-1 L with I_world = R I R^T [rad/s].
 Vec3d angularVelocity(const RigidState& s, const MassProperties& m);
+// I_world^-1 v for the state's orientation: what an angular impulse v turns the body by.
+Vec3d inverseInertiaTimes(const RigidState& s, const MassProperties& m, const Vec3d& v);
 
 // One step of dt, semi-implicit (symplectic) Euler: the momenta first, from the force (plus the
 // body's weight, m gravity) and the torque about the centre; then the centre from the new velocity

@@ -144,6 +144,77 @@ TEST(Bodies, BadBodiesAreInvalidInputNamingThem)
   EXPECT_NE(errorOf(moved).find("box: density = nan"), std::string::npos) << errorOf(moved);
 }
 
+// Two heavy cubes dropped into a shallow pool, one onto the other, and a third onto a fixed cube:
+// none passes through another. A cube of side L holds the ball of radius L / 2 about its centre,
+// so two cubes that do not overlap have centres at least L apart, however they turn; the contacts
+// allow 5 % of L through. A cube that passed through would come within a fraction of L.
+TEST(Bodies, BodiesMeetEachOtherAndFixedSolidsWithoutPassingThrough)
+{
+  Scene scene;
+  scene.name = "stack";
+  scene.domain = { { 0, 0, 0 }, { 0.8, 0.8, 0.6 } };
+  scene.boxes.push_back({ { 0, 0, 0 }, { 0.8, 0.08, 0.6 }, { 0, 0, 0 } });
+  const double side = kHeight;
+  auto cube = [&](const std::string& name, const Vec3d& lo, double density) {
+    SolidRegion b;
+    b.kind = SolidRegion::Kind::Box;
+    b.box = { lo, lo + Vec3d{ side, side, side } };
+    b.density = density;
+    b.name = name;
+    return b;
+  };
+  scene.solids.push_back(cube("lower", { 0.1, 0.0, 0.2 }, 2000));
+  scene.solids.push_back(cube("upper", { 0.12, 0.3, 0.22 }, 2000));
+  scene.solids.push_back(cube("block", { 0.5, 0.0, 0.2 }, 0)); // fixed: no density
+  scene.solids.push_back(cube("faller", { 0.52, 0.4, 0.22 }, 1500));
+  const Vec3d blockCentre{ 0.58, 0.08, 0.28 };
+  Simulation simulation(scene, parameters(), Backend::OpenMP, Precision::Single);
+  ASSERT_EQ(simulation.bodies().size(), 3u);
+  double closest = 1, closestToBlock = 1;
+  for (int frame = 1; frame <= 60; ++frame)
+  {
+    simulation.advanceTo(frame / 60.0);
+    const RigidState& lower = simulation.bodies()[0].state;
+    const RigidState& upper = simulation.bodies()[1].state;
+    const RigidState& faller = simulation.bodies()[2].state;
+    closest = std::min(closest, length(upper.centre - lower.centre));
+    closestToBlock = std::min(closestToBlock, length(faller.centre - blockCentre));
+  }
+  const RigidState& upper = simulation.bodies()[1].state;
+  const RigidState& faller = simulation.bodies()[2].state;
+  std::printf("closest centres over 1 s: upper-lower %.4f m, faller-block %.4f m (side %.2f m); "
+              "upper ends at y = %.3f, faller at %.3f\n",
+    closest, closestToBlock, side, upper.centre.y, faller.centre.y);
+  EXPECT_GT(closest, 0.95 * side) << "the upper cube went into the lower";
+  EXPECT_GT(closestToBlock, 0.95 * side) << "the faller went into the block";
+  EXPECT_LT(upper.centre.y, 0.3) << "the upper cube did not fall";
+  EXPECT_LT(faller.centre.y, 0.4) << "the faller did not fall";
+}
+
+TEST(Bodies, ABodyStartingThroughAWallOrInsideAnotherSolidIsNamed)
+{
+  Scene through = floatingBox(0.5);
+  through.solids[0].box.min.y = -0.05;
+  EXPECT_NE(errorOf(through).find("box: a body starts 0.05 m through the tank's -y wall"),
+    std::string::npos)
+    << errorOf(through);
+  Scene inside = floatingBox(0.5);
+  SolidRegion other = inside.solids[0];
+  other.name = "other";
+  other.box.min.x += 0.1;
+  other.box.max.x += 0.1;
+  inside.solids.push_back(other);
+  const std::string error = errorOf(inside);
+  EXPECT_EQ(error.rfind("box: a body starts ", 0), 0u) << error;
+  EXPECT_NE(error.find(" m inside other; move them apart"), std::string::npos) << error;
+  // Side by side, touching, is not inside.
+  Scene touching = floatingBox(0.5);
+  other.box.min.x = touching.solids[0].box.max.x;
+  other.box.max.x = other.box.min.x + 0.2;
+  touching.solids.push_back(other);
+  EXPECT_EQ(errorOf(touching), "");
+}
+
 // A scene file says "density" to make an obstacle a body: a number > 0, and not with keyframes.
 TEST(Bodies, ASceneFileNamesItsBadBodies)
 {
