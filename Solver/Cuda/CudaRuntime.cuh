@@ -276,6 +276,20 @@ __global__ void __launch_bounds__(kReduceThreads) compressionFinalKernel(
   }
 }
 
+// Each lane's kLoadValues sums added over the block in a fixed tree: shared[v][0] holds value v's.
+__device__ inline void treeSumLoads(double (*shared)[kReduceThreads], const double* acc)
+{
+  for (int v = 0; v < kLoadValues; ++v)
+  {
+    shared[v][threadIdx.x] = acc[v];
+  }
+  __syncthreads();
+  for (int v = 0; v < kLoadValues; ++v)
+  {
+    treeSum(shared[v]);
+  }
+}
+
 // The solids' loads (KernelExecutor::sumLoads): block (b, o) sums load o over the particles of its
 // lanes (StepSchedule.h) in a fixed tree; blockSums[(o kLoadBlocks + b) kLoadValues + v].
 template <class F>
@@ -298,15 +312,7 @@ __global__ void __launch_bounds__(kReduceThreads) loadBlocksKernel(
       break; // i + stride would wrap around 2^32
     }
   }
-  for (int v = 0; v < kLoadValues; ++v)
-  {
-    shared[v][threadIdx.x] = acc[v];
-  }
-  __syncthreads();
-  for (int v = 0; v < kLoadValues; ++v)
-  {
-    treeSum(shared[v]);
-  }
+  treeSumLoads(shared, acc);
   if (threadIdx.x < kLoadValues)
   {
     blockSums[(static_cast<std::size_t>(o) * gridDim.x + blockIdx.x) * kLoadValues + threadIdx.x] =
@@ -335,15 +341,7 @@ __global__ void __launch_bounds__(kReduceThreads) loadFinalKernel(
       acc[v] += blockSums[(o * blocks + b) * kLoadValues + v];
     }
   }
-  for (int v = 0; v < kLoadValues; ++v)
-  {
-    shared[v][threadIdx.x] = acc[v];
-  }
-  __syncthreads();
-  for (int v = 0; v < kLoadValues; ++v)
-  {
-    treeSum(shared[v]);
-  }
+  treeSumLoads(shared, acc);
   if (threadIdx.x < kLoadValues)
   {
     loads[o * kLoadValues + threadIdx.x] += shared[threadIdx.x][0];
