@@ -43,7 +43,7 @@ def main(spacing, until, at, folder):
     view.ViewTime = at
     particles = simple.Show(simple.OutputPort(source, 0), view)
     particles.SetRepresentationType("Points")
-    particles.PointSize = 3
+    particles.PointSize = 4
     simple.ColorBy(particles, ("POINTS", "pressure"))
     domain = simple.Show(simple.OutputPort(source, 2), view)
     simple.ColorBy(domain, ("POINTS", "pressure"))
@@ -52,8 +52,9 @@ def main(spacing, until, at, folder):
     lut.AutomaticRescaleRangeMode = "Never"
     lut.RescaleTransferFunction(0.0, 6000.0)
     particles.SetScalarBarVisibility(view, True)
-    view.CameraPosition = [0.8, 1.3, 2.4]
-    view.CameraFocalPoint = [0.8, 0.2, 0.3]
+    simple.Render(view)  # the first render frames everything; the camera is set after it
+    view.CameraPosition = [0.95, 0.9, 1.75]
+    view.CameraFocalPoint = [0.95, 0.15, 0.3]
     view.CameraViewUp = [0, 1, 0]
     simple.Render(view)
     simple.SaveScreenshot(os.path.join(folder, "floating_box.png"), view,
