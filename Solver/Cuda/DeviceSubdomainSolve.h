@@ -62,6 +62,10 @@ public:
       exec.fillZero(k_.loads,
         static_cast<std::size_t>(k_.obstacleCount) * kLoadValues * sizeof(double));
     }
+    if (k_.wallLoads)
+    {
+      exec.fillZero(k_.wallLoads, std::size_t(kWalls) * kLoadValues * sizeof(double));
+    }
   }
 
   void densityAndLambda(const Projection& p)
@@ -91,8 +95,9 @@ public:
       return;
     }
     auto exec = device_.executor();
-    detail::loadsPass(
-      exec, k_, n_, view(p.iteration), nullptr, detail::ListedParticles{ s_.ownedList_ });
+    const detail::ListedParticles owned{ s_.ownedList_ };
+    detail::loadsPass(exec, k_, n_, view(p.iteration), nullptr, owned);
+    detail::wallLoadsPass(exec, k_, n_, view(p.iteration), nullptr, owned);
   }
 
   // Chebyshev's blend reads each owned particle's own positions two projections back, which
@@ -187,17 +192,26 @@ private:
   void finishLoads()
   {
     const std::size_t solids = static_cast<std::size_t>(k_.obstacleCount);
+    const std::size_t walls = k_.wallLoads ? std::size_t(kWalls) : 0;
     s_.report_.loads.clear();
-    if (solids == 0)
+    if (solids + walls == 0)
     {
       return;
     }
-    std::vector<double> mine(solids * kLoadValues);
-    device_.download(mine.data(), k_.loads, mine.size() * sizeof(double));
+    std::vector<double> mine((solids + walls) * kLoadValues);
+    if (solids > 0)
+    {
+      device_.download(mine.data(), k_.loads, solids * kLoadValues * sizeof(double));
+    }
+    if (walls > 0)
+    {
+      device_.download(mine.data() + solids * kLoadValues, k_.wallLoads,
+        walls * kLoadValues * sizeof(double));
+    }
     device_.synchronize();
     const std::vector<double> all = distributed::sumInRankOrder(s_.communicator_, mine);
-    s_.report_.loads.resize(solids);
-    for (std::size_t o = 0; o < solids; ++o)
+    s_.report_.loads.resize(solids + walls);
+    for (std::size_t o = 0; o < solids + walls; ++o)
     {
       const double* v = &all[o * kLoadValues];
       s_.report_.loads[o].force = Vec3d{ v[0], v[1], v[2] };
