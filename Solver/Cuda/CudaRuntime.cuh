@@ -174,11 +174,9 @@ __global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageMaxK
 // block sums by one block, so the result is the same on every run.
 constexpr int kReduceThreads = 256;
 
-// shared[0] = the sum of shared[0, Threads), added in a fixed tree (Threads a power of 2).
-template <int Threads>
-__device__ inline void treeSumOf(double* shared)
+__device__ inline void treeSum(double* shared)
 {
-  for (int width = Threads / 2; width > 0; width >>= 1)
+  for (int width = kReduceThreads / 2; width > 0; width >>= 1)
   {
     if (static_cast<int>(threadIdx.x) < width)
     {
@@ -186,11 +184,6 @@ __device__ inline void treeSumOf(double* shared)
     }
     __syncthreads();
   }
-}
-
-__device__ inline void treeSum(double* shared)
-{
-  treeSumOf<kReduceThreads>(shared);
 }
 
 __device__ inline void treeMax(double* shared)
@@ -283,10 +276,8 @@ __global__ void __launch_bounds__(kReduceThreads) compressionFinalKernel(
   }
 }
 
-// Each lane's kLoadValues sums added over the block's Threads lanes in a fixed tree:
-// shared[v][0] holds value v's.
-template <int Threads>
-__device__ inline void treeSumLoads(double (*shared)[Threads], const double* acc)
+// Each lane's kLoadValues sums added over the block in a fixed tree: shared[v][0] holds value v's.
+__device__ inline void treeSumLoads(double (*shared)[kReduceThreads], const double* acc)
 {
   for (int v = 0; v < kLoadValues; ++v)
   {
@@ -295,7 +286,7 @@ __device__ inline void treeSumLoads(double (*shared)[Threads], const double* acc
   __syncthreads();
   for (int v = 0; v < kLoadValues; ++v)
   {
-    treeSumOf<Threads>(shared[v]);
+    treeSum(shared[v]);
   }
 }
 
@@ -321,7 +312,7 @@ __global__ void __launch_bounds__(kReduceThreads) loadBlocksKernel(
       break; // i + stride would wrap around 2^32
     }
   }
-  treeSumLoads<kReduceThreads>(shared, acc);
+  treeSumLoads(shared, acc);
   if (threadIdx.x < kLoadValues)
   {
     blockSums[(static_cast<std::size_t>(o) * gridDim.x + blockIdx.x) * kLoadValues + threadIdx.x] =
@@ -331,20 +322,19 @@ __global__ void __launch_bounds__(kReduceThreads) loadBlocksKernel(
 
 // The mirror walls' loads (KernelExecutor::sumWallLoads): each block sums all six walls over the
 // particles of its lanes, then each wall's values in a fixed tree, into
-// blockSums[(w kLoadBlocks + b) kLoadValues + v]. kMaskBlock lanes a block: the walk of the
-// neighbour masks keeps its rows in shared memory for that many threads (NeighborMasks.h).
+// blockSums[(w kLoadBlocks + b) kLoadValues + v].
 template <class F>
-__global__ void __launch_bounds__(kMaskBlock) wallLoadBlocksKernel(
+__global__ void __launch_bounds__(kReduceThreads) wallLoadBlocksKernel(
   std::uint32_t n, const AdaptiveState* state, double* blockSums, F f)
 {
-  __shared__ double shared[kLoadValues][kMaskBlock];
+  __shared__ double shared[kLoadValues][kReduceThreads];
   if (state && state->done)
   {
     return;
   }
   double acc[kWalls * kLoadValues] = {};
-  const std::uint32_t stride = static_cast<std::uint32_t>(kLoadBlocks) * kMaskBlock;
-  for (std::uint32_t i = blockIdx.x * kMaskBlock + threadIdx.x; i < n; i += stride)
+  const std::uint32_t stride = static_cast<std::uint32_t>(kLoadBlocks) * kReduceThreads;
+  for (std::uint32_t i = blockIdx.x * kReduceThreads + threadIdx.x; i < n; i += stride)
   {
     f(i, acc);
     if (i >= n - stride)
@@ -354,7 +344,7 @@ __global__ void __launch_bounds__(kMaskBlock) wallLoadBlocksKernel(
   }
   for (int w = 0; w < kWalls; ++w)
   {
-    treeSumLoads<kMaskBlock>(shared, acc + w * kLoadValues);
+    treeSumLoads(shared, acc + w * kLoadValues);
     if (threadIdx.x < kLoadValues)
     {
       blockSums[(static_cast<std::size_t>(w) * kLoadBlocks + blockIdx.x) * kLoadValues +
@@ -385,7 +375,7 @@ __global__ void __launch_bounds__(kReduceThreads) loadFinalKernel(
       acc[v] += blockSums[(o * blocks + b) * kLoadValues + v];
     }
   }
-  treeSumLoads<kReduceThreads>(shared, acc);
+  treeSumLoads(shared, acc);
   if (threadIdx.x < kLoadValues)
   {
     loads[o * kLoadValues + threadIdx.x] += shared[threadIdx.x][0];
@@ -589,7 +579,7 @@ public:
   void sumWallLoads(
     std::uint32_t n, const AdaptiveState* state, double* blockSums, double* loads, F f)
   {
-    wallLoadBlocksKernel<<<kLoadBlocks, kMaskBlock, 0, stream_>>>(n, state, blockSums, f);
+    wallLoadBlocksKernel<<<kLoadBlocks, kReduceThreads, 0, stream_>>>(n, state, blockSums, f);
     check(cudaGetLastError(), "kernel launch (wall loads)");
     loadFinalKernel<F><<<kWalls, kReduceThreads, 0, stream_>>>(state, blockSums, loads);
     check(cudaGetLastError(), "kernel launch (wall loads)");

@@ -35,9 +35,8 @@
 //                                        kLoadValues per block and load); nothing once state
 //                                        (may be null) is done
 //   sumWallLoads(n, state, blockSums, loads, f)   the same for the six mirror walls at once:
-//                                        f(i, acc) adds to acc[w * kLoadValues + v]; blocks of
-//                                        kMaskBlock lanes (f walks the neighbour masks);
-//                                        blockSums holds kWalls * kLoadBlocks * kLoadValues doubles
+//                                        f(i, acc) adds to acc[w * kLoadValues + v]; blockSums
+//                                        holds kWalls * kLoadBlocks * kLoadValues doubles
 //   runIfChain(branches, first, end, body)   body(exec', k) for k = first, first + 1, ... < end,
 //                                        each only when branches[k] is set and every body before
 //                                        it ran: while the step is captured, CUDA graph conditional

@@ -161,12 +161,12 @@ public:
       {
         f(i, o, &lanes[(i % kLanes) * cuda::kLoadValues]);
       }
-      addLanes(lanes, cuda::kLoadValues, 0, loads + o * cuda::kLoadValues, kThreads);
+      addLanes(lanes, cuda::kLoadValues, 0, loads + o * cuda::kLoadValues);
     }
   }
 
-  // The mirror walls' loads as wallLoadBlocksKernel sums them: every wall's in each lane (blocks
-  // of kMaskBlock lanes), then each wall's lanes as sumLoads adds them.
+  // The mirror walls' loads as wallLoadBlocksKernel sums them: every wall's in each lane, then
+  // each wall's lanes as sumLoads adds them.
   template <class F>
   void sumWallLoads(std::uint32_t n, const cuda::AdaptiveState* state, double*, double* loads, F f)
   {
@@ -175,16 +175,14 @@ public:
       return;
     }
     constexpr int values = cuda::kWalls * cuda::kLoadValues;
-    constexpr std::size_t threads = kMaskBlock;
-    constexpr std::size_t wallLanes = cuda::kLoadBlocks * threads;
-    std::vector<double> lanes(wallLanes * values, 0.0);
+    std::vector<double> lanes(kLanes * values, 0.0);
     for (std::uint32_t i = 0; i < n; ++i)
     {
-      f(i, &lanes[(i % wallLanes) * values]);
+      f(i, &lanes[(i % kLanes) * values]);
     }
     for (int w = 0; w < cuda::kWalls; ++w)
     {
-      addLanes(lanes, values, w * cuda::kLoadValues, loads + w * cuda::kLoadValues, threads);
+      addLanes(lanes, values, w * cuda::kLoadValues, loads + w * cuda::kLoadValues);
     }
   }
 
@@ -212,14 +210,13 @@ private:
   static constexpr std::size_t kThreads = 256;
   static constexpr std::size_t kLanes = cuda::kLoadBlocks * kThreads;
 
-  // out[v] += lanes (kLoadBlocks blocks of `threads` lanes of `stride` doubles, value v at
-  // offset + v) added as the load kernels add them: each block's lanes in a tree, then the blocks'
-  // sums as 256 lanes in a tree.
+  // out[v] += lanes (kLanes of `stride` doubles, value v at offset + v) added as the load kernels
+  // add them: each block's 256 in a tree, then the blocks' sums as 256 lanes in a tree.
   static void addLanes(const std::vector<double>& lanes, std::size_t stride, std::size_t offset,
-    double* out, std::size_t threads)
+    double* out)
   {
     const auto tree = [](std::vector<double>& t) {
-      for (std::size_t width = t.size() / 2; width > 0; width >>= 1)
+      for (std::size_t width = kThreads / 2; width > 0; width >>= 1)
       {
         for (std::size_t k = 0; k < width; ++k)
         {
@@ -233,10 +230,10 @@ private:
       std::vector<double> blocks(kThreads, 0.0);
       for (std::size_t b = 0; b < static_cast<std::size_t>(cuda::kLoadBlocks); ++b)
       {
-        std::vector<double> t(threads);
-        for (std::size_t k = 0; k < threads; ++k)
+        std::vector<double> t(kThreads);
+        for (std::size_t k = 0; k < kThreads; ++k)
         {
-          t[k] = lanes[(b * threads + k) * stride + offset + v];
+          t[k] = lanes[(b * kThreads + k) * stride + offset + v];
         }
         blocks[b % kThreads] += tree(t);
       }
