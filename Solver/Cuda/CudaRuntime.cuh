@@ -320,40 +320,6 @@ __global__ void __launch_bounds__(kReduceThreads) loadBlocksKernel(
   }
 }
 
-// The mirror walls' loads (KernelExecutor::sumWallLoads): each block sums all six walls over the
-// particles of its lanes, then each wall's values in a fixed tree, into
-// blockSums[(w kLoadBlocks + b) kLoadValues + v].
-template <class F>
-__global__ void __launch_bounds__(kReduceThreads) wallLoadBlocksKernel(
-  std::uint32_t n, const AdaptiveState* state, double* blockSums, F f)
-{
-  __shared__ double shared[kLoadValues][kReduceThreads];
-  if (state && state->done)
-  {
-    return;
-  }
-  double acc[kWalls * kLoadValues] = {};
-  const std::uint32_t stride = static_cast<std::uint32_t>(kLoadBlocks) * kReduceThreads;
-  for (std::uint32_t i = blockIdx.x * kReduceThreads + threadIdx.x; i < n; i += stride)
-  {
-    f(i, acc);
-    if (i >= n - stride)
-    {
-      break; // i + stride would wrap around 2^32
-    }
-  }
-  for (int w = 0; w < kWalls; ++w)
-  {
-    treeSumLoads(shared, acc + w * kLoadValues);
-    if (threadIdx.x < kLoadValues)
-    {
-      blockSums[(static_cast<std::size_t>(w) * kLoadBlocks + blockIdx.x) * kLoadValues +
-        threadIdx.x] = shared[threadIdx.x][0];
-    }
-    __syncthreads(); // the next wall's sums go where these were read
-  }
-}
-
 // Block o adds load o's block sums, in a fixed tree, to loads[o kLoadValues + v]. F, the blocks'
 // functor, only gives each translation unit an instance of its own.
 template <class F>
@@ -573,16 +539,6 @@ public:
     loadFinalKernel<F><<<static_cast<unsigned>(count), kReduceThreads, 0, stream_>>>(
       state, blockSums, loads);
     check(cudaGetLastError(), "kernel launch (loads)");
-  }
-
-  template <class F>
-  void sumWallLoads(
-    std::uint32_t n, const AdaptiveState* state, double* blockSums, double* loads, F f)
-  {
-    wallLoadBlocksKernel<<<kLoadBlocks, kReduceThreads, 0, stream_>>>(n, state, blockSums, f);
-    check(cudaGetLastError(), "kernel launch (wall loads)");
-    loadFinalKernel<F><<<kWalls, kReduceThreads, 0, stream_>>>(state, blockSums, loads);
-    check(cudaGetLastError(), "kernel launch (wall loads)");
   }
 
   // The indices i in [0, n) with pred(i), ascending, into out; their number into *count (device

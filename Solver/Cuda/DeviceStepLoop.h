@@ -102,10 +102,6 @@ public:
       exec_.fillZero(k_.loads,
         static_cast<std::size_t>(k_.obstacleCount) * kLoadValues * sizeof(double));
     }
-    if (k_.wallLoads)
-    {
-      exec_.fillZero(k_.wallLoads, std::size_t(kWalls) * kLoadValues * sizeof(double));
-    }
     // Projection k runs when the reduction before it says so (proceed[k]).
     branches_.resize(static_cast<std::size_t>(k_.iterations) + 1);
     for (int k = 0; k <= k_.iterations; ++k)
@@ -127,12 +123,10 @@ public:
       mayStop ? k_.tolerance : -1.0, (*proceed_)[p.iteration + 1]);
   }
 
-  // Into k.loads and k.wallLoads, which lastStep() reads back.
+  // Into k.loads, which lastStep() reads back.
   void sumLoads(const Projection& p)
   {
-    const AdaptiveState* state = adaptive_ ? b_.adaptive : nullptr;
-    detail::loadsPass(exec_, k_, n_, view(p.iteration), state);
-    detail::wallLoadsPass(exec_, k_, n_, view(p.iteration), state);
+    detail::loadsPass(exec_, k_, n_, view(p.iteration), adaptive_ ? b_.adaptive : nullptr);
   }
 
   // With a fixed count the last correction also updates the velocity (line 21); in adaptive

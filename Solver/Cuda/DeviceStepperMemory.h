@@ -42,11 +42,6 @@ void DeviceStepper<Real, Device>::allocateFixed()
   const std::size_t adaptiveAt = place(sizeof(AdaptiveState));
   const std::size_t partialsAt = place(device_->statisticsPartialBytes());
   const std::size_t resultAt = place(kStatisticsValues * sizeof(double));
-  // The mirror walls' loads and their block sums (StepConstants::wallLoads).
-  const bool walls = parameters_.mirrorWalls;
-  const std::size_t wallLoadsAt = walls ? place(std::size_t(kWalls) * kLoadValues * 8) : 0;
-  const std::size_t wallSumsAt =
-    walls ? place(std::size_t(kWalls) * kLoadBlocks * kLoadValues * 8) : 0;
   fixed_ = device_->allocate(offset);
   fixedBytes_ = offset;
   char* base = static_cast<char*>(fixed_);
@@ -55,8 +50,6 @@ void DeviceStepper<Real, Device>::allocateFixed()
   healthBits_ = reinterpret_cast<unsigned long long*>(base + healthAt);
   statisticsPartials_ = reinterpret_cast<double*>(base + partialsAt);
   statisticsResult_ = reinterpret_cast<double*>(base + resultAt);
-  constants_.wallLoads = walls ? reinterpret_cast<double*>(base + wallLoadsAt) : nullptr;
-  constants_.wallBlockSums = walls ? reinterpret_cast<double*>(base + wallSumsAt) : nullptr;
   StepBuffers<Real>& b = fixedBuffers_;
   b.cellOffsets = reinterpret_cast<std::uint32_t*>(base + offsetsAt);
   b.cellMoved = masks ? reinterpret_cast<std::uint32_t*>(base + cellMovedAt) : nullptr;

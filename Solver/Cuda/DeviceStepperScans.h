@@ -80,26 +80,20 @@ StepReport DeviceStepper<Real, Device>::lastStep() const
   report.iterations = constants_.iterations;
   report.densityError = std::numeric_limits<double>::quiet_NaN();
   const std::size_t solids = static_cast<std::size_t>(constants_.obstacleCount);
-  const std::size_t walls = constants_.wallLoads ? std::size_t(kWalls) : 0;
-  if (!adaptive && solids + walls == 0)
+  if (!adaptive && solids == 0)
   {
     return report;
   }
   device_->activate();
   AdaptiveState state{};
-  std::vector<double> loads((solids + walls) * kLoadValues);
+  std::vector<double> loads(solids * kLoadValues);
   if (adaptive)
   {
     device_->download(&state, buffers_.adaptive, sizeof state);
   }
   if (solids > 0)
   {
-    device_->download(loads.data(), constants_.loads, solids * kLoadValues * sizeof(double));
-  }
-  if (walls > 0)
-  {
-    device_->download(loads.data() + solids * kLoadValues, constants_.wallLoads,
-      walls * kLoadValues * sizeof(double));
+    device_->download(loads.data(), constants_.loads, loads.size() * sizeof(double));
   }
   device_->synchronize();
   if (adaptive)
@@ -107,8 +101,8 @@ StepReport DeviceStepper<Real, Device>::lastStep() const
     report.iterations = state.iterations;
     report.densityError = state.densityError;
   }
-  report.loads.resize(solids + walls);
-  for (std::size_t o = 0; o < solids + walls; ++o)
+  report.loads.resize(solids);
+  for (std::size_t o = 0; o < solids; ++o)
   {
     const double* v = &loads[o * kLoadValues];
     report.loads[o].force = Vec3d{ v[0], v[1], v[2] };

@@ -26,12 +26,6 @@ void DeviceSubdomainStepper<Real, Device>::allocateFixed()
   constants_.time = deviceTime_;
   adaptive_ = allocateFixed<AdaptiveState>(1);
   healthBits_ = allocateFixed<unsigned long long>(3);
-  if (parameters_.mirrorWalls)
-  {
-    constants_.wallLoads = allocateFixed<double>(std::size_t(kWalls) * kLoadValues);
-    constants_.wallBlockSums =
-      allocateFixed<double>(std::size_t(kWalls) * kLoadBlocks * kLoadValues);
-  }
   listCounts_ = static_cast<std::uint32_t*>(device_->allocateHost(8 * sizeof(std::uint32_t)));
   // The owner counts' copies, then the ghosts sent to each side.
   setupCounts_ = static_cast<std::uint32_t*>(

@@ -62,10 +62,6 @@ public:
       exec.fillZero(k_.loads,
         static_cast<std::size_t>(k_.obstacleCount) * kLoadValues * sizeof(double));
     }
-    if (k_.wallLoads)
-    {
-      exec.fillZero(k_.wallLoads, std::size_t(kWalls) * kLoadValues * sizeof(double));
-    }
   }
 
   void densityAndLambda(const Projection& p)
@@ -95,9 +91,8 @@ public:
       return;
     }
     auto exec = device_.executor();
-    const detail::ListedParticles owned{ s_.ownedList_ };
-    detail::loadsPass(exec, k_, n_, view(p.iteration), nullptr, owned);
-    detail::wallLoadsPass(exec, k_, n_, view(p.iteration), nullptr, owned);
+    detail::loadsPass(
+      exec, k_, n_, view(p.iteration), nullptr, detail::ListedParticles{ s_.ownedList_ });
   }
 
   // Chebyshev's blend reads each owned particle's own positions two projections back, which
@@ -192,26 +187,17 @@ private:
   void finishLoads()
   {
     const std::size_t solids = static_cast<std::size_t>(k_.obstacleCount);
-    const std::size_t walls = k_.wallLoads ? std::size_t(kWalls) : 0;
     s_.report_.loads.clear();
-    if (solids + walls == 0)
+    if (solids == 0)
     {
       return;
     }
-    std::vector<double> mine((solids + walls) * kLoadValues);
-    if (solids > 0)
-    {
-      device_.download(mine.data(), k_.loads, solids * kLoadValues * sizeof(double));
-    }
-    if (walls > 0)
-    {
-      device_.download(mine.data() + solids * kLoadValues, k_.wallLoads,
-        walls * kLoadValues * sizeof(double));
-    }
+    std::vector<double> mine(solids * kLoadValues);
+    device_.download(mine.data(), k_.loads, mine.size() * sizeof(double));
     device_.synchronize();
     const std::vector<double> all = distributed::sumInRankOrder(s_.communicator_, mine);
-    s_.report_.loads.resize(solids + walls);
-    for (std::size_t o = 0; o < solids + walls; ++o)
+    s_.report_.loads.resize(solids);
+    for (std::size_t o = 0; o < solids; ++o)
     {
       const double* v = &all[o * kLoadValues];
       s_.report_.loads[o].force = Vec3d{ v[0], v[1], v[2] };

@@ -34,9 +34,6 @@
 //                                        fixed tree, then the blocks' sums likewise (blockSums:
 //                                        kLoadValues per block and load); nothing once state
 //                                        (may be null) is done
-//   sumWallLoads(n, state, blockSums, loads, f)   the same for the six mirror walls at once:
-//                                        f(i, acc) adds to acc[w * kLoadValues + v]; blockSums
-//                                        holds kWalls * kLoadBlocks * kLoadValues doubles
 //   runIfChain(branches, first, end, body)   body(exec', k) for k = first, first + 1, ... < end,
 //                                        each only when branches[k] is set and every body before
 //                                        it ran: while the step is captured, CUDA graph conditional
@@ -95,7 +92,6 @@ constexpr int kCompressionBlock = 4096;
 // a torque, kLoadValues doubles per block and solid.
 constexpr int kLoadBlocks = 512;
 constexpr int kLoadValues = 6;
-constexpr int kWalls = 6; // the mirror walls' loads: -x, +x, -y, +y, -z, +z
 
 struct AdaptiveState
 {
@@ -160,10 +156,6 @@ struct StepConstants
   // each), summed over its projections, and their block sums (sumLoads).
   double* loads;
   double* loadBlockSums;
-  // With mirror walls, in the stepper's fixed arrays: the six walls' loads likewise (null
-  // without mirror walls).
-  double* wallLoads;
-  double* wallBlockSums;
 };
 
 // The constants of a step for given parameters: skin is how far beyond h the masks reach, as a
@@ -549,32 +541,6 @@ void loadsPass(Exec& exec, const StepConstants<Real>& k, std::uint32_t n,
         acc[3] += static_cast<double>(torque.x);
         acc[4] += static_cast<double>(torque.y);
         acc[5] += static_cast<double>(torque.z);
-      });
-    });
-}
-
-// What the fluid pushes the mirror walls with in this projection (Equations.h's wallLoads), into
-// k.wallLoads: a pass of its own over the particles, in which only those within h of a wall walk
-// their neighbours.
-template <class Real, class Exec, class Visit = AllParticles>
-void wallLoadsPass(Exec& exec, const StepConstants<Real>& k, std::uint32_t n,
-  const FluidView<Real, MaskedNeighbors<Real>>& f, const AdaptiveState* state,
-  Visit visit = Visit{})
-{
-  if (!k.wallLoads)
-  {
-    return;
-  }
-  exec.sumWallLoads(n, state, k.wallBlockSums, k.wallLoads,
-    [=] PBF_HD(std::uint32_t q, double* acc) {
-      wallLoads(visit(q), f, [&](int w, const Vec3<Real>& force, const Vec3<Real>& torque) {
-        double* a = acc + w * kLoadValues;
-        a[0] += static_cast<double>(force.x);
-        a[1] += static_cast<double>(force.y);
-        a[2] += static_cast<double>(force.z);
-        a[3] += static_cast<double>(torque.x);
-        a[4] += static_cast<double>(torque.y);
-        a[5] += static_cast<double>(torque.z);
       });
     });
 }

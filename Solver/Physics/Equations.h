@@ -388,21 +388,6 @@ PBF_HD PBF_INLINE void recordPressure(
   }
 }
 
-// One neighbour's (or image's) term of eq. 14 before m / rho_0, at d = p_i - p_j (d2 = |d|^2 < h^2),
-// with s_corr's push (eq. 13) where tensile is not 0: in the step's first projection only, as the
-// later ones do not evaluate poly6.
-template <class Real>
-PBF_HD PBF_INLINE Vec3<Real> correctionTerm(const Vec3<Real>& d, Real d2, Real lambdaI,
-  Real lambdaJ, Real tensile, const Coefficients<Real>& c)
-{
-  Real sCorr = Real(0);
-  if (tensile != Real(0))
-  {
-    sCorr = -tensile * power(c.kernels.poly6Within(d2) * c.inverseWDeltaQ, c.sCorrN);
-  }
-  return c.kernels.spikyGradientWithin(d, d2) * (lambdaI + lambdaJ + sCorr);
-}
-
 // positionCorrection's default: nothing is done with the mirror walls' terms.
 struct NoWallTerms
 {
@@ -434,7 +419,13 @@ PBF_HD PBF_INLINE void positionCorrection(
     {
       const Real lambdaJ = f.lambda[j];
       const auto add = [&](const Vec3<Real>& d, Real d2) {
-        const Vec3<Real> term = correctionTerm(d, d2, lambdaI, lambdaJ, tensile, f.c);
+        // s_corr only in the step's first projection: the later ones do not evaluate poly6.
+        Real sCorr = Real(0);
+        if (tensile != Real(0))
+        {
+          sCorr = -tensile * power(f.c.kernels.poly6Within(d2) * f.c.inverseWDeltaQ, f.c.sCorrN);
+        }
+        const Vec3<Real> term = f.c.kernels.spikyGradientWithin(d, d2) * (lambdaI + lambdaJ + sCorr);
         delta += term;
         return term;
       };
@@ -508,53 +499,6 @@ PBF_HD PBF_INLINE void wallShares(const Vec3<Real>& term, const WallMirrors<Real
     }
     add(2 * a + (mirrors.wall[a][slot[a] - 1] == lo[a] ? 0 : 1),
       Vec3<Real>{ share[0], share[1], share[2] });
-  }
-}
-
-// What particle i pushes the tank's mirror walls with in this projection: each image's term of
-// delta p_i (the ones positionCorrection's onWall hears) shared among its walls (wallShares), as
-// one force per wall at the particle's foot on it, m delta p / dt^2 reversed; add(wall, force,
-// torque about the world's origin). The GPU sums it in a pass of its own; the CPU hears the same
-// terms in its correction (HostStepLoop's correctSummingWallLoads).
-template <class Real, class Neighbors, class Add>
-PBF_HD PBF_INLINE void wallLoads(std::uint32_t i, const FluidView<Real, Neighbors>& f, Add&& add)
-{
-  const Vec3<Real> pi = f.p[i];
-  const WallMirrors<Real> mirrors = nearWalls(pi, f.c);
-  if (!hasReflections(mirrors))
-  {
-    return;
-  }
-  const Real lambdaI = f.lambda[i];
-  const Real tensile = f.tensile ? f.time->tensile : Real(0);
-  Vec3<Real> pressed[6] = {};
-  forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
-    const Vec3<Real> pj = f.p[j];
-    const Vec3<Real> r = pi - pj;
-    if (dot(r, r) < f.c.kernels.h2)
-    {
-      const Real lambdaJ = f.lambda[j];
-      forEachReflection(mirrors, pj, [&](const Vec3<Real>& image, int ix, int iy, int iz) {
-        const Vec3<Real> d = pi - image;
-        const Real d2 = dot(d, d);
-        if (d2 < f.c.kernels.h2)
-        {
-          const Vec3<Real> term = correctionTerm(d, d2, lambdaI, lambdaJ, tensile, f.c);
-          wallShares(term, mirrors, ix, iy, iz, f.c,
-            [&](int w, const Vec3<Real>& part) { pressed[w] += part; });
-        }
-      });
-    }
-  });
-  const Real scale = -f.c.massOverRho0 * f.c.mass * f.time->inverseDt * f.time->inverseDt;
-  const Real wall[6] = { f.c.boxMin.x, f.c.boxMax.x, f.c.boxMin.y, f.c.boxMax.y, f.c.boxMin.z,
-    f.c.boxMax.z };
-  for (int w = 0; w < 6; ++w)
-  {
-    Vec3<Real> foot = pi;
-    (w / 2 == 0 ? foot.x : w / 2 == 1 ? foot.y : foot.z) = wall[w];
-    const Vec3<Real> force = pressed[w] * scale;
-    add(w, force, cross(foot, force));
   }
 }
 

@@ -85,6 +85,7 @@ struct StepReport
   double densityError = 0;
   // One per solid obstacle, in the order of setObstacles, then with mirror walls one per wall of
   // the domain (-x, +x, -y, +y, -z, +z), over every rank; empty where the stepper has neither.
+  // The GPU steppers sum the solids' loads only (no walls').
   std::vector<SolidLoad> loads;
 };
 

@@ -154,35 +154,48 @@ public:
     {
       return;
     }
+    constexpr std::size_t threads = 256;
+    constexpr std::size_t blocks = cuda::kLoadBlocks;
+    constexpr int values = cuda::kLoadValues;
+    const auto tree = [](std::vector<double>& lanes) {
+      for (std::size_t width = threads / 2; width > 0; width >>= 1)
+      {
+        for (std::size_t t = 0; t < width; ++t)
+        {
+          lanes[t] += lanes[t + width];
+        }
+      }
+      return lanes[0];
+    };
     for (int o = 0; o < count; ++o)
     {
-      std::vector<double> lanes(kLanes * cuda::kLoadValues, 0.0);
+      std::vector<double> acc(blocks * threads * values, 0.0);
       for (std::uint32_t i = 0; i < n; ++i)
       {
-        f(i, o, &lanes[(i % kLanes) * cuda::kLoadValues]);
+        f(i, o, &acc[(i % (blocks * threads)) * values]);
       }
-      addLanes(lanes, cuda::kLoadValues, 0, loads + o * cuda::kLoadValues);
-    }
-  }
-
-  // The mirror walls' loads as wallLoadBlocksKernel sums them: every wall's in each lane, then
-  // each wall's lanes as sumLoads adds them.
-  template <class F>
-  void sumWallLoads(std::uint32_t n, const cuda::AdaptiveState* state, double*, double* loads, F f)
-  {
-    if (state && state->done)
-    {
-      return;
-    }
-    constexpr int values = cuda::kWalls * cuda::kLoadValues;
-    std::vector<double> lanes(kLanes * values, 0.0);
-    for (std::uint32_t i = 0; i < n; ++i)
-    {
-      f(i, &lanes[(i % kLanes) * values]);
-    }
-    for (int w = 0; w < cuda::kWalls; ++w)
-    {
-      addLanes(lanes, values, w * cuda::kLoadValues, loads + w * cuda::kLoadValues);
+      std::vector<double> blockSums(blocks * values);
+      for (std::size_t b = 0; b < blocks; ++b)
+      {
+        for (int v = 0; v < values; ++v)
+        {
+          std::vector<double> lanes(threads);
+          for (std::size_t t = 0; t < threads; ++t)
+          {
+            lanes[t] = acc[(b * threads + t) * values + v];
+          }
+          blockSums[b * values + v] = tree(lanes);
+        }
+      }
+      for (int v = 0; v < values; ++v)
+      {
+        std::vector<double> lanes(threads, 0.0);
+        for (std::size_t b = 0; b < blocks; ++b)
+        {
+          lanes[b % threads] += blockSums[b * values + v];
+        }
+        loads[o * values + v] += tree(lanes);
+      }
     }
   }
 
@@ -207,40 +220,6 @@ public:
   }
 
 private:
-  static constexpr std::size_t kThreads = 256;
-  static constexpr std::size_t kLanes = cuda::kLoadBlocks * kThreads;
-
-  // out[v] += lanes (kLanes of `stride` doubles, value v at offset + v) added as the load kernels
-  // add them: each block's 256 in a tree, then the blocks' sums as 256 lanes in a tree.
-  static void addLanes(const std::vector<double>& lanes, std::size_t stride, std::size_t offset,
-    double* out)
-  {
-    const auto tree = [](std::vector<double>& t) {
-      for (std::size_t width = kThreads / 2; width > 0; width >>= 1)
-      {
-        for (std::size_t k = 0; k < width; ++k)
-        {
-          t[k] += t[k + width];
-        }
-      }
-      return t[0];
-    };
-    for (int v = 0; v < cuda::kLoadValues; ++v)
-    {
-      std::vector<double> blocks(kThreads, 0.0);
-      for (std::size_t b = 0; b < static_cast<std::size_t>(cuda::kLoadBlocks); ++b)
-      {
-        std::vector<double> t(kThreads);
-        for (std::size_t k = 0; k < kThreads; ++k)
-        {
-          t[k] = lanes[(b * kThreads + k) * stride + offset + v];
-        }
-        blocks[b % kThreads] += tree(t);
-      }
-      out[v] += tree(blocks);
-    }
-  }
-
   bool backwards_;
   bool conditionals_;
   std::vector<char> branches_;
