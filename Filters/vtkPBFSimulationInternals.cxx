@@ -121,6 +121,7 @@ pbf::PlaybackKey vtkPBFSimulationInternals::MakeKey(const vtkPBFSettings& settin
   if (key.scene != this->MeshFilesOf)
   {
     this->MeshFiles = vtkPBFSceneMeshFiles(sceneFile);
+    this->SceneLiquids = vtkPBFSceneNamesLiquids(sceneFile, settings.PresetName);
     this->MeshFilesOf = key.scene;
   }
   key.scene += vtkPBFFileVersions(this->MeshFiles);
@@ -182,8 +183,12 @@ pbf::PlaybackKey vtkPBFSimulationInternals::MakeKey(const vtkPBFSettings& settin
   }
   this->Playback.setRanks(ranks);
   key.ranks = r.Decomposed ? r.Pieces : 1;
-  const pbf::BackendChoice choice =
-    pbf::chooseBackend(settings.Backend, this->HasCuda(), this->CudaAbsence, ranks);
+  // HasCuda() first: it fills CudaAbsence. CUDA ranks do not run named liquids yet.
+  const bool cuda = this->HasCuda();
+  const bool liquidRanks = this->SceneLiquids && ranks;
+  const pbf::BackendChoice choice = pbf::chooseBackend(settings.Backend, cuda && !liquidRanks,
+    liquidRanks ? "the scene names liquids, which CUDA ranks do not run yet" : this->CudaAbsence,
+    ranks);
   key.backend = choice.backend;
   if (!choice.noCuda.empty() && !this->FallbackReported)
   {

@@ -34,6 +34,29 @@ bool cudaAvailable(std::string* why)
 #endif
 }
 
+namespace
+{
+
+// Several liquids run on every backend but CUDA ranks: the decomposed GPU stepper does not carry a
+// particle's liquid yet.
+void refuseLiquidsOnCudaRanks(const Parameters& parameters)
+{
+  if (parameters.liquids.empty())
+  {
+    return;
+  }
+  std::string names;
+  for (const Liquid& liquid : parameters.liquids)
+  {
+    names += (names.empty() ? "" : ", ") + liquid.name;
+  }
+  throw InvalidInput("liquids = " + std::to_string(parameters.liquids.size()) + " (" + names +
+    "): CUDA ranks run scenes without \"liquids\" for now; run the scene on one GPU, or on "
+    "Serial or OpenMP ranks (Auto does)");
+}
+
+} // namespace
+
 std::unique_ptr<Stepper> makeStepper(Backend backend, Precision precision,
   const Parameters& parameters, const ParticleBatch& initial)
 {
@@ -77,6 +100,7 @@ std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backen
     // waiting for it in the first exchange: then every rank throws.
     std::string why;
     chooseBackend(BackendRequest::CUDA, cudaAvailable(&why), why, &communicator);
+    refuseLiquidsOnCudaRanks(parameters);
 #ifdef PBF_WITH_CUDA
     return cuda::makeCudaSubdomainStepper(communicator, precision, parameters, everything,
       localRank(communicator) % cuda::cudaDeviceCount());
@@ -96,8 +120,12 @@ std::unique_ptr<Stepper> makeSubdomainStepperAuto(Communicator& communicator, Pr
   const Parameters& parameters, const ParticleBatch& everything, Backend cpu)
 {
   std::string why;
-  const BackendChoice choice =
-    chooseBackend(BackendRequest::Auto, cudaAvailable(&why), why, &communicator);
+  const bool cuda = cudaAvailable(&why) && parameters.liquids.empty();
+  if (!parameters.liquids.empty())
+  {
+    why = "the scene names liquids, which CUDA ranks do not run yet";
+  }
+  const BackendChoice choice = chooseBackend(BackendRequest::Auto, cuda, why, &communicator);
   const Backend backend = choice.backend == Backend::CUDA ? Backend::CUDA : cpu;
   return makeSubdomainStepper(communicator, backend, precision, parameters, everything);
 }

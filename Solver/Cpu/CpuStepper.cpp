@@ -92,12 +92,7 @@ void CpuStepper<Real>::append(const ParticleBatch& batch)
 {
   checkBatch(fluid_.parameters, batch);
   const std::size_t n = fluid_.x.size() + batch.position.size();
-  for (std::size_t i = 0; i < batch.position.size(); ++i)
-  {
-    fluid_.x.push_back(Vec3<Real>::from(batch.position[i]));
-    fluid_.v.push_back(Vec3<Real>::from(batch.velocity[i]));
-    fluid_.id.push_back(batch.id[i]);
-  }
+  fluid_.appendState(batch);
   fluid_.resizeWork(n);
   evaluateDensityAtRest();
 }
@@ -112,33 +107,47 @@ Compression CpuStepper<Real>::compression()
   }
   // Fixed blocks summed in parallel, then the block sums in order: the same bits whatever the
   // number of threads, so OpenMP stays identical to serial.
+  // With several liquids the mean is the most compressed liquid's: a thin light layer must not
+  // hide a deep heavy one's compression. Each block keeps a sum and a count per liquid.
   constexpr std::size_t block = 4096;
   const std::size_t n = fluid_.density.size();
-  const auto blocks = static_cast<std::int64_t>((n + block - 1) / block);
-  // Sums then maxima, one block each: blockSums_[b] and blockSums_[blocks + b].
-  blockSums_.assign(2 * static_cast<std::size_t>(blocks), 0.0);
+  const auto liquids = static_cast<std::size_t>(fluid_.parameters.liquidCount());
+  const auto blocks = static_cast<std::size_t>((n + block - 1) / block);
+  // Per block b: the sums of liquids l at [l blocks + b], the counts at [(liquids + l) blocks + b]
+  // (with several liquids), the maxima at [2 liquids blocks + b].
+  blockSums_.assign((2 * liquids + 1) * blocks, 0.0);
   const double inverseRho0 = 1.0 / fluid_.parameters.restDensity;
+  const std::uint8_t* liquid = fluid_.liquid.empty() ? nullptr : fluid_.liquid.data();
 #pragma omp parallel for schedule(static) if (parallel_)
-  for (std::int64_t b = 0; b < blocks; ++b)
+  for (std::int64_t b = 0; b < static_cast<std::int64_t>(blocks); ++b)
   {
-    double sum = 0.0, largest = 0.0;
-    const std::size_t end = std::min(n, static_cast<std::size_t>(b + 1) * block);
-    for (std::size_t i = static_cast<std::size_t>(b) * block; i < end; ++i)
+    const auto k = static_cast<std::size_t>(b);
+    double largest = 0.0;
+    const std::size_t end = std::min(n, (k + 1) * block);
+    for (std::size_t i = k * block; i < end; ++i)
     {
       const double e = std::max(double(fluid_.density[i]) * inverseRho0 - 1.0, 0.0);
-      sum += e;
+      const std::size_t l = liquid ? liquid[i] : 0;
+      blockSums_[l * blocks + k] += e;
+      blockSums_[(liquids + l) * blocks + k] += 1.0;
       largest = std::max(largest, e);
     }
-    blockSums_[static_cast<std::size_t>(b)] = sum;
-    blockSums_[static_cast<std::size_t>(blocks + b)] = largest;
+    blockSums_[2 * liquids * blocks + k] = largest;
   }
-  double total = 0.0;
-  for (std::int64_t b = 0; b < blocks; ++b)
+  for (std::size_t b = 0; b < blocks; ++b)
   {
-    total += blockSums_[static_cast<std::size_t>(b)];
-    c.max = std::max(c.max, blockSums_[static_cast<std::size_t>(blocks + b)]);
+    c.max = std::max(c.max, blockSums_[2 * liquids * blocks + b]);
   }
-  c.mean = total / double(n);
+  for (std::size_t l = 0; l < liquids; ++l)
+  {
+    double total = 0.0, count = 0.0;
+    for (std::size_t b = 0; b < blocks; ++b)
+    {
+      total += blockSums_[l * blocks + b];
+      count += blockSums_[(liquids + l) * blocks + b];
+    }
+    c.mean = std::max(c.mean, liquids == 1 ? total / double(n) : total / std::max(count, 1.0));
+  }
   return c;
 }
 
@@ -169,7 +178,7 @@ Statistics CpuStepper<Real>::statistics() const
   }
   const GridView<Real> grid{ fluid_.geometry, offsets.data(), sortedKeys.data() };
   const double h2 = fluid_.parameters.smoothingLength() * fluid_.parameters.smoothingLength();
-  const double mass = calibratedParticleMass(fluid_.parameters);
+  const LiquidMasses masses(fluid_.parameters);
   double errorSum = 0, neighborSum = 0;
   for (std::uint32_t k = 0; k < sorted.size(); ++k)
   {
@@ -186,6 +195,7 @@ Statistics CpuStepper<Real>::statistics() const
     const Vec3d xi = Vec3d::from(fluid_.x[i]);
     const Vec3d vi = Vec3d::from(fluid_.v[i]);
     const double speed2 = dot(vi, vi);
+    const double mass = masses(fluid_.liquid, i);
     s.maxSpeed = std::max(s.maxSpeed, std::sqrt(speed2));
     s.kineticEnergy += 0.5 * mass * speed2;
     s.momentum += vi * mass;

@@ -55,7 +55,7 @@ private:
   template <class In>
   void loadState(const Snapshot<In>& state)
   {
-    loadFromSnapshot(state, fluid_.particles());
+    loadFromSnapshot(fluid_.parameters, state, fluid_.particles());
     fluid_.resizeWork(fluid_.x.size());
   }
   // Mean and max of max(rho_i / rho_0 - 1, 0) of density_, summed in fixed blocks: thread-count

@@ -51,6 +51,7 @@ struct HostFluid
     f.density = density.data();
     f.lambda = lambda.data();
     f.pressure = pressure.data();
+    f.liquid = liquid.empty() ? nullptr : liquid.data();
     f.scratch = scratch.data();
     f.omega = omega.data();
     // XSPH's sum goes where delta p was: the solve is over when it is written.
@@ -92,7 +93,7 @@ struct HostFluid
   }
 
   // Sorts the particles by the cell of p (Green 2008): keys, a counting sort (O(N + cells),
-  // serial), then x, p, v, id and keys gathered in the new order. forEach(f) runs f(i) for every
+  // serial), then x, p, v, id, liquid and keys gathered in the new order. forEach(f) runs f(i) for every
   // particle, in parallel or not; gatherMore(gather) gathers a stepper's own arrays the same way
   // (gather(array, scratch)).
   template <class ForEach, class GatherMore>
@@ -111,12 +112,42 @@ struct HostFluid
     gather(p, gatherVec);
     gather(v, gatherVec);
     gather(id, gatherId);
+    if (!liquid.empty())
+    {
+      gather(liquid, gatherLiquid);
+    }
     gather(keys, gatherKey);
     gatherMore(gather);
   }
 
-  HostParticles<Real> particles() { return { x, v, density, lambda, pressure, id }; }
-  ConstHostParticles<Real> particles() const { return { x, v, density, lambda, pressure, id }; }
+  HostParticles<Real> particles() { return { x, v, density, lambda, pressure, id, liquid }; }
+  ConstHostParticles<Real> particles() const
+  {
+    return { x, v, density, lambda, pressure, id, liquid };
+  }
+
+  // Appends a batch's state (checkBatch first): its liquids, or liquid 0 where it carries none,
+  // where the scene names liquids.
+  void appendState(const ParticleBatch& batch)
+  {
+    for (std::size_t i = 0; i < batch.position.size(); ++i)
+    {
+      x.push_back(Vec3<Real>::from(batch.position[i]));
+      v.push_back(Vec3<Real>::from(batch.velocity[i]));
+      id.push_back(batch.id[i]);
+    }
+    if (!parameters.liquids.empty())
+    {
+      if (batch.liquid.empty())
+      {
+        liquid.resize(liquid.size() + batch.position.size(), 0);
+      }
+      else
+      {
+        liquid.insert(liquid.end(), batch.liquid.begin(), batch.liquid.end());
+      }
+    }
+  }
 
   // The work arrays that follow the particle count (x, v and id are the state).
   void resizeWork(std::size_t n)
@@ -145,11 +176,14 @@ struct HostFluid
   std::vector<Vec3<Real>> x, p, v, scratch, omega;
   std::vector<Real> density, lambda, pressure;
   std::vector<std::int64_t> id;
+  // Each particle's liquid (Parameters::liquids); empty where the scene names none.
+  std::vector<std::uint8_t> liquid;
   std::vector<CellKey> keys;
   std::vector<std::uint32_t> cellOffsets, order, cursor;
   // Gather targets of the cell sort, kept to avoid allocating every step.
   std::vector<Vec3<Real>> gatherVec;
   std::vector<std::int64_t> gatherId;
+  std::vector<std::uint8_t> gatherLiquid;
   std::vector<CellKey> gatherKey;
 
   std::vector<DistanceGrid> obstacles;

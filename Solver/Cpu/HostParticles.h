@@ -2,7 +2,9 @@
 // distributed::SubdomainStepper): the state as a Snapshot, out and in, and the health scan.
 #pragma once
 
+#include "LiquidDensities.h"
 #include "Parameters.h"
+#include "ParticleChecks.h"
 #include "Stepper.h"
 
 #include <algorithm>
@@ -25,6 +27,7 @@ struct HostParticles
   std::vector<Real>& lambda;
   std::vector<Real>& pressure;
   std::vector<std::int64_t>& id;
+  std::vector<std::uint8_t>& liquid; // empty where the scene names no liquids
 };
 
 template <class Real>
@@ -36,10 +39,12 @@ struct ConstHostParticles
   const std::vector<Real>& lambda;
   const std::vector<Real>& pressure;
   const std::vector<std::int64_t>& id;
+  const std::vector<std::uint8_t>& liquid;
 };
 
 template <class Real, class Out>
-void copyToSnapshot(const ConstHostParticles<Real>& p, Snapshot<Out>& out)
+void copyToSnapshot(
+  const Parameters& parameters, const ConstHostParticles<Real>& p, Snapshot<Out>& out)
 {
   const std::size_t n = p.x.size();
   out.position.resize(n);
@@ -48,6 +53,7 @@ void copyToSnapshot(const ConstHostParticles<Real>& p, Snapshot<Out>& out)
   out.lambda.resize(n);
   out.pressure.resize(n);
   out.id = p.id;
+  out.liquid = p.liquid;
   for (std::size_t i = 0; i < n; ++i)
   {
     out.position[i] = Vec3<Out>::from(p.x[i]);
@@ -56,11 +62,13 @@ void copyToSnapshot(const ConstHostParticles<Real>& p, Snapshot<Out>& out)
     out.lambda[i] = static_cast<Out>(p.lambda[i]);
     out.pressure[i] = static_cast<Out>(p.pressure[i]);
   }
+  toLiquidDensities(parameters, out.liquid, out.density);
 }
 
 // Throws InvalidInput for a snapshot of the other precision or with arrays of different lengths.
 template <class Real, class In>
-void loadFromSnapshot(const Snapshot<In>& state, const HostParticles<Real>& p)
+void loadFromSnapshot(
+  const Parameters& parameters, const Snapshot<In>& state, const HostParticles<Real>& p)
 {
   if (sizeof(In) != sizeof(Real))
   {
@@ -74,12 +82,18 @@ void loadFromSnapshot(const Snapshot<In>& state, const HostParticles<Real>& p)
   {
     throw InvalidInput("checkpoint arrays differ in length (" + std::to_string(n) + " ids)");
   }
+  checkLiquids(parameters, state.liquid, n, "checkpoint");
   p.x.resize(n);
   p.v.resize(n);
   p.density.resize(n);
   p.lambda.resize(n);
   p.pressure.resize(n);
   p.id = state.id;
+  p.liquid = state.liquid;
+  if (!parameters.liquids.empty() && p.liquid.empty())
+  {
+    p.liquid.assign(n, 0);
+  }
   for (std::size_t i = 0; i < n; ++i)
   {
     p.x[i] = Vec3<Real>::from(state.position[i]);
@@ -88,6 +102,7 @@ void loadFromSnapshot(const Snapshot<In>& state, const HostParticles<Real>& p)
     p.lambda[i] = static_cast<Real>(state.lambda[i]);
     p.pressure[i] = static_cast<Real>(state.pressure[i]);
   }
+  fromLiquidDensities(parameters, p.liquid, p.density);
 }
 
 // The divergence check's scan (Stepper::health) of the particles held here. maxDensity, when

@@ -17,8 +17,14 @@ public:
   std::size_t size() const override { return fluid_.x.size(); }
   Backend backend() const override { return parallel_ ? Backend::OpenMP : Backend::Serial; }
   Precision precision() const override { return fluid_.precision(); }
-  void read(Snapshot<float>& out) const override { copyToSnapshot(fluid_.particles(), out); }
-  void read(Snapshot<double>& out) const override { copyToSnapshot(fluid_.particles(), out); }
+  void read(Snapshot<float>& out) const override
+  {
+    copyToSnapshot(fluid_.parameters, fluid_.particles(), out);
+  }
+  void read(Snapshot<double>& out) const override
+  {
+    copyToSnapshot(fluid_.parameters, fluid_.particles(), out);
+  }
   void setTimeStep(double dt) override { fluid_.setTimeStep(dt); }
   double timeStep() const override { return fluid_.dt; }
   StepReport lastStep() const override { return report_; }

@@ -195,8 +195,7 @@ public:
   }
   void scanStatistics(const StatisticsScan<Real>& s, double* partials, double* result)
   {
-    statisticsKernel<Real><<<kStatisticsBlocks, kStatisticsThreads, 0, stream_>>>(s.x, s.v,
-      s.density, s.sorted, s.grid, s.n, s.h2, s.mass, s.restDensity, partials);
+    statisticsKernel<Real><<<kStatisticsBlocks, kStatisticsThreads, 0, stream_>>>(s, partials);
     check(cudaGetLastError(), "kernel launch (statistics)");
     statisticsFinalKernel<Real><<<1, kStatisticsThreads, 0, stream_>>>(
       partials, kStatisticsBlocks, result);

@@ -53,10 +53,17 @@ __device__ inline void reduceBlock(double (*shared)[kStatisticsThreads], double*
 // The same quantities as CpuStepper::statistics(), in double. Neighbours are counted on `sorted`,
 // the positions sorted into a grid of their own (enqueueSortedCopy), as the CPU counts them.
 template <class Real>
-__global__ void __launch_bounds__(kStatisticsThreads) statisticsKernel(const Vec3<Real>* x,
-  const Vec3<Real>* v, const Real* density, const Vec3<Real>* sorted, GridView<Real> grid,
-  std::uint32_t n, double h2, double mass, double restDensity, double* partials)
+__global__ void __launch_bounds__(kStatisticsThreads) statisticsKernel(
+  StatisticsScan<Real> s, double* partials)
 {
+  const Vec3<Real>* x = s.x;
+  const Vec3<Real>* v = s.v;
+  const Real* density = s.density;
+  const Vec3<Real>* sorted = s.sorted;
+  const GridView<Real> grid = s.grid;
+  const std::uint32_t n = s.n;
+  const double h2 = s.h2;
+  const double restDensity = s.restDensity;
   __shared__ double shared[kStatisticsValues][kStatisticsThreads];
   double acc[kStatisticsValues] = {};
   const std::uint32_t stride = gridDim.x * blockDim.x;
@@ -79,6 +86,7 @@ __global__ void __launch_bounds__(kStatisticsThreads) statisticsKernel(const Vec
     const Vec3d xi = Vec3d::from(x[i]);
     const Vec3d vi = Vec3d::from(v[i]);
     const double speed2 = dot(vi, vi);
+    const double mass = s.massOf(i);
     acc[kSpeedMax] = fmax(acc[kSpeedMax], sqrt(speed2));
     acc[kKinetic] += 0.5 * mass * speed2;
     acc[kMomentumX] += vi.x * mass;

@@ -198,9 +198,67 @@ __device__ inline void treeMax(double* shared)
   }
 }
 
+// With several liquids (liquids > 1), each block sums each liquid's compression and count too:
+// the mean is the most compressed liquid's (CpuStepper::compression). Blocks' sums of liquid l at
+// blockSums[l blocks + b], counts at [(liquids + l) blocks + b], maxima at [2 liquids blocks + b].
+template <class Real>
+__device__ void compressionByLiquid(const Real* density, const std::uint8_t* liquid, int liquids,
+  std::uint32_t begin, std::uint32_t end, double inverseRestDensity, double* shared,
+  double* largest, double* blockSums)
+{
+  double sum[kMaxLiquids] = {}, count[kMaxLiquids] = {};
+  double top = 0.0;
+  for (std::uint32_t i = begin + threadIdx.x; i < end; i += kReduceThreads)
+  {
+    const double c = static_cast<double>(density[i]) * inverseRestDensity - 1.0;
+    const double e = c < 0.0 ? 0.0 : c;
+    const int mine = liquid[i];
+#pragma unroll
+    for (int l = 0; l < kMaxLiquids; ++l)
+    {
+      sum[l] += l == mine ? e : 0.0;
+      count[l] += l == mine ? 1.0 : 0.0;
+    }
+    top = fmax(top, e);
+  }
+  largest[threadIdx.x] = top;
+  __syncthreads();
+  treeMax(largest);
+  const std::uint32_t blocks = gridDim.x;
+#pragma unroll
+  for (int l = 0; l < kMaxLiquids; ++l)
+  {
+    if (l >= liquids)
+    {
+      break;
+    }
+    shared[threadIdx.x] = sum[l];
+    __syncthreads();
+    treeSum(shared);
+    if (threadIdx.x == 0)
+    {
+      blockSums[l * blocks + blockIdx.x] = shared[0];
+    }
+    __syncthreads();
+    shared[threadIdx.x] = count[l];
+    __syncthreads();
+    treeSum(shared);
+    if (threadIdx.x == 0)
+    {
+      blockSums[(liquids + l) * blocks + blockIdx.x] = shared[0];
+    }
+    __syncthreads();
+  }
+  if (threadIdx.x == 0)
+  {
+    blockSums[2 * liquids * blocks + blockIdx.x] = largest[0];
+  }
+}
+
 template <class Real>
 __global__ void __launch_bounds__(kReduceThreads) compressionBlocksKernel(const Real* density,
-  std::uint32_t n, double inverseRestDensity, const AdaptiveState* state, double* blockSums)
+  const std::uint8_t* liquid, int liquids, std::uint32_t n, double inverseRestDensity,
+  const AdaptiveState* state, double* blockSums)
 {
   __shared__ double shared[kReduceThreads];
   if (state->done)
@@ -210,6 +268,12 @@ __global__ void __launch_bounds__(kReduceThreads) compressionBlocksKernel(const 
   const std::uint32_t begin = blockIdx.x * kCompressionBlock;
   const std::uint32_t end = n - begin < kCompressionBlock ? n : begin + kCompressionBlock;
   __shared__ double largest[kReduceThreads];
+  if (liquid && liquids > 1)
+  {
+    compressionByLiquid(
+      density, liquid, liquids, begin, end, inverseRestDensity, shared, largest, blockSums);
+    return;
+  }
   double sum = 0.0, top = 0.0;
   for (std::uint32_t i = begin + threadIdx.x; i < end; i += kReduceThreads)
   {
@@ -240,29 +304,52 @@ struct GraphBranch
 
 template <class Real> // only so that each translation unit has its own instance
 __global__ void __launch_bounds__(kReduceThreads) compressionFinalKernel(
-  std::uint32_t blocks, std::uint32_t n, double tolerance, double maxTolerance,
+  std::uint32_t blocks, std::uint32_t n, int liquids, double tolerance, double maxTolerance,
   AdaptiveState* state, const double* blockSums)
 {
   __shared__ double shared[kReduceThreads];
   __shared__ double largest[kReduceThreads];
+  __shared__ double counts[kReduceThreads];
   if (state->done)
   {
     return;
   }
-  double sum = 0.0, top = 0.0;
+  // One liquid: the sums at [b], the maxima at [blocks + b]; several: compressionByLiquid's.
+  const int sums = liquids > 1 ? liquids : 1;
+  double top = 0.0;
   for (std::uint32_t b = threadIdx.x; b < blocks; b += kReduceThreads)
   {
-    sum += blockSums[b];
-    top = fmax(top, blockSums[blocks + b]);
+    top = fmax(top, blockSums[(liquids > 1 ? 2 * liquids : 1) * blocks + b]);
   }
-  shared[threadIdx.x] = sum;
   largest[threadIdx.x] = top;
   __syncthreads();
-  treeSum(shared);
   treeMax(largest);
+  double mean = 0.0;
+  for (int l = 0; l < sums; ++l)
+  {
+    double sum = 0.0, count = 0.0;
+    for (std::uint32_t b = threadIdx.x; b < blocks; b += kReduceThreads)
+    {
+      sum += blockSums[l * blocks + b];
+      count += liquids > 1 ? blockSums[(liquids + l) * blocks + b] : 0.0;
+    }
+    shared[threadIdx.x] = sum;
+    counts[threadIdx.x] = count;
+    __syncthreads();
+    treeSum(shared);
+    treeSum(counts);
+    if (liquids > 1)
+    {
+      mean = fmax(mean, counts[0] > 0.0 ? shared[0] / counts[0] : 0.0);
+    }
+    else
+    {
+      mean = n > 0 ? shared[0] / n : 0.0;
+    }
+    __syncthreads();
+  }
   if (threadIdx.x == 0)
   {
-    const double mean = n > 0 ? shared[0] / n : 0.0;
     state->densityError = mean;
     state->maxDensityError = largest[0];
     if (mean <= tolerance && (maxTolerance <= 0.0 || largest[0] <= maxTolerance))
@@ -505,18 +592,20 @@ public:
   }
 
   template <class Real>
-  void reduceCompression(const Real* density, std::uint32_t n, AdaptiveState* state,
-    double* blockSums, const StepConstants<Real>& k, double tolerance, Branch next = noBranch())
+  void reduceCompression(const Real* density, const std::uint8_t* liquid, std::uint32_t n,
+    AdaptiveState* state, double* blockSums, const StepConstants<Real>& k, double tolerance,
+    Branch next = noBranch())
   {
     const std::uint32_t blocks = (n + kCompressionBlock - 1) / kCompressionBlock;
+    const int liquids = liquid ? k.liquids : 1;
     if (blocks > 0)
     {
       compressionBlocksKernel<Real><<<blocks, kReduceThreads, 0, stream_>>>(
-        density, n, k.inverseRestDensity, state, blockSums);
+        density, liquid, liquids, n, k.inverseRestDensity, state, blockSums);
       check(cudaGetLastError(), "kernel launch (compression)");
     }
     compressionFinalKernel<Real><<<1, kReduceThreads, 0, stream_>>>(
-      blocks, n, tolerance, k.maxTolerance, state, blockSums);
+      blocks, n, liquids, tolerance, k.maxTolerance, state, blockSums);
     check(cudaGetLastError(), "kernel launch (compression)");
     if (next.valid)
     {

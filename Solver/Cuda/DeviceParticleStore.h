@@ -30,6 +30,9 @@ struct ParticleArrays
   bool alternates = false; // density, lambda, pressure and id again: the sub-domain's gathers
   bool moved = false;     // a float per particle: per-particle mask rebuilds (MovedSinceSort)
   int lists = 0;          // index lists (uint32 per particle): the sub-domain's selections
+  // The scene's named liquids (Parameters::liquids): with any, a byte per particle (and one
+  // more with the alternates); with several, adaptive mode's block sums per liquid.
+  int liquids = 0;
 };
 
 constexpr int kMaxParticleLists = 5;
@@ -54,6 +57,7 @@ public:
     const std::size_t scalars = 3 + (a.volumes ? 2 : 0) + (a.alternates ? 3 : 0);
     return 4 * sizeof(Vec3<Real>) + scalars * sizeof(Real) +
       (a.alternates ? 2 : 1) * sizeof(std::int64_t) + 2 * sizeof(CellKey) +
+      (a.liquids > 0 ? (a.alternates ? 2 : 1) : 0) * sizeof(std::uint8_t) +
       (a.masks ? kNeighborRows * sizeof(std::uint32_t) : 0) + (a.moved ? sizeof(float) : 0) +
       static_cast<std::size_t>(a.lists) * sizeof(std::uint32_t);
   }
@@ -96,6 +100,10 @@ public:
       exec.copy(p.lambda, old.lambda, keep * sizeof(Real));
       exec.copy(p.pressure, old.pressure, keep * sizeof(Real));
       exec.copy(p.id, old.id, keep * sizeof(std::int64_t));
+      if (p.liquid)
+      {
+        exec.copy(p.liquid, old.liquid, keep);
+      }
     }
     device_.synchronize();
     if (oldArena)
@@ -133,6 +141,7 @@ public:
     std::swap(p.lambda, p.lambdaAlt);
     std::swap(p.pressure, p.pressureAlt);
     std::swap(p.id, p.idAlt);
+    std::swap(p.liquid, p.liquidAlt);
   }
 
   // The arrays' per-particle part as the stages see it (the caller adds the fixed arrays).
@@ -149,6 +158,7 @@ public:
     b.volume = p.volume;
     b.omegaLength = p.omegaLength;
     b.id = p.id;
+    b.liquid = p.liquid;
     b.keys[0] = p.keys[0];
     b.keys[1] = p.keys[1];
     b.masks = p.masks;
@@ -165,11 +175,14 @@ public:
     Real *pressure = nullptr;
     Real *densityAlt = nullptr, *lambdaAlt = nullptr, *pressureAlt = nullptr;
     std::int64_t *id = nullptr, *idAlt = nullptr;
+    std::uint8_t *liquid = nullptr, *liquidAlt = nullptr;
     CellKey* keys[2] = {};
     std::uint32_t* masks = nullptr;
     float* moved = nullptr;
     std::uint32_t* list[kMaxParticleLists] = {};
-    double* blockSums = nullptr; // two per block of kCompressionBlock: sums, then maxima
+    // Per block of kCompressionBlock: sums, then maxima (with several liquids, per liquid a sum
+    // and a count, then maxima: CudaRuntime.cuh's compressionByLiquid).
+    double* blockSums = nullptr;
   };
   Pointers p;
 
@@ -181,6 +194,7 @@ private:
     std::size_t vec[4] = {};
     std::size_t density = 0, lambda = 0, volume = 0, omegaLength = 0;
     std::size_t pressure = 0, densityAlt = 0, lambdaAlt = 0, pressureAlt = 0, id = 0, idAlt = 0;
+    std::size_t liquid = 0, liquidAlt = 0;
     std::size_t keys[2] = {};
     std::size_t masks = 0, moved = 0;
     std::size_t list[kMaxParticleLists] = {};
@@ -212,6 +226,8 @@ private:
     l.pressureAlt = a.alternates ? place(scalar) : 0;
     l.id = place(capacity * sizeof(std::int64_t));
     l.idAlt = a.alternates ? place(capacity * sizeof(std::int64_t)) : 0;
+    l.liquid = a.liquids > 0 ? place(capacity) : 0;
+    l.liquidAlt = a.liquids > 0 && a.alternates ? place(capacity) : 0;
     l.keys[0] = place(capacity * sizeof(CellKey));
     l.keys[1] = place(capacity * sizeof(CellKey));
     l.masks = a.masks ? place(kNeighborRows * capacity * sizeof(std::uint32_t)) : 0;
@@ -220,8 +236,9 @@ private:
     {
       l.list[k] = place(capacity * sizeof(std::uint32_t));
     }
-    l.blockSums =
-      place(2 * ((capacity + kCompressionBlock - 1) / kCompressionBlock) * sizeof(double));
+    const std::size_t perBlock = a.liquids > 1 ? 2 * static_cast<std::size_t>(a.liquids) + 1 : 2;
+    l.blockSums = place(
+      perBlock * ((capacity + kCompressionBlock - 1) / kCompressionBlock) * sizeof(double));
     l.total = offset;
     return l;
   }
@@ -246,6 +263,9 @@ private:
     q.pressureAlt = a.alternates ? static_cast<Real*>(at(l.pressureAlt)) : nullptr;
     q.id = static_cast<std::int64_t*>(at(l.id));
     q.idAlt = a.alternates ? static_cast<std::int64_t*>(at(l.idAlt)) : nullptr;
+    q.liquid = a.liquids > 0 ? static_cast<std::uint8_t*>(at(l.liquid)) : nullptr;
+    q.liquidAlt =
+      a.liquids > 0 && a.alternates ? static_cast<std::uint8_t*>(at(l.liquidAlt)) : nullptr;
     q.keys[0] = static_cast<CellKey*>(at(l.keys[0]));
     q.keys[1] = static_cast<CellKey*>(at(l.keys[1]));
     q.masks = a.masks ? static_cast<std::uint32_t*>(at(l.masks)) : nullptr;

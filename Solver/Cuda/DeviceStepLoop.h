@@ -113,13 +113,15 @@ public:
 
   void densityAndLambda(const Projection& p)
   {
-    detail::firstPassOnPositions(exec_, DensityStage<Real>{}, b_, k_, n_, view(p.iteration),
-      p.iteration, adaptive_, detail::DensityPass{});
+    detail::withPass<detail::DensityPass>(b_.liquid != nullptr, [&](auto pass) {
+      detail::firstPassOnPositions(exec_, DensityStage<Real>{}, b_, k_, n_, view(p.iteration),
+        p.iteration, adaptive_, pass);
+    });
   }
 
   void measureCompression(const Projection& p, bool mayStop)
   {
-    exec_.reduceCompression(b_.density, n_, b_.adaptive, b_.blockSums, k_,
+    exec_.reduceCompression(b_.density, b_.liquid, n_, b_.adaptive, b_.blockSums, k_,
       mayStop ? k_.tolerance : -1.0, (*proceed_)[p.iteration + 1]);
   }
 

@@ -23,6 +23,7 @@
 #include "DeviceParticleStore.h"
 #include "DeviceSolids.h"
 #include "Equations.h"
+#include "LiquidDensities.h"
 #include "ParticleChecks.h"
 #include "StatisticsScan.h"
 #include "DeviceStepLoop.h"
@@ -111,7 +112,7 @@ private:
   void captureGraphs();
   // Uploads x, v and id of the n_ particles into a fresh allocation.
   void restore(const std::vector<Vec3<Real>>& x, const std::vector<Vec3<Real>>& v,
-    const std::vector<std::int64_t>& id);
+    const std::vector<std::int64_t>& id, const std::vector<std::uint8_t>& liquid);
   // After the particles changed (append, load, solids): density and lambda at rest, the step
   // captured again, and a wait (the host arrays that went up may die).
   void settle();
@@ -180,6 +181,7 @@ DeviceStepper<Real, Device>::DeviceStepper(const Parameters& parameters,
   arrays.masks = constants_.schedule.enabled != 0;
   arrays.moved = arrays.masks;
   arrays.volumes = true;
+  arrays.liquids = static_cast<int>(parameters_.liquids.size());
   store_ = std::make_unique<DeviceParticleStore<Real, Device>>(
     *device_, arrays, std::size_t(constants_.cellCount) + 1, constants_.keyBits);
   try

@@ -79,7 +79,8 @@ void DeviceStepper<Real, Device>::allocate(std::size_t capacity, std::size_t par
 
 template <class Real, class Device>
 void DeviceStepper<Real, Device>::restore(const std::vector<Vec3<Real>>& x,
-  const std::vector<Vec3<Real>>& v, const std::vector<std::int64_t>& id)
+  const std::vector<Vec3<Real>>& v, const std::vector<std::int64_t>& id,
+  const std::vector<std::uint8_t>& liquid)
 {
   if (n_ == 0)
   {
@@ -88,6 +89,10 @@ void DeviceStepper<Real, Device>::restore(const std::vector<Vec3<Real>>& x,
   device_->upload(buffers_.vec[roles_.x], x.data(), n_ * sizeof(Vec3<Real>));
   device_->upload(buffers_.vec[roles_.v], v.data(), n_ * sizeof(Vec3<Real>));
   device_->upload(buffers_.id, id.data(), n_ * sizeof(std::int64_t));
+  if (buffers_.liquid)
+  {
+    device_->upload(buffers_.liquid, liquid.data(), n_);
+  }
   device_->synchronize();
 }
 
@@ -109,11 +114,16 @@ void DeviceStepper<Real, Device>::append(const ParticleBatch& batch)
     // everything else is recomputed from them.
     std::vector<Vec3<Real>> x(n_), v(n_);
     std::vector<std::int64_t> id(n_);
+    std::vector<std::uint8_t> liquid(buffers_.liquid ? n_ : 0);
     if (n_ > 0)
     {
       device_->download(x.data(), buffers_.vec[roles_.x], n_ * sizeof(Vec3<Real>));
       device_->download(v.data(), buffers_.vec[roles_.v], n_ * sizeof(Vec3<Real>));
       device_->download(id.data(), buffers_.id, n_ * sizeof(std::int64_t));
+      if (buffers_.liquid)
+      {
+        device_->download(liquid.data(), buffers_.liquid, n_);
+      }
     }
     device_->synchronize();
     const std::size_t oldCapacity = store_->capacity();
@@ -139,12 +149,12 @@ void DeviceStepper<Real, Device>::append(const ParticleBatch& batch)
       // Keep the particles we had: the memory they used was just freed.
       allocate(oldCapacity, n_);
       roles_ = Roles{};
-      restore(x, v, id);
+      restore(x, v, id, liquid);
       settle();
       throw;
     }
     roles_ = Roles{};
-    restore(x, v, id);
+    restore(x, v, id, liquid);
   }
   if (added > 0)
   {
@@ -157,6 +167,13 @@ void DeviceStepper<Real, Device>::append(const ParticleBatch& batch)
     device_->upload(buffers_.vec[roles_.x] + n_, x.data(), added * sizeof(Vec3<Real>));
     device_->upload(buffers_.vec[roles_.v] + n_, v.data(), added * sizeof(Vec3<Real>));
     device_->upload(buffers_.id + n_, batch.id.data(), added * sizeof(std::int64_t));
+    // A batch without liquids is of liquid 0 (checkBatch).
+    const std::vector<std::uint8_t> zeros(buffers_.liquid && batch.liquid.empty() ? added : 0, 0);
+    if (buffers_.liquid)
+    {
+      device_->upload(buffers_.liquid + n_,
+        batch.liquid.empty() ? zeros.data() : batch.liquid.data(), added);
+    }
     // The host vectors die at the end of this scope: wait for the copies.
     device_->synchronize();
   }
@@ -190,6 +207,27 @@ void DeviceStepper<Real, Device>::copyInto(const SnapshotView<Out>& out) const
     copy(out.lambda, buffers_.lambda, sizeof(Real));
     copy(out.pressure, buffers_.pressure, sizeof(Real));
     copy(out.id, buffers_.id, sizeof(std::int64_t));
+    if (buffers_.liquid)
+    {
+      // The densities in each particle's liquid's units (toLiquidDensities), which need the
+      // liquids even where the caller does not ask for them.
+      std::vector<std::uint8_t> own(out.liquid ? 0 : n);
+      std::uint8_t* liquid = out.liquid ? out.liquid : own.data();
+      copy(liquid, buffers_.liquid, 1);
+      device_->synchronize();
+      if (out.density)
+      {
+        double ratio[kMaxLiquids];
+        for (int l = 0; l < parameters_.liquidCount(); ++l)
+        {
+          ratio[l] = parameters_.liquidRestDensity(l) / parameters_.restDensity;
+        }
+        for (std::size_t i = 0; i < n; ++i)
+        {
+          out.density[i] = static_cast<Real>(out.density[i] * ratio[liquid[i]]);
+        }
+      }
+    }
     device_->synchronize();
   }
 }
@@ -204,11 +242,13 @@ void DeviceStepper<Real, Device>::copyOut(Snapshot<Out>& out) const
   out.lambda.resize(n_);
   out.pressure.resize(n_);
   out.id.resize(n_);
+  out.liquid.resize(buffers_.liquid ? n_ : 0);
   if constexpr (std::is_same<Out, Real>::value)
   {
     // Same precision (checkpoints): straight into the snapshot's vectors.
     copyInto(SnapshotView<Real>{ out.position.data(), out.velocity.data(), out.density.data(),
-      out.lambda.data(), out.pressure.data(), out.id.data() });
+      out.lambda.data(), out.pressure.data(), out.id.data(),
+      buffers_.liquid ? out.liquid.data() : nullptr });
   }
   else
   {
@@ -223,6 +263,7 @@ void DeviceStepper<Real, Device>::copyOut(Snapshot<Out>& out) const
       out.pressure[i] = static_cast<Out>(same.pressure[i]);
     }
     out.id = std::move(same.id);
+    out.liquid = std::move(same.liquid);
   }
 }
 
@@ -244,6 +285,16 @@ void DeviceStepper<Real, Device>::loadState(const Snapshot<In>& state)
   {
     throw InvalidInput("checkpoint arrays differ in length (" + std::to_string(n) + " ids)");
   }
+  checkLiquids(parameters_, state.liquid, n, "checkpoint");
+  // Back to the reference's units (fromLiquidDensities); a checkpoint without liquids in a scene
+  // that names them is of liquid 0.
+  std::vector<In> density = state.density;
+  std::vector<std::uint8_t> liquid = state.liquid;
+  if (!parameters_.liquids.empty())
+  {
+    liquid.resize(n, 0);
+    fromLiquidDensities(parameters_, liquid, density);
+  }
   device_->activate();
   device_->synchronize();
   if (n > store_->capacity())
@@ -259,10 +310,14 @@ void DeviceStepper<Real, Device>::loadState(const Snapshot<In>& state)
     // In is Real here (checked above), so the arrays go up as they are.
     device_->upload(buffers_.vec[roles_.x], state.position.data(), n * sizeof(Vec3<Real>));
     device_->upload(buffers_.vec[roles_.v], state.velocity.data(), n * sizeof(Vec3<Real>));
-    device_->upload(buffers_.density, state.density.data(), n * sizeof(Real));
+    device_->upload(buffers_.density, density.data(), n * sizeof(Real));
     device_->upload(buffers_.lambda, state.lambda.data(), n * sizeof(Real));
     device_->upload(buffers_.pressure, state.pressure.data(), n * sizeof(Real));
     device_->upload(buffers_.id, state.id.data(), n * sizeof(std::int64_t));
+    if (buffers_.liquid)
+    {
+      device_->upload(buffers_.liquid, liquid.data(), n);
+    }
   }
   captureGraphs();
   device_->synchronize();

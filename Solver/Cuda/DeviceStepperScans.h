@@ -26,9 +26,11 @@ Statistics DeviceStepper<Real, Device>::statistics() const
   auto exec = device_->executor();
   const CellKey* keys = enqueueSortedCopy(exec, constants_, n, b.vec[roles_.x], b.keys[0],
     b.keys[1], order, order + store_->capacity(), b.vec[3], b.cellOffsets);
-  const StatisticsScan<Real> scan{ b.vec[roles_.x], b.vec[roles_.v], b.density, b.vec[3],
+  StatisticsScan<Real> scan{ b.vec[roles_.x], b.vec[roles_.v], b.density, b.vec[3],
     GridView<Real>{ constants_.geometry, b.cellOffsets, keys }, n, h * h,
-    calibratedParticleMass(parameters_), parameters_.restDensity };
+    calibratedParticleMass(parameters_), parameters_.restDensity, b.liquid, {} };
+  const LiquidMasses masses(parameters_);
+  std::copy(std::begin(masses.of), std::end(masses.of), std::begin(scan.masses));
   device_->scanStatistics(scan, statisticsPartials_, statisticsResult_);
   double r[kStatisticsValues];
   device_->download(r, statisticsResult_, sizeof r);

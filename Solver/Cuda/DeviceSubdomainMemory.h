@@ -65,7 +65,8 @@ template <class In>
 void DeviceSubdomainStepper<Real, Device>::loadState(const Snapshot<In>& state)
 {
   HostState s;
-  loadFromSnapshot(state, HostParticles<Real>{ s.x, s.v, s.density, s.lambda, s.pressure, s.id });
+  loadFromSnapshot(parameters_, state,
+    HostParticles<Real>{ s.x, s.v, s.density, s.lambda, s.pressure, s.id, s.liquid });
   device_->activate();
   device_->synchronize();
   const std::size_t n = s.id.size();

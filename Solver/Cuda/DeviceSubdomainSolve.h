@@ -7,6 +7,10 @@
 namespace pbf::cuda
 {
 
+// The density pass of a sub-domain: CUDA ranks carry no liquids (Backends.cpp refuses a scene
+// that names them), so their weight is compiled out.
+constexpr detail::DensityPass<false> kDensityPass{};
+
 // The Loop of StepLoop.h for one rank's GPU sub-domain: each pass over the owned particles runs
 // as two launches, the border particles (the columns a neighbour mirrors) on the border stream
 // and then the interior ones, the border's fields on their way to the neighbours while the
@@ -70,7 +74,7 @@ public:
     twoSided<Real>(
       [&](auto& exec, const StepBuffers<Real>& b, std::uint32_t n, detail::ListedParticles on) {
         detail::firstPassOnPositions(
-          exec, DensityStage<Real>{}, b, k_, n, f, p.iteration, false, detail::DensityPass{}, on);
+          exec, DensityStage<Real>{}, b, k_, n, f, p.iteration, false, kDensityPass, on);
       },
       s_.density_, s_.lambda_);
   }
@@ -261,7 +265,7 @@ Compression DeviceSubdomainStepper<Real, Device>::compression(std::uint32_t n)
   subdomain::gather<Real>(exec, n, ownedList_, density_, densityAlt_);
   // A negative tolerance: the state only reports, the loop here decides.
   exec.fillZero(adaptive_, sizeof(AdaptiveState));
-  exec.reduceCompression(densityAlt_, n, adaptive_, blockSums_, constants_, -1.0);
+  exec.reduceCompression(densityAlt_, nullptr, n, adaptive_, blockSums_, constants_, -1.0);
   AdaptiveState state{};
   device_->download(&state, adaptive_, sizeof state);
   device_->synchronize();
@@ -336,7 +340,7 @@ void DeviceSubdomainStepper<Real, Device>::evaluateAtRest()
     f,
     0,
     false,
-    detail::DensityPass{},
+    kDensityPass,
     detail::ListedParticles{ ownedList_ });
   // No step has corrected these positions: no pressure yet.
   exec.fillZero(pressure_, static_cast<std::size_t>(n_) * sizeof(Real));

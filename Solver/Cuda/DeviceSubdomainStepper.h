@@ -210,11 +210,13 @@ public:
   }
   void read(Snapshot<float>& out) const override
   {
-    distributed::together(communicator_, [&] { copyToSnapshot(hostState().view(), out); });
+    distributed::together(
+      communicator_, [&] { copyToSnapshot(parameters_, hostState().view(), out); });
   }
   void read(Snapshot<double>& out) const override
   {
-    distributed::together(communicator_, [&] { copyToSnapshot(hostState().view(), out); });
+    distributed::together(
+      communicator_, [&] { copyToSnapshot(parameters_, hostState().view(), out); });
   }
   Statistics statistics() const override
   {
@@ -378,7 +380,11 @@ private:
     std::vector<Vec3<Real>> x, v;
     std::vector<Real> density, lambda, pressure;
     std::vector<std::int64_t> id;
-    ConstHostParticles<Real> view() const { return { x, v, density, lambda, pressure, id }; }
+    std::vector<std::uint8_t> liquid; // empty: the GPU steppers run scenes of one liquid
+    ConstHostParticles<Real> view() const
+    {
+      return { x, v, density, lambda, pressure, id, liquid };
+    }
   };
 
   using Clock = std::chrono::steady_clock;

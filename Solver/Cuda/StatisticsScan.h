@@ -6,6 +6,8 @@
 #pragma once
 
 #include "Grid.h"
+#include "HostDevice.h"
+#include "Parameters.h"
 #include "Vec3.h"
 
 #include <cstdint>
@@ -41,6 +43,10 @@ struct StatisticsScan
   double h2;
   double mass;
   double restDensity;
+  // Each particle's liquid and the liquids' masses (LiquidMasses); null: every particle `mass`.
+  const std::uint8_t* liquid;
+  double masses[kMaxLiquids];
+  PBF_HD PBF_INLINE double massOf(std::uint32_t i) const { return liquid ? masses[liquid[i]] : mass; }
 };
 
 } // namespace cuda

@@ -20,9 +20,11 @@
 //   sortByKey(keys, keysAlt, values, valuesAlt, n, keyBits) -> SortedPairs (stable radix sort)
 //   maxScan(data, count)                 inclusive max-scan in place
 //   fillZero(pointer, bytes), copy(destination, source, bytes)
-//   reduceCompression(density, n, state, blockSums, constants, tolerance[, next])   adaptive
-//                                        mode, see AdaptiveState (blockSums: 2 per block of
-//                                        kCompressionBlock); a negative tolerance never finishes;
+//   reduceCompression(density, liquid, n, state, blockSums, constants, tolerance[, next])
+//                                        adaptive mode, see AdaptiveState (blockSums: 2 per block
+//                                        of kCompressionBlock, 2 liquids + 1 with several liquids:
+//                                        the mean is the most compressed liquid's); a negative
+//                                        tolerance never finishes;
 //                                        next (a Branch) is set to whether the solve goes on
 //   Branch, branch() -> Branch           a condition for one body of runIfChain, off unless a
 //                                        reduction sets it (Exec::noBranch() names none)
@@ -117,6 +119,7 @@ struct StepBuffers
   Real* volume;            // m / rho_i for the vorticity passes; may be null (FluidView::volume)
   Real* omegaLength;       // |omega_i| for the confinement; may be null
   std::int64_t* id;
+  std::uint8_t* liquid;    // each particle's liquid (Parameters::liquids); null: none named
   CellKey* keys[2];        // cell keys and the sort's alternate buffer
   std::uint32_t* masks;    // kNeighborRows * stride entries; null when masks are off
   std::uint32_t stride;    // capacity of every per-particle array
@@ -145,6 +148,7 @@ struct StepConstants
   double maxTolerance;         // maxDensityErrorTolerance as a fraction; 0: not a criterion
   double inverseRestDensity;   // 1 / rho_0 in double, for the compression of adaptive mode
   double chebyshevRho;         // Parameters::chebyshevRho: 0, plain Jacobi
+  int liquids;                 // Parameters::liquidCount(): the compression's means by liquid
   // This step's dt and what follows from it, in the stepper's memory (device memory on a GPU):
   // the stepper writes it before a step, so a captured step reads the current values.
   const StepTime<Real>* time;
@@ -188,6 +192,7 @@ StepConstants<Real> makeStepConstants(const Parameters& parameters, double skin,
   k.maxTolerance = parameters.maxDensityErrorTolerance / 100.0;
   k.inverseRestDensity = 1.0 / parameters.restDensity;
   k.chebyshevRho = parameters.chebyshevRho;
+  k.liquids = parameters.liquidCount();
   return k;
 }
 
@@ -254,6 +259,14 @@ const CellKey* sortAndGather(Exec& exec, const StepBuffers<Real>& b, const StepC
   std::int64_t* idSorted = reinterpret_cast<std::int64_t*>(B);
   exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { idSorted[i] = id[perm[i]]; });
   exec.copy(id, idSorted, static_cast<std::size_t>(n) * sizeof(std::int64_t));
+  if (b.liquid)
+  {
+    // B again, for the liquids.
+    std::uint8_t* liquid = b.liquid;
+    std::uint8_t* liquidSorted = reinterpret_cast<std::uint8_t*>(B);
+    exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { liquidSorted[i] = liquid[perm[i]]; });
+    exec.copy(liquid, liquidSorted, static_cast<std::size_t>(n));
+  }
   return keys;
 }
 
@@ -265,6 +278,7 @@ FluidView<Real, MaskedNeighbors<Real>> solverView(const StepBuffers<Real>& b,
   f.density = b.density;
   f.lambda = b.lambda;
   f.pressure = b.pressure;
+  f.liquid = b.liquid;
   f.grid = MaskedNeighbors<Real>{ GridView<Real>{ k.geometry, b.cellOffsets, sortedKeys }, b.masks,
     b.stride, k.schedule.enabled != 0 };
   f.c = k.c;
@@ -388,12 +402,14 @@ void firstPassOnPositions(Exec& exec, Stage stage, const StepBuffers<Real>& b,
   });
 }
 
+// With Liquids false the liquids' weight is compiled out (densityAndLambda says why).
+template <bool Liquids>
 struct DensityPass
 {
-  template <class View>
-  PBF_HD PBF_INLINE void operator()(std::uint32_t i, const View& f) const
+  template <class Real, class Neighbors>
+  PBF_HD PBF_INLINE void operator()(std::uint32_t i, const FluidView<Real, Neighbors>& f) const
   {
-    densityAndLambda(i, f);
+    densityAndLambda<Real, Neighbors, Liquids>(i, f);
   }
 };
 
@@ -450,7 +466,7 @@ void withPass(bool on, Run&& run)
 // each particle reads its own before overwriting it, and no buffer is added. Accelerate false
 // compiles the blend out, as withPass does for the optional terms of other passes: its registers
 // would cost the plain projections.
-template <bool Accelerate, class Real, class Exec, class Visit>
+template <bool Accelerate, bool Liquids, class Real, class Exec, class Visit>
 void correctionPassOf(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
   const AdaptiveState* state, Real omega, Visit visit)
@@ -478,7 +494,7 @@ void correctionPassOf(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
       // delta p_i lands in the other position buffer (f.scratch), which nobody reads in this
       // pass; applyCorrection then adds p_i to it in place. IEEE addition is commutative, so
       // this is exactly x*_i + delta p_i, and no particle reads a position that moved.
-      positionCorrection(i, f);
+      positionCorrection<Real, MaskedNeighbors<Real>, NoWallTerms, Liquids>(i, f);
       const Vec3<Real> delta = f.scratch[i];
       applyCorrection(i, apply);
       if constexpr (Accelerate)
@@ -507,13 +523,23 @@ void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
   const AdaptiveState* state, bool accelerate, Real omega, Visit visit = Visit{})
 {
-  if (accelerate)
+  // The liquids' terms compiled in only where the particles carry liquids (positionCorrection).
+  const bool liquids = f.liquid != nullptr;
+  if (accelerate && liquids)
   {
-    correctionPassOf<true>(exec, b, n, f, iteration, last, state, omega, visit);
+    correctionPassOf<true, true>(exec, b, n, f, iteration, last, state, omega, visit);
+  }
+  else if (accelerate)
+  {
+    correctionPassOf<true, false>(exec, b, n, f, iteration, last, state, omega, visit);
+  }
+  else if (liquids)
+  {
+    correctionPassOf<false, true>(exec, b, n, f, iteration, last, state, omega, visit);
   }
   else
   {
-    correctionPassOf<false>(exec, b, n, f, iteration, last, state, omega, visit);
+    correctionPassOf<false, false>(exec, b, n, f, iteration, last, state, omega, visit);
   }
 }
 
@@ -595,7 +621,9 @@ void enqueueEvaluateAtRest(Exec& exec, const StepBuffers<Real>& b, const StepCon
   // A = x (sorted, equal to D), C = v.
   FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, k, sortedKeys);
   f.p = A;
-  detail::firstPassOnPositions(exec, DensityStage<Real>{}, b, k, n, f, 0, false, detail::DensityPass{});
+  detail::withPass<detail::DensityPass>(b.liquid != nullptr, [&](auto pass) {
+    detail::firstPassOnPositions(exec, DensityStage<Real>{}, b, k, n, f, 0, false, pass);
+  });
   exec.copy(B, C, static_cast<std::size_t>(n) * sizeof(Vec3<Real>));
   // No step has corrected these positions: no pressure yet.
   exec.fillZero(b.pressure, static_cast<std::size_t>(n) * sizeof(Real));

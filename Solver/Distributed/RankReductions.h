@@ -21,7 +21,7 @@ template <class Real>
 Statistics reduceStatistics(
   Communicator& communicator, const Parameters& parameters, const ConstHostParticles<Real>& p)
 {
-  const double mass = calibratedParticleMass(parameters);
+  const LiquidMasses masses(parameters);
   double errorSum = 0, errorMax = 0, speedMax = 0, kinetic = 0, finite = 1;
   Vec3d momentum{ 0, 0, 0 };
   for (std::size_t i = 0; i < p.x.size(); ++i)
@@ -32,6 +32,7 @@ Statistics reduceStatistics(
     const Vec3d xi = Vec3d::from(p.x[i]);
     const Vec3d vi = Vec3d::from(p.v[i]);
     const double speed2 = dot(vi, vi);
+    const double mass = masses(p.liquid, i);
     speedMax = std::max(speedMax, std::sqrt(speed2));
     kinetic += 0.5 * mass * speed2;
     momentum += vi * mass;

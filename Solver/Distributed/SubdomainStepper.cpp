@@ -98,6 +98,10 @@ void SubdomainStepper<Real>::append(const ParticleBatch& batch)
       fluid_.x.push_back(q);
       fluid_.v.push_back(Vec3<Real>::from(batch.velocity[i]));
       fluid_.id.push_back(batch.id[i]);
+      if (!fluid_.parameters.liquids.empty())
+      {
+        fluid_.liquid.push_back(batch.liquid.empty() ? std::uint8_t(0) : batch.liquid[i]);
+      }
     }
   }
   fluid_.density.resize(fluid_.x.size());
@@ -147,6 +151,7 @@ void SubdomainStepper<Real>::migrate(bool byPrediction)
   const int me = communicator_.rank();
   std::vector<Bytes> out(static_cast<std::size_t>(communicator_.size()));
   std::size_t kept = 0;
+  const bool liquids = !fluid_.parameters.liquids.empty();
   for (std::size_t i = 0; i < fluid_.x.size(); ++i)
   {
     const int owner = slabs_.owner(column(byPrediction ? fluid_.p[i] : fluid_.x[i]));
@@ -159,6 +164,10 @@ void SubdomainStepper<Real>::migrate(bool byPrediction)
       fluid_.density[kept] = fluid_.density[i];
       fluid_.lambda[kept] = fluid_.lambda[i];
       fluid_.pressure[kept] = fluid_.pressure[i];
+      if (liquids)
+      {
+        fluid_.liquid[kept] = fluid_.liquid[i];
+      }
       ++kept;
       continue;
     }
@@ -170,6 +179,10 @@ void SubdomainStepper<Real>::migrate(bool byPrediction)
     put(b, fluid_.density[i]);
     put(b, fluid_.lambda[i]);
     put(b, fluid_.pressure[i]);
+    if (liquids)
+    {
+      put(b, fluid_.liquid[i]);
+    }
   }
   fluid_.x.resize(kept);
   fluid_.p.resize(kept);
@@ -178,6 +191,7 @@ void SubdomainStepper<Real>::migrate(bool byPrediction)
   fluid_.density.resize(kept);
   fluid_.lambda.resize(kept);
   fluid_.pressure.resize(kept);
+  fluid_.liquid.resize(liquids ? kept : 0);
   const std::vector<Bytes> in = communicator_.exchange(out);
   for (const Bytes& b : in)
   {
@@ -190,6 +204,10 @@ void SubdomainStepper<Real>::migrate(bool byPrediction)
       fluid_.density.push_back(take<Real>(b, offset));
       fluid_.lambda.push_back(take<Real>(b, offset));
       fluid_.pressure.push_back(take<Real>(b, offset));
+      if (liquids)
+      {
+        fluid_.liquid.push_back(take<std::uint8_t>(b, offset));
+      }
       ++exchange_.migrated;
     }
   }
@@ -206,6 +224,7 @@ void SubdomainStepper<Real>::receiveGhosts()
   // Which owned particles each rank mirrors, by index before the sort (mapped after it).
   std::vector<std::vector<std::uint32_t>> sendOriginal(ranks);
   std::vector<Bytes> out(ranks);
+  const bool liquids = !fluid_.parameters.liquids.empty();
   for (std::size_t i = 0; i < owned; ++i)
   {
     const int c = column(fluid_.p[i]);
@@ -221,6 +240,10 @@ void SubdomainStepper<Real>::receiveGhosts()
       Bytes& b = out[static_cast<std::size_t>(to)];
       putVec(b, fluid_.p[i]);
       put(b, fluid_.id[i]);
+      if (liquids)
+      {
+        put(b, fluid_.liquid[i]);
+      }
     }
   }
   const std::vector<Bytes> in = communicator_.exchange(out);
@@ -234,6 +257,10 @@ void SubdomainStepper<Real>::receiveGhosts()
       fluid_.p.push_back(q);
       fluid_.v.push_back(Vec3<Real>{ Real(0), Real(0), Real(0) });
       fluid_.id.push_back(take<std::int64_t>(in[r], offset));
+      if (liquids)
+      {
+        fluid_.liquid.push_back(take<std::uint8_t>(in[r], offset));
+      }
       from.push_back(static_cast<std::int32_t>(r));
     }
   }
@@ -353,6 +380,10 @@ void SubdomainStepper<Real>::dropGhosts()
   keep(fluid_.density);
   keep(fluid_.lambda);
   keep(fluid_.pressure);
+  if (!fluid_.liquid.empty())
+  {
+    keep(fluid_.liquid);
+  }
   ghostFrom_.assign(owned, -1);
 }
 
@@ -361,24 +392,32 @@ Compression SubdomainStepper<Real>::compression()
 {
   // In fixed blocks per rank, then the ranks in order: deterministic, though summed in another
   // order than the serial backend's blocks.
-  double sum = 0.0, largest = 0.0;
+  // With several liquids, each liquid's sum and count (the mean is the most compressed liquid's).
+  const std::size_t liquids = static_cast<std::size_t>(fluid_.parameters.liquidCount());
+  std::vector<double> mine(2 * liquids + 1, 0.0); // sums, counts, the largest
   const double inverseRho0 = 1.0 / fluid_.parameters.restDensity;
   for (std::uint32_t i : owned_)
   {
     const double e = std::max(double(fluid_.density[i]) * inverseRho0 - 1.0, 0.0);
-    sum += e;
-    largest = std::max(largest, e);
+    const std::size_t l = fluid_.liquid.empty() ? 0 : fluid_.liquid[i];
+    mine[l] += e;
+    mine[liquids + l] += 1.0;
+    mine[2 * liquids] = std::max(mine[2 * liquids], e);
   }
-  double total = 0.0, count = 0.0;
+  std::vector<double> total(2 * liquids, 0.0);
   Compression c;
-  for (const std::vector<double>& r :
-    allGather(communicator_, { sum, double(owned_.size()), largest }))
+  for (const std::vector<double>& r : allGather(communicator_, mine))
   {
-    total += r[0];
-    count += r[1];
-    c.max = std::max(c.max, r[2]);
+    for (std::size_t k = 0; k < 2 * liquids; ++k)
+    {
+      total[k] += r[k];
+    }
+    c.max = std::max(c.max, r[2 * liquids]);
   }
-  c.mean = count > 0 ? total / count : 0.0;
+  for (std::size_t l = 0; l < liquids; ++l)
+  {
+    c.mean = std::max(c.mean, total[liquids + l] > 0 ? total[l] / total[liquids + l] : 0.0);
+  }
   return c;
 }
 

@@ -83,8 +83,14 @@ public:
   Health health() const override;
   // This rank's particles as read() gave them, at a step where the ranks were as now. The next
   // step cuts the slabs from this state, as the run that took it did.
-  void load(const Snapshot<float>& state) override { loadFromSnapshot(state, fluid_.particles()); }
-  void load(const Snapshot<double>& state) override { loadFromSnapshot(state, fluid_.particles()); }
+  void load(const Snapshot<float>& state) override
+  {
+    loadFromSnapshot(fluid_.parameters, state, fluid_.particles());
+  }
+  void load(const Snapshot<double>& state) override
+  {
+    loadFromSnapshot(fluid_.parameters, state, fluid_.particles());
+  }
   // Collective: every rank holds every solid (their fields are small beside the fluid), and
   // density and lambda are evaluated again with them, as CpuStepper does.
   void setObstacles(

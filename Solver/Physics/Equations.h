@@ -81,6 +81,16 @@ struct StepTime
   Real tensile;
   Real xsph;      // XSPH blend c of eq. 17 for this step: nu dt / (beta h^2), Parameters::xsphNu
   Real xsphHyper; // the bi-Laplacian blend c_4: nu_4 dt / (beta h^2), Parameters::xsphHyperNu
+  // Per liquid (Parameters::liquids), indexed by a particle's liquid: its XSPH blend
+  // (Parameters::liquidXsphNu; c_4 is shared, xsph is liquid 0's), w_l = restDensity / rho_l,
+  // its inverse mass in units of the reference's (liquidWeight), and rho_l / restDensity. They
+  // live here, in the stepper's memory read through FluidView::time, rather than in the
+  // Coefficients a GPU kernel takes as its argument: a kernel's argument indexed at run time is
+  // copied to local memory, which made the correction pass spill (+2 to +4 % a step at 1M
+  // particles on an H100, one liquid or two).
+  Real liquidXsph[kMaxLiquids];
+  Real liquidWeight[kMaxLiquids];
+  Real liquidDensityRatio[kMaxLiquids];
 
   static StepTime make(const Parameters& p, const LatticeCalibration& lattice, double dt)
   {
@@ -92,11 +102,25 @@ struct StepTime
     // c + c_4 at most kMaxXsphBlend: explicit smoothing beyond it is unstable (a pattern's gain
     // S is at most about 1 on the lattice, so each blend damps, never flips, it). Automatic steps
     // stay below (Simulation::nextTimeStep); a long fixed step scales both down to it.
-    const double c = p.xsphNu() * dt / lattice.xsphSecondMoment;
+    // With several liquids, the most viscous one's c + c_4 decides the clamp for all of them.
     const double c4 = p.xsphHyperNu() * dt / lattice.xsphSecondMoment;
-    const bool clamped = c + c4 > kMaxXsphBlend;
-    t.xsph = static_cast<Real>(clamped ? kMaxXsphBlend * (c / (c + c4)) : c);
-    t.xsphHyper = static_cast<Real>(clamped ? kMaxXsphBlend * (c4 / (c + c4)) : c4);
+    const double largest = p.largestXsphNu() * dt / lattice.xsphSecondMoment;
+    const bool clamped = largest + c4 > kMaxXsphBlend;
+    for (int l = 0; l < kMaxLiquids; ++l)
+    {
+      const double c = l < p.liquidCount() ? p.liquidXsphNu(l) * dt / lattice.xsphSecondMoment : 0.0;
+      t.liquidXsph[l] = static_cast<Real>(clamped ? kMaxXsphBlend * (c / (largest + c4)) : c);
+    }
+    for (int l = 0; l < kMaxLiquids; ++l)
+    {
+      const bool named = l < p.liquidCount();
+      t.liquidWeight[l] = static_cast<Real>(named ? p.restDensity / p.liquidRestDensity(l) : 1.0);
+      t.liquidDensityRatio[l] =
+        static_cast<Real>(named ? p.liquidRestDensity(l) / p.restDensity : 1.0);
+    }
+    const double c = p.liquidXsphNu(0) * dt / lattice.xsphSecondMoment;
+    t.xsph = static_cast<Real>(clamped ? kMaxXsphBlend * (c / (largest + c4)) : c);
+    t.xsphHyper = static_cast<Real>(clamped ? kMaxXsphBlend * (c4 / (largest + c4)) : c4);
     return t;
   }
 };
@@ -126,6 +150,8 @@ struct FluidView
   // Optional (null: not recorded): the pressure each particle's corrections of this step stand
   // for (recordPressure), written by positionCorrection.
   Real* pressure;
+  // Each particle's liquid (Parameters::liquids); null: one liquid, and no particle reads it.
+  const std::uint8_t* liquid;
   Neighbors grid;
   Coefficients<Real> c;
   const StepTime<Real>* time; // this step's dt and what follows from it
@@ -138,6 +164,40 @@ struct FluidView
   int obstacleCount;
   BoundaryTable<Real> boundary;
 };
+
+// w_i = restDensity / rho_l of particle i's liquid l: its inverse mass in units of the reference
+// particle's (StepTime::liquidWeight). The constraint C_i is on the number density, the same
+// for every liquid; lambda_i's denominator carries w_i (the neighbours' weights taken as its own:
+// exact inside a liquid, where a particle's corrections then equal the one-liquid solver's), so
+// lambda_i is rho_l / restDensity times the one-liquid lambda, a pressure continuous across an
+// interface; and the correction carries w_i, so that m_i delta p_i = m_ref (m / rho_0) sum_j
+// (lambda_i + lambda_j + s_corr) grad W_ij is antisymmetric in i and j (momentum is kept) and a
+// pressure gradient rho_l g lifts each liquid by its own weight: buoyancy between liquids follows.
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE Real liquidWeight(std::uint32_t i, const FluidView<Real, Neighbors>& f)
+{
+  return f.liquid ? f.time->liquidWeight[f.liquid[i]] : Real(1);
+}
+
+// s_corr between particles i and j as a pressure: scaled by the mean of their liquids' density
+// ratios, so that the push it gives (times w_i) is the calibrated acceleration inside any liquid
+// (Parameters::sCorrK) and stays antisymmetric across an interface. 1 for one liquid.
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE Real tensileDensity(
+  std::uint32_t i, std::uint32_t j, const FluidView<Real, Neighbors>& f)
+{
+  return Real(0.5) *
+    (f.time->liquidDensityRatio[f.liquid[i]] + f.time->liquidDensityRatio[f.liquid[j]]);
+}
+
+// A solid's s_corr with particle i: its image in the solid is of i's liquid (tensileDensity).
+// Liquids false: one liquid, whatever f.liquid holds (the GPU compiles the liquids' terms out).
+template <bool Liquids = true, class Real, class Neighbors>
+PBF_HD PBF_INLINE Real solidTensile(std::uint32_t i, const FluidView<Real, Neighbors>& f)
+{
+  const Real tensile = f.tensile ? f.time->tensile : Real(0);
+  return Liquids && f.liquid ? tensile * f.time->liquidDensityRatio[f.liquid[i]] : tensile;
+}
 
 // Calls visit(n, b, solid) for each solid within h of q: n its outward unit normal there (the
 // field's gradient), b the table's sums at q's distance from it, solid its view (for its velocity).
@@ -323,7 +383,9 @@ PBF_HD PBF_INLINE void predictPosition(std::uint32_t i, const FluidView<Real, Ne
 
 // Eq. 2 (poly6 density), eq. 1 (C_i = rho_i / rho_0 - 1), eq. 8 (spiky constraint gradients) and
 // eq. 11 (lambda_i with relaxation epsilon), in one pass over the neighbours and their images.
-template <class Real, class Neighbors>
+// Liquids false compiles the liquids' weight out (a GPU pass of a scene without liquids: the
+// branch's registers made the double-precision passes spill).
+template <class Real, class Neighbors, bool Liquids = true>
 PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
   const Vec3<Real> pi = f.p[i];
@@ -365,7 +427,9 @@ PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real, N
     C = Real(0);
   }
   f.density[i] = rho;
-  f.lambda[i] = -C * f.c.jacobiRelaxation / (sumGradJ2 + dot(gradI, gradI) + f.c.relaxation);
+  const Real denominator = sumGradJ2 + dot(gradI, gradI) + f.c.relaxation;
+  f.lambda[i] = -C * f.c.jacobiRelaxation /
+    (Liquids && f.liquid ? denominator * liquidWeight(i, f) : denominator);
 }
 
 // The pressure p_i that the step's corrections of particle i stand for [Pa]. SPH's symmetric
@@ -401,7 +465,8 @@ struct NoWallTerms
 // enters in the step's first projection only, with this step's coefficient (StepTime::tensile).
 // onWall(term, mirrors, p_i, image, ix, iy, iz) hears each mirror image's term of delta p_i (before
 // m / rho_0) with forEachReflection's arguments: what the walls' loads are made of (wallShares).
-template <class Real, class Neighbors, class OnWall = NoWallTerms>
+// Liquids false compiles the liquids' terms out, as densityAndLambda's.
+template <class Real, class Neighbors, class OnWall = NoWallTerms, bool Liquids = true>
 PBF_HD PBF_INLINE void positionCorrection(
   std::uint32_t i, const FluidView<Real, Neighbors>& f, OnWall&& onWall = OnWall{})
 {
@@ -423,7 +488,8 @@ PBF_HD PBF_INLINE void positionCorrection(
         Real sCorr = Real(0);
         if (tensile != Real(0))
         {
-          sCorr = -tensile * power(f.c.kernels.poly6Within(d2) * f.c.inverseWDeltaQ, f.c.sCorrN);
+          const Real pair = Liquids && f.liquid ? tensile * tensileDensity(i, j, f) : tensile;
+          sCorr = -pair * power(f.c.kernels.poly6Within(d2) * f.c.inverseWDeltaQ, f.c.sCorrN);
         }
         const Vec3<Real> term = f.c.kernels.spikyGradientWithin(d, d2) * (lambdaI + lambdaJ + sCorr);
         delta += term;
@@ -447,11 +513,13 @@ PBF_HD PBF_INLINE void positionCorrection(
     }
   });
   // The solid's share carries lambda_i, as a mirror image does (Boundary.h).
+  const Real tensileI = solidTensile<Liquids>(i, f);
   forEachNearSolid(pi, f,
     [&](const Vec3<Real>& n, const BoundarySample<Real>& b, const DistanceGridView<Real>&) {
-    delta += solidShare(n, b, lambdaI, tensile);
+    delta += solidShare(n, b, lambdaI, tensileI);
   });
-  f.scratch[i] = delta * f.c.massOverRho0;
+  f.scratch[i] =
+    delta * (Liquids && f.liquid ? f.c.massOverRho0 * liquidWeight(i, f) : f.c.massOverRho0);
   recordPressure(i, f, lambdaI);
 }
 
@@ -464,7 +532,7 @@ PBF_HD PBF_INLINE void solidLoads(std::uint32_t i, const FluidView<Real, Neighbo
 {
   const Vec3<Real> pi = f.p[i];
   const Real lambdaI = f.lambda[i];
-  const Real tensile = f.tensile ? f.time->tensile : Real(0);
+  const Real tensile = solidTensile(i, f);
   const Real scale = -f.c.massOverRho0 * f.c.mass * f.time->inverseDt * f.time->inverseDt;
   forEachNearSolid(pi, f,
     [&](const Vec3<Real>& n, const BoundarySample<Real>& b, const DistanceGridView<Real>& solid) {
@@ -663,7 +731,7 @@ PBF_HD PBF_INLINE void vorticityConfinement(
     }
   });
   // XSPH (eq. 17) and its bi-Laplacian: v + c S_i - c_4 S(S)_i.
-  Vec3<Real> v = f.v[i] + si * f.time->xsph;
+  Vec3<Real> v = f.v[i] + si * (f.liquid ? f.time->liquidXsph[f.liquid[i]] : f.time->xsph);
   if (smoothTwice)
   {
     v -= hyper * f.time->xsphHyper;

@@ -73,6 +73,54 @@ void requireFits(const std::string& field, double fieldValue, const std::string&
   reject(field, fieldValue, rule.str());
 }
 
+// The liquids' densities, as ratios to the reference restDensity, scale each particle's
+// correction (StepTime::liquidWeight): a ratio beyond kMostDensityRatio either way would make
+// the lighter liquid's corrections that many times the heavier's, which the Jacobi projection
+// does not converge for.
+constexpr double kMostDensityRatio = 100.0;
+
+void validateLiquids(const Parameters& p)
+{
+  if (p.liquids.size() > static_cast<std::size_t>(kMaxLiquids))
+  {
+    reject("liquids", static_cast<double>(p.liquids.size()),
+      "at most " + std::to_string(kMaxLiquids) + " liquids in one scene");
+  }
+  for (std::size_t l = 0; l < p.liquids.size(); ++l)
+  {
+    const Liquid& liquid = p.liquids[l];
+    const std::string field = "liquid \"" + liquid.name + "\" ";
+    if (liquid.name.empty())
+    {
+      reject("liquids[" + std::to_string(l) + "].name", 0, "every liquid needs a name");
+    }
+    for (std::size_t k = 0; k < l; ++k)
+    {
+      if (p.liquids[k].name == liquid.name)
+      {
+        reject(field + "name", static_cast<double>(l), "two liquids have this name");
+      }
+    }
+    requireFinite(field + "restDensity", liquid.restDensity);
+    if (!(liquid.restDensity > 0.0))
+    {
+      reject(field + "restDensity", liquid.restDensity, "must be > 0 [kg/m^3]");
+    }
+    const double ratio = liquid.restDensity / p.restDensity;
+    if (ratio > kMostDensityRatio || ratio < 1.0 / kMostDensityRatio)
+    {
+      std::ostringstream rule;
+      rule << "must be within " << kMostDensityRatio << " times restDensity (" << p.restDensity
+           << " kg/m^3), the reference the particles' volume is calibrated at";
+      reject(field + "restDensity", liquid.restDensity, rule.str());
+    }
+    if (!std::isnan(liquid.xsphViscosity))
+    {
+      requireNonNegative(field + "xsphViscosity", liquid.xsphViscosity);
+    }
+  }
+}
+
 } // namespace
 
 void Parameters::validate() const
@@ -84,6 +132,7 @@ void Parameters::validate() const
   {
     reject("timeStepping", static_cast<double>(timeStepping), "must be Fixed (0) or Automatic (1)");
   }
+  validateLiquids(*this);
   const char* axis[3] = { "x", "y", "z" };
   const double lo[3] = { domain.min.x, domain.min.y, domain.min.z };
   const double hi[3] = { domain.max.x, domain.max.y, domain.max.z };
@@ -185,7 +234,12 @@ std::string describe(const Parameters& p)
     out << " ";
   }
   out << "h=" << p.smoothingLength() << " m=" << calibratedParticleMass(p)
-      << " xsphNu=" << p.xsphNu() << " dt="
+      << " xsphNu=" << p.xsphNu();
+  for (const Liquid& liquid : p.liquids)
+  {
+    out << " liquid=" << liquid.name << ":" << liquid.restDensity << ":" << liquid.xsphViscosity;
+  }
+  out << " dt="
       << (p.timeStepping == TimeStepping::Automatic ? "automatic" : "fixed");
   return out.str();
 }

@@ -83,6 +83,27 @@ double jacobiGain(double s, double h)
 
 } // namespace
 
+double Parameters::liquidRestDensity(int l) const
+{
+  return liquids.empty() ? restDensity : liquids[static_cast<std::size_t>(l)].restDensity;
+}
+
+double Parameters::liquidXsphNu(int l) const
+{
+  const double alpha = liquids.empty() ? xsphViscosity : liquids[static_cast<std::size_t>(l)].xsphViscosity;
+  return std::isnan(alpha) ? xsphNu() : alpha * smoothingLength() * sceneSpeed();
+}
+
+double Parameters::largestXsphNu() const
+{
+  double largest = 0.0;
+  for (int l = 0; l < liquidCount(); ++l)
+  {
+    largest = std::max(largest, liquidXsphNu(l));
+  }
+  return largest;
+}
+
 double Parameters::sceneSpeed() const
 {
   if (sceneSpeedHint > 0)

@@ -3,8 +3,11 @@
 
 #include "Vec3.h"
 
+#include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace pbf
 {
@@ -26,6 +29,19 @@ constexpr double kJacobiGainTarget = 2.0;
 // The largest XSPH blend per step (nu dt / (beta h^2)) that explicit smoothing keeps stable.
 constexpr double kMaxXsphBlend = 0.5;
 
+// The most liquids one scene holds: a particle's liquid is a byte, and each liquid's constants
+// travel with the step's coefficients (Equations.h) into every kernel.
+constexpr int kMaxLiquids = 8;
+
+// One liquid of a scene that holds several (Scene's "liquids", Data/README.md).
+struct Liquid
+{
+  std::string name;
+  double restDensity = 1000.0;   // its rho_0 [kg/m^3]
+  // Its alpha, as Parameters::xsphViscosity; NaN (unset): Parameters::xsphViscosity.
+  double xsphViscosity = std::numeric_limits<double>::quiet_NaN();
+};
+
 struct Box
 {
   Vec3d min{ 0, 0, 0 };
@@ -46,11 +62,21 @@ struct Parameters
   double particleSpacing = 0.02;  // lattice spacing s of the initial fluid [m]
   double smoothingRatio = 2.0;    // h / s; the support radius h of poly6 and spiky
 
+  // Several liquids (the scene's "liquids"); empty: one, of restDensity and xsphViscosity. A
+  // particle's liquid is its index here. Every particle has the volume V = m / restDensity that
+  // the lattice calibrates (restDensity is then the reference, not a liquid's), and the mass
+  // V rho_l of its liquid's rest density. The constraint is on the number density
+  // sum_j W_ij (Solenthaler and Pajarola 2008's density contrast), the same for every liquid, so
+  // each liquid is held at its own rest density and an interface is not smeared; a particle's
+  // correction is weighted by its inverse mass, so buoyancy follows (Equations.h, liquidWeight).
+  std::vector<Liquid> liquids;
+
   // Solver (Macklin & Mueller 2013)
   int solverIterations = 40;    // constraint projections per step: the most when adaptive (the
                                 // default), every step's count when densityErrorTolerance is 0
   // Adaptive mode when > 0: after the first projection, iterate until the mean compression
-  // max(rho_i / rho_0 - 1, 0) is at or below this many percent, or solverIterations are done.
+  // max(rho_i / rho_0 - 1, 0) is at or below this many percent (with several liquids, each
+  // liquid's mean over its own particles), or solverIterations are done.
   // 0: always solverIterations (the paper's fixed count).
   double densityErrorTolerance = 0.2;
   // Adaptive mode: iterate also while any particle is compressed by more than this many percent
@@ -126,6 +152,12 @@ struct Parameters
   double sceneSpeed() const;
   double xsphNu() const { return xsphViscosity * smoothingLength() * sceneSpeed(); } // [m^2/s]
   double xsphHyperNu() const { return xsphHyperViscosity * smoothingLength() * sceneSpeed(); }
+  // Liquid l's rest density and XSPH nu (restDensity and xsphNu() when there are no liquids).
+  double liquidRestDensity(int l) const;
+  double liquidXsphNu(int l) const;
+  int liquidCount() const { return liquids.empty() ? 1 : static_cast<int>(liquids.size()); }
+  // The largest XSPH nu of the liquids: what bounds the explicit smoothing's step.
+  double largestXsphNu() const;
 
   // Throws InvalidInput naming the first bad field and its value.
   void validate() const;
@@ -174,6 +206,26 @@ inline double calibratedParticleMass(const Parameters& p)
 {
   return calibrateLattice(p).mass;
 }
+
+// Each liquid's particle mass [kg], the calibrated volume m / restDensity times its rest density;
+// slots beyond the liquids hold liquid 0's.
+struct LiquidMasses
+{
+  explicit LiquidMasses(const Parameters& p)
+  {
+    const double m = calibratedParticleMass(p);
+    for (int l = 0; l < kMaxLiquids; ++l)
+    {
+      of[l] = m * (p.liquidRestDensity(l < p.liquidCount() ? l : 0) / p.restDensity);
+    }
+  }
+  // The mass of particle i of a liquid array (empty: liquid 0).
+  double operator()(const std::vector<std::uint8_t>& liquid, std::size_t i) const
+  {
+    return liquid.empty() ? of[0] : of[liquid[i]];
+  }
+  double of[kMaxLiquids];
+};
 
 std::string describe(const Parameters& p);
 

@@ -18,11 +18,13 @@ struct Snapshot
 {
   std::vector<Vec3<Real>> position;
   std::vector<Vec3<Real>> velocity;
-  std::vector<Real> density; // rho_i from the last constraint evaluation [kg/m^3]
+  std::vector<Real> density; // rho_i from the last constraint evaluation [kg/m^3], of its liquid
   std::vector<Real> lambda;  // lambda_i from the last constraint evaluation
   std::vector<Real> pressure; // p_i of the last step's corrections [Pa] (Equations.h's
                               // recordPressure); 0 before a particle's first step
   std::vector<std::int64_t> id;
+  // Each particle's liquid, its index in Parameters::liquids; empty where the scene names none.
+  std::vector<std::uint8_t> liquid;
 };
 
 // Caller-owned host arrays of size() particles laid out as a Snapshot's (a Vec3 is three packed
@@ -36,6 +38,7 @@ struct SnapshotView
   Real* lambda = nullptr;
   Real* pressure = nullptr;
   std::int64_t* id = nullptr;
+  std::uint8_t* liquid = nullptr; // left as it is where the scene names no liquids
 };
 
 // New particles (emitters); ids are given by the caller so they stay unique across backends.
@@ -44,7 +47,8 @@ struct ParticleBatch
   std::vector<Vec3d> position;
   std::vector<Vec3d> velocity;
   std::vector<std::int64_t> id;
+  // Each particle's liquid (Parameters::liquids); empty: liquid 0 for all.
+  std::vector<std::uint8_t> liquid;
 };
-
 
 } // namespace pbf

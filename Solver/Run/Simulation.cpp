@@ -116,7 +116,7 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   checkInterval_ = backend == Backend::CUDA && !automatic ? 0 : 1;
   const LatticeCalibration lattice = calibrateLattice(parameters_);
   // Both blends together (StepTime::make): c + c_4 <= kMaxXsphBlend.
-  const double xsphNu = parameters_.xsphNu() + parameters_.xsphHyperNu();
+  const double xsphNu = parameters_.largestXsphNu() + parameters_.xsphHyperNu();
   xsphStepLimit_ = xsphNu > 0 ? kMaxXsphBlend * lattice.xsphSecondMoment / xsphNu
                               : std::numeric_limits<double>::infinity();
   const Health start = stepper_->health();
@@ -488,7 +488,7 @@ std::size_t SimulationCheckpoint::bytes() const
       return s.position.size() * sizeof(s.position[0]) + s.velocity.size() * sizeof(s.velocity[0]) +
         s.density.size() * sizeof(s.density[0]) + s.lambda.size() * sizeof(s.lambda[0]) +
         s.pressure.size() * sizeof(s.pressure[0]) +
-        s.id.size() * sizeof(s.id[0]) + layersEmitted.size() * sizeof(std::int64_t) +
+        s.id.size() * sizeof(s.id[0]) + s.liquid.size() + layersEmitted.size() * sizeof(std::int64_t) +
         bodyStates.size() * sizeof(RigidState) + bodyLoads.size() * sizeof(SolidLoad);
     },
     state);
@@ -601,6 +601,10 @@ void Simulation::emit()
             batch.position.push_back(origin + u * (s * a) + w * (s * b));
             batch.velocity.push_back(d * emitter.speed);
             batch.id.push_back(nextId_++);
+            if (!scene_.liquids.empty())
+            {
+              batch.liquid.push_back(static_cast<std::uint8_t>(emitter.liquid));
+            }
           }
         }
       }

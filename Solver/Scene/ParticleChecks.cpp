@@ -21,6 +21,7 @@ void checkBatch(const Parameters& parameters, const ParticleBatch& batch)
       std::to_string(batch.velocity.size()) + " velocities, " + std::to_string(batch.id.size()) +
       " ids");
   }
+  checkLiquids(parameters, batch.liquid, n, "particle batch");
   if (n >= std::numeric_limits<std::uint32_t>::max())
   {
     throw InvalidInput("particle count = " + std::to_string(n) + ": more than 32-bit indices hold");
@@ -47,6 +48,35 @@ void checkBatch(const Parameters& parameters, const ParticleBatch& batch)
     {
       throw InvalidInput("position of particle " + std::to_string(i) + " = " + pointText(x) +
         ": outside the domain " + pointText(d.min) + " - " + pointText(d.max));
+    }
+  }
+}
+
+void checkLiquids(const Parameters& parameters, const std::vector<std::uint8_t>& liquid,
+  std::size_t count, const char* what)
+{
+  if (parameters.liquids.empty())
+  {
+    if (!liquid.empty())
+    {
+      throw InvalidInput(std::string(what) + " liquid array: the scene names no liquids, yet " +
+        std::to_string(liquid.size()) + " particles carry one");
+    }
+    return;
+  }
+  if (!liquid.empty() && liquid.size() != count)
+  {
+    throw InvalidInput(std::string(what) + " liquid array = " + std::to_string(liquid.size()) +
+      " values: must be one per particle (" + std::to_string(count) + ")");
+  }
+  for (std::size_t i = 0; i < liquid.size(); ++i)
+  {
+    if (liquid[i] >= parameters.liquids.size())
+    {
+      throw InvalidInput(std::string(what) + " liquid of particle " + std::to_string(i) + " = " +
+        std::to_string(liquid[i]) + ": the scene names " +
+        std::to_string(parameters.liquids.size()) + " liquids (0 to " +
+        std::to_string(parameters.liquids.size() - 1) + ")");
     }
   }
 }

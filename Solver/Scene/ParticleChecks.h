@@ -14,6 +14,12 @@ namespace pbf
 // coordinates or velocities, positions outside the domain, more particles than 32-bit indices.
 void checkBatch(const Parameters& parameters, const ParticleBatch& batch);
 
+// Throws InvalidInput when `liquid` holds an index beyond the parameters' liquids, or when its
+// length is neither `count` nor (where the scene names no liquids, or for a batch all of
+// liquid 0) empty. `what` names the array in the message ("checkpoint", "particle batch").
+void checkLiquids(const Parameters& parameters, const std::vector<std::uint8_t>& liquid,
+  std::size_t count, const char* what);
+
 // Initial particles the solver would tear apart, named before any work is done (a VTK filter's
 // input points, say): packed several times denser than the fluid's one particle per spacing^3
 // (the first projection flings them out, and the neighbour search takes minutes on the way), or,

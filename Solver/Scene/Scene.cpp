@@ -258,7 +258,72 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
   return solids;
 }
 
-// The fluid regions of a scene file's "fluid" array, into scene (whose domain is read).
+// "liquids": [{"name": "water", "restDensity": 1000, "xsphViscosity": 0.0125}, ...]: the
+// scene's liquids, which its regions and emitters name.
+std::vector<Liquid> parseLiquids(const json& liquids)
+{
+  if (!liquids.is_array() || liquids.empty() || liquids.size() > std::size_t(kMaxLiquids))
+  {
+    reject(".liquids", liquids,
+      "must be an array of 1 to " + std::to_string(kMaxLiquids) + " liquids");
+  }
+  std::vector<Liquid> out;
+  for (std::size_t k = 0; k < liquids.size(); ++k)
+  {
+    const std::string path = ".liquids[" + std::to_string(k) + "]";
+    const json& item = liquids[k];
+    requireKeys(item, path, { "name", "restDensity", "xsphViscosity" }, { "name", "restDensity" });
+    if (!item["name"].is_string() || item["name"].get<std::string>().empty())
+    {
+      reject(path + ".name", item["name"], "must be a non-empty string");
+    }
+    Liquid liquid;
+    liquid.name = item["name"].get<std::string>();
+    for (const Liquid& earlier : out)
+    {
+      if (earlier.name == liquid.name)
+      {
+        reject(path + ".name", item["name"], "another liquid has this name");
+      }
+    }
+    liquid.restDensity = positive(item, path, "restDensity");
+    if (item.contains("xsphViscosity"))
+    {
+      liquid.xsphViscosity = number(item, path, "xsphViscosity");
+      if (liquid.xsphViscosity < 0)
+      {
+        reject(path + ".xsphViscosity", item["xsphViscosity"], "must be >= 0");
+      }
+    }
+    out.push_back(liquid);
+  }
+  return out;
+}
+
+// The index in scene.liquids of the liquid that item's "liquid" names; 0 without the key.
+int liquidOf(const json& item, const std::string& path, const Scene& scene)
+{
+  if (!item.contains("liquid"))
+  {
+    return 0;
+  }
+  const json& name = item["liquid"];
+  std::string known;
+  for (std::size_t l = 0; l < scene.liquids.size(); ++l)
+  {
+    if (name.is_string() && name.get<std::string>() == scene.liquids[l].name)
+    {
+      return static_cast<int>(l);
+    }
+    known += (known.empty() ? "" : ", ") + scene.liquids[l].name;
+  }
+  reject(path + ".liquid", name,
+    scene.liquids.empty() ? "the scene has no \"liquids\" to name"
+                          : "unknown liquid (the scene's: " + known + ")");
+}
+
+// The fluid regions of a scene file's "fluid" array, into scene (whose domain and liquids are
+// read).
 void parseFluidRegions(const json& fluid, Scene& scene)
 {
   for (std::size_t r = 0; r < fluid.size(); ++r)
@@ -273,9 +338,9 @@ void parseFluidRegions(const json& fluid, Scene& scene)
     const std::string type = region["type"].get<std::string>();
     if (type == "box")
     {
-      requireKeys(region, path, { "type", "min", "max", "velocity" }, { "min", "max" });
+      requireKeys(region, path, { "type", "min", "max", "velocity", "liquid" }, { "min", "max" });
       FluidBox box{ vector3(region, path, "min"), vector3(region, path, "max"),
-        vector3(region, path, "velocity") };
+        vector3(region, path, "velocity"), liquidOf(region, path, scene) };
       requireOrdered(box.min, box.max, path, region["max"]);
       if (!inside(box.min, scene.domain) || !inside(box.max, scene.domain))
       {
@@ -285,9 +350,10 @@ void parseFluidRegions(const json& fluid, Scene& scene)
     }
     else if (type == "sphere")
     {
-      requireKeys(region, path, { "type", "center", "radius", "velocity" }, { "center", "radius" });
+      requireKeys(
+        region, path, { "type", "center", "radius", "velocity", "liquid" }, { "center", "radius" });
       FluidSphere sphere{ vector3(region, path, "center"), positive(region, path, "radius"),
-        vector3(region, path, "velocity") };
+        vector3(region, path, "velocity"), liquidOf(region, path, scene) };
       const Vec3d r{ sphere.radius, sphere.radius, sphere.radius };
       if (!inside(sphere.center - r, scene.domain) || !inside(sphere.center + r, scene.domain))
       {
@@ -310,9 +376,11 @@ void parseEmitters(const json& emitters, Scene& scene)
   {
     const std::string path = ".emitters[" + std::to_string(e) + "]";
     const json& item = emitters[e];
-    requireKeys(item, path, { "center", "direction", "radius", "speed", "start", "stop" },
+    requireKeys(item, path,
+      { "center", "direction", "radius", "speed", "start", "stop", "liquid" },
       { "center", "direction", "radius", "speed", "stop" });
     Emitter emitter;
+    emitter.liquid = liquidOf(item, path, scene);
     emitter.center = vector3(item, path, "center");
     emitter.direction = vector3(item, path, "direction");
     // Scaled by the largest component first: |d| of [1e200, 0, 0] overflows and that of
@@ -348,7 +416,8 @@ void parseEmitters(const json& emitters, Scene& scene)
 
 Scene parse(const json& root)
 {
-  requireKeys(root, "", { "name", "description", "domain", "fluid", "emitters", "obstacles" },
+  requireKeys(root, "",
+    { "name", "description", "domain", "liquids", "fluid", "emitters", "obstacles" },
     { "domain", "fluid" });
   Scene scene;
   if (root.contains("name"))
@@ -374,6 +443,10 @@ Scene parse(const json& root)
   scene.domain.max = vector3(domain, ".domain", "max");
   requireOrdered(scene.domain.min, scene.domain.max, ".domain", domain["max"]);
 
+  if (root.contains("liquids"))
+  {
+    scene.liquids = parseLiquids(root["liquids"]);
+  }
   const json& fluid = root["fluid"];
   if (!fluid.is_array())
   {
@@ -402,7 +475,8 @@ Scene parse(const json& root)
 }
 
 // Lattice sites min + s (i + 1/2) inside [min, max]: the fluid stays s/2 from the region's faces.
-void fillBox(const FluidBox& box, double s, ParticleBatch& out)
+// The region's liquid goes with each site where the scene names liquids (`liquids`).
+void fillBox(const FluidBox& box, double s, bool liquids, ParticleBatch& out)
 {
   const auto count = [s](double lo, double hi) {
     return static_cast<long>(std::floor((hi - lo) / s + 1e-9));
@@ -419,12 +493,16 @@ void fillBox(const FluidBox& box, double s, ParticleBatch& out)
         out.position.push_back(
           { box.min.x + s * (i + 0.5), box.min.y + s * (j + 0.5), box.min.z + s * (k + 0.5) });
         out.velocity.push_back(box.velocity);
+        if (liquids)
+        {
+          out.liquid.push_back(static_cast<std::uint8_t>(box.liquid));
+        }
       }
     }
   }
 }
 
-void fillSphere(const FluidSphere& sphere, double s, ParticleBatch& out)
+void fillSphere(const FluidSphere& sphere, double s, bool liquids, ParticleBatch& out)
 {
   const long n = static_cast<long>(std::floor(sphere.radius / s));
   for (long k = -n; k <= n; ++k)
@@ -438,6 +516,10 @@ void fillSphere(const FluidSphere& sphere, double s, ParticleBatch& out)
         {
           out.position.push_back(sphere.center + offset);
           out.velocity.push_back(sphere.velocity);
+          if (liquids)
+          {
+            out.liquid.push_back(static_cast<std::uint8_t>(sphere.liquid));
+          }
         }
       }
     }
@@ -571,11 +653,11 @@ ParticleBatch fillScene(const Scene& scene, const Parameters& parameters)
   ParticleBatch batch;
   for (const FluidBox& box : scene.boxes)
   {
-    fillBox(box, parameters.particleSpacing, batch);
+    fillBox(box, parameters.particleSpacing, !scene.liquids.empty(), batch);
   }
   for (const FluidSphere& sphere : scene.spheres)
   {
-    fillSphere(sphere, parameters.particleSpacing, batch);
+    fillSphere(sphere, parameters.particleSpacing, !scene.liquids.empty(), batch);
   }
   batch.id.resize(batch.position.size());
   for (std::size_t i = 0; i < batch.id.size(); ++i)
@@ -588,6 +670,7 @@ ParticleBatch fillScene(const Scene& scene, const Parameters& parameters)
 Parameters withSceneDomain(Parameters parameters, const Scene& scene)
 {
   parameters.domain = scene.domain;
+  parameters.liquids = scene.liquids;
   return parameters;
 }
 

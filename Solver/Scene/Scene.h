@@ -14,10 +14,12 @@
 namespace pbf
 {
 
+// `liquid` is an index into Scene::liquids (0 where the scene names none).
 struct FluidBox
 {
   Vec3d min, max;
   Vec3d velocity{ 0, 0, 0 };
+  int liquid = 0;
 };
 
 struct FluidSphere
@@ -25,6 +27,7 @@ struct FluidSphere
   Vec3d center;
   double radius = 0;
   Vec3d velocity{ 0, 0, 0 };
+  int liquid = 0;
 };
 
 // A nozzle that adds a disk of particles, one lattice layer at a time, while start <= t < stop.
@@ -36,6 +39,7 @@ struct Emitter
   double speed = 0;
   double start = 0;
   double stop = 0;
+  int liquid = 0;
 };
 
 struct Scene
@@ -43,6 +47,8 @@ struct Scene
   std::string name;
   std::string description;
   Box domain;
+  // "liquids": several liquids by name (Parameters::liquids); empty: one, of the parameters.
+  std::vector<Liquid> liquids;
   std::vector<FluidBox> boxes;
   std::vector<FluidSphere> spheres;
   std::vector<Emitter> emitters;
@@ -69,7 +75,7 @@ double estimateParticleCount(const Scene& scene, const Parameters& parameters);
 // before allocating when the spacing would make more than kMaxParticles.
 ParticleBatch fillScene(const Scene& scene, const Parameters& parameters);
 
-// Parameters with the scene's domain.
+// Parameters with the scene's domain and liquids.
 Parameters withSceneDomain(Parameters parameters, const Scene& scene);
 
 } // namespace pbf

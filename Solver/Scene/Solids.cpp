@@ -199,6 +199,10 @@ ParticleBatch outsideSolids(const ParticleBatch& batch, const std::vector<Distan
     kept.position.push_back(batch.position[i]);
     kept.velocity.push_back(batch.velocity[i]);
     kept.id.push_back(static_cast<std::int64_t>(kept.id.size()));
+    if (!batch.liquid.empty())
+    {
+      kept.liquid.push_back(batch.liquid[i]);
+    }
   }
   return kept;
 }

@@ -55,7 +55,8 @@ struct Health
 };
 
 // Adaptive mode's measure of the constraint: mean and max over particles of
-// max(rho_i / rho_0 - 1, 0), and whether a step may stop projecting there.
+// max(rho_i / rho_0 - 1, 0), and whether a step may stop projecting there. With several liquids
+// the mean is the largest of the liquids' means.
 struct Compression
 {
   double mean = 0;

@@ -25,6 +25,22 @@ Scene scaledDamBreak(double particles, double spacing)
   return scene;
 }
 
+void splitIntoTwoLiquids(Scene& scene)
+{
+  Liquid water, oil;
+  water.name = "water";
+  oil.name = "oil";
+  oil.restDensity = 800;
+  scene.liquids = { water, oil };
+  FluidBox upper = scene.boxes.at(0);
+  const double middle = 0.5 * (upper.min.y + upper.max.y);
+  scene.boxes[0].max.y = middle;
+  scene.boxes[0].liquid = 0;
+  upper.min.y = middle;
+  upper.liquid = 1;
+  scene.boxes.push_back(upper);
+}
+
 void addFloatingBoxes(Scene& scene, int count, double spacing)
 {
   const double side = 8 * spacing;

@@ -19,4 +19,8 @@ Scene scaledDamBreak(double particles, double spacing);
 // in the surge's way.
 void addFloatingBoxes(Scene& scene, int count, double spacing);
 
+// A scaled dam break's column as two liquids: water (1000 kg/m^3) in its lower half, oil (800,
+// the parameters' XSPH alpha) over it. What several liquids cost.
+void splitIntoTwoLiquids(Scene& scene);
+
 } // namespace pbf

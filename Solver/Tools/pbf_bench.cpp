@@ -127,9 +127,13 @@ SolidMotion setBenchmarkSolid(Stepper& stepperRef, const Parameters& parameters,
 }
 
 Result benchmark(const ToolOptions& options, double particles, int warmup, int steps,
-  const std::string& neighbors, double skin, bool graphs, int block, int solid)
+  const std::string& neighbors, double skin, bool graphs, int block, int solid, int liquids)
 {
-  const Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
+  Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
+  if (liquids == 2)
+  {
+    splitIntoTwoLiquids(scene);
+  }
   const Parameters parameters = withSceneDomain(options.parameters, scene);
   const auto setup0 = std::chrono::steady_clock::now();
   ParticleBatch batch = fillScene(scene, parameters);
@@ -350,7 +354,7 @@ std::vector<double> parseCounts(const std::string& text)
 void refuseTheOtherBenchmarksOptions(const ToolOptions& options, bool refined)
 {
   const std::vector<std::string> widenedOnly = { "particles", "sweep", "steps", "warmup",
-    "neighbors", "skin", "graphs", "block", "solid", "bodies", "json", "label" };
+    "neighbors", "skin", "graphs", "block", "solid", "bodies", "liquids", "json", "label" };
   const std::vector<std::string> refinedOnly = { "until", "frame", "modes", "csv" };
   for (const std::string& key : refined ? widenedOnly : refinedOnly)
   {
@@ -399,6 +403,7 @@ int main(int argc, char** argv)
     { "frame", "--refined: frame interval [s] (default 1/60)" },
     { "modes", "--refined: comma-separated of fixed, fixed4, defaults (default all three)" },
     { "csv", "--refined: a folder for one CSV of frames per run" },
+    { "liquids", "1 (default) or 2: the column as water under oil (what several liquids cost)" },
     { "bodies", "N >= 0: run through Simulation with N floating boxes in the surge's way (what "
                 "bodies cost; the loads read back every step), instead of the bare stepper" },
     { "solid", "1: a sphere solid in the surge's way, 2: the MARIN box, 3: the sphere rolling "
@@ -451,6 +456,11 @@ int main(int argc, char** argv)
         ": must be a count >= 0, and not with --solid");
     }
 
+    const int liquids = std::stoi(extra("liquids", "1"));
+    if (liquids != 1 && liquids != 2)
+    {
+      throw InvalidInput("--liquids = " + options.extra["liquids"] + ": must be 1 or 2");
+    }
     std::printf("pbf_bench: dam break widened to N particles, %d warm-up + %d timed steps; %s\n",
       warmup, steps, describe(options.parameters).c_str());
     std::printf("%-7s %-6s %-5s %10s %6s %10s %10s %10s %9s %7s %8s %8s %7s %6s\n", "backend",
@@ -463,7 +473,8 @@ int main(int argc, char** argv)
       results.push_back(bodies >= 0
           ? bodiesBenchmark(options, count, warmup, steps, bodies)
           : benchmark(
-              options, count, warmup, steps, neighbors, skin, graphs, block, std::stoi(solid)));
+              options, count, warmup, steps, neighbors, skin, graphs, block, std::stoi(solid),
+              liquids));
       printRow(results.back());
     }
     if (!results.empty())

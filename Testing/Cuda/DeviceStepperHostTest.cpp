@@ -16,6 +16,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -523,4 +524,143 @@ TEST(MovedSinceSort, AParticleKeepsItsMasksUntilItOrAnyCandidateMovedPastTheSkin
   // A NaN displacement never passes.
   float nan[1] = { std::numeric_limits<float>::quiet_NaN() };
   EXPECT_FALSE((MovedSinceSort{ nan, cellMoved.data() }.keeps(grid, 0, schedule, 1)));
+}
+
+namespace
+{
+
+// test::twoLiquids on the serial backend and on the device schedule, `steps` steps of fixed size
+// with `iterations` projections (adaptive with `tolerance` > 0), from the scene's initial fluid
+// (the emitter is Simulation's, not the stepper's): the same bits, and in adaptive mode the same
+// projections (the mean each step stops at is the most compressed liquid's on both).
+template <class Real>
+void compareTwoLiquids(bool masks, bool graphs, int iterations, double tolerance, int steps)
+{
+  const Scene scene = test::twoLiquids();
+  Parameters p;
+  p.particleSpacing = 0.04;
+  p.solverIterations = iterations;
+  p.densityErrorTolerance = tolerance;
+  p.timeStep = 1.0 / 120.0;
+  p = withSceneDomain(p, scene);
+  const ParticleBatch initial = fillScene(scene, p);
+  const Precision precision = sizeof(Real) == 4 ? Precision::Single : Precision::Double;
+  auto serial = makeStepper(Backend::Serial, precision, p, initial);
+  cuda::Options options;
+  options.search = masks ? cuda::NeighborSearch::RowMasks : cuda::NeighborSearch::CellWalk;
+  options.graphs = graphs;
+  auto device = hostStepper<Real>(p, initial, options);
+  int serialIterations = 0, deviceIterations = 0;
+  for (int s = 0; s < steps; ++s)
+  {
+    serial->step();
+    device->step();
+    serialIterations += serial->lastStep().iterations;
+    deviceIterations += device->lastStep().iterations;
+  }
+  SCOPED_TRACE(std::string(masks ? "masks" : "cell walk") + (graphs ? ", graphs" : "") +
+    ", tolerance " + std::to_string(tolerance));
+  EXPECT_EQ(deviceIterations, serialIterations);
+  if (tolerance > 0)
+  {
+    EXPECT_LT(serialIterations, steps * iterations);
+    EXPECT_GT(serialIterations, steps);
+  }
+  const Snapshot<Real> a = stateOf<Real>(*serial), b = stateOf<Real>(*device);
+  test::expectBitIdentical(a, b);
+  EXPECT_EQ(a.liquid, b.liquid);
+  ASSERT_EQ(b.liquid.size(), b.id.size());
+  EXPECT_GT(std::count(b.liquid.begin(), b.liquid.end(), 1), 100);
+}
+
+} // namespace
+
+TEST(StepSchedule, TwoLiquidsReproduceTheSerialBackendBitForBit)
+{
+  compareTwoLiquids<float>(true, true, 4, 0, 40);
+  compareTwoLiquids<double>(false, false, 4, 0, 40);
+  compareTwoLiquids<float>(true, true, 8, 0.3, 40);
+  compareTwoLiquids<double>(true, false, 8, 0.3, 40);
+}
+
+// Through Simulation: the nozzle's oil grows the device arrays (their liquids kept through the
+// host), a checkpoint resumes bit-identically with every particle's liquid, and the scans weigh
+// each particle by its liquid's mass as the serial backend does (the same particles summed in the
+// same order: 1e-12 relative leaves room for another association only).
+TEST(DeviceStepperOnHost, TwoLiquidsGrowResumeAndScanAsTheSerialBackend)
+{
+  Parameters p;
+  p.particleSpacing = 0.04;
+  p.timeStepping = TimeStepping::Fixed;
+  p.timeStep = 1.0 / 120.0;
+  const Scene scene = test::twoLiquids();
+  auto make = [&](Backend backend) {
+    const Parameters q = withSceneDomain(p, scene);
+    const ParticleBatch initial = fillScene(scene, q);
+    return backend == Backend::Serial
+      ? makeStepper(Backend::Serial, Precision::Double, q, initial)
+      : std::unique_ptr<Stepper>(hostStepper<double>(q, initial, cuda::Options{}));
+  };
+  auto serial = make(Backend::Serial);
+  auto device = make(Backend::CUDA);
+  const std::size_t start = device->size();
+  // The nozzle's layers, as Simulation emits them: one batch of oil every few steps.
+  std::int64_t nextId = static_cast<std::int64_t>(start);
+  Snapshot<double> checkpoint;
+  for (int s = 0; s < 36; ++s)
+  {
+    if (s % 4 == 0 && s < 24)
+    {
+      ParticleBatch batch;
+      for (int a = -1; a <= 1; ++a)
+      {
+        for (int b = -1; b <= 1; ++b)
+        {
+          batch.position.push_back({ 0.6 + 0.04 * a, 0.5, 0.12 + 0.04 * b });
+          batch.velocity.push_back({ 0, -1, 0 });
+          batch.id.push_back(nextId++);
+          batch.liquid.push_back(1);
+        }
+      }
+      serial->append(batch);
+      device->append(batch);
+    }
+    serial->step();
+    device->step();
+    if (s == 20)
+    {
+      device->read(checkpoint);
+    }
+  }
+  ASSERT_GT(device->size(), start);
+  const Snapshot<double> a = stateOf<double>(*serial), b = stateOf<double>(*device);
+  test::expectBitIdentical(a, b);
+  EXPECT_EQ(a.liquid, b.liquid);
+  const Statistics sa = serial->statistics(), sb = device->statistics();
+  EXPECT_NEAR(sb.kineticEnergy, sa.kineticEnergy, 1e-12 * sa.kineticEnergy);
+  EXPECT_NEAR(sb.averageDensityError, sa.averageDensityError, 1e-12 * sa.averageDensityError);
+  // The checkpoint after step 21, loaded into a fresh stepper, gives the last 15 steps again (no
+  // batch came after it).
+  auto resumed = make(Backend::CUDA);
+  resumed->load(checkpoint);
+  for (int s = 0; s < 15; ++s)
+  {
+    resumed->step();
+  }
+  const Snapshot<double> c = stateOf<double>(*resumed);
+  test::expectBitIdentical(c, b);
+  EXPECT_EQ(c.liquid, b.liquid);
+  // And the densities come back in each liquid's units: the oil reads about 800.
+  double oil = 0;
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < c.id.size(); ++i)
+  {
+    if (c.liquid[i] == 1)
+    {
+      oil += c.density[i];
+      ++count;
+    }
+  }
+  ASSERT_GT(count, 0u);
+  EXPECT_NEAR(oil / double(count), 800.0, 80.0);
 }

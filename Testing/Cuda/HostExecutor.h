@@ -108,26 +108,41 @@ public:
   }
 
   template <class Real>
-  void reduceCompression(const Real* density, std::uint32_t n, cuda::AdaptiveState* state,
-    double*, const cuda::StepConstants<Real>& k, double tolerance, Branch next = noBranch())
+  void reduceCompression(const Real* density, const std::uint8_t* liquid, std::uint32_t n,
+    cuda::AdaptiveState* state, double*, const cuda::StepConstants<Real>& k, double tolerance,
+    Branch next = noBranch())
   {
     if (state->done)
     {
       return;
     }
-    double total = 0.0, top = 0.0;
+    // Per liquid with several (the most compressed liquid's mean), as the kernels.
+    const int liquids = liquid ? k.liquids : 1;
+    double total[kMaxLiquids] = {}, count[kMaxLiquids] = {}, top = 0.0;
     for (std::uint32_t begin = 0; begin < n; begin += 4096)
     {
-      double sum = 0.0;
+      double sum[kMaxLiquids] = {}, within[kMaxLiquids] = {};
       for (std::uint32_t i = begin; i < std::min(n, begin + 4096); ++i)
       {
         const double e = std::max(double(density[i]) * k.inverseRestDensity - 1.0, 0.0);
-        sum += e;
+        const int l = liquids > 1 ? liquid[i] : 0;
+        sum[l] += e;
+        within[l] += 1.0;
         top = std::max(top, e);
       }
-      total += sum;
+      for (int l = 0; l < liquids; ++l)
+      {
+        total[l] += sum[l];
+        count[l] += within[l];
+      }
     }
-    state->densityError = n > 0 ? total / double(n) : 0.0;
+    state->densityError = 0.0;
+    for (int l = 0; l < liquids; ++l)
+    {
+      const double mean = liquids > 1 ? (count[l] > 0 ? total[l] / count[l] : 0.0)
+                                      : (n > 0 ? total[0] / double(n) : 0.0);
+      state->densityError = std::max(state->densityError, mean);
+    }
     state->maxDensityError = top;
     if (state->densityError <= tolerance && (k.maxTolerance <= 0 || top <= k.maxTolerance))
     {
@@ -327,11 +342,12 @@ public:
       const Vec3d xi = Vec3d::from(s.x[i]);
       const Vec3d vi = Vec3d::from(s.v[i]);
       const double speed2 = dot(vi, vi);
+      const double mass = s.massOf(i);
       acc[cuda::kSpeedMax] = std::max(acc[cuda::kSpeedMax], std::sqrt(speed2));
-      acc[cuda::kKinetic] += 0.5 * s.mass * speed2;
-      acc[cuda::kMomentumX] += vi.x * s.mass;
-      acc[cuda::kMomentumY] += vi.y * s.mass;
-      acc[cuda::kMomentumZ] += vi.z * s.mass;
+      acc[cuda::kKinetic] += 0.5 * mass * speed2;
+      acc[cuda::kMomentumX] += vi.x * mass;
+      acc[cuda::kMomentumY] += vi.y * mass;
+      acc[cuda::kMomentumZ] += vi.z * mass;
       if (!std::isfinite(xi.x + xi.y + xi.z + vi.x + vi.y + vi.z))
       {
         acc[cuda::kNonFinite] = 1.0;

@@ -133,8 +133,26 @@ Snapshot<double> joined(const std::vector<Snapshot<double>>& parts)
     all.lambda.insert(all.lambda.end(), part.lambda.begin(), part.lambda.end());
     all.pressure.insert(all.pressure.end(), part.pressure.begin(), part.pressure.end());
     all.id.insert(all.id.end(), part.id.begin(), part.id.end());
+    all.liquid.insert(all.liquid.end(), part.liquid.begin(), part.liquid.end());
   }
   return all;
+}
+
+Scene twoLiquids()
+{
+  return parseScene(R"({
+    "domain": { "min": [0, 0, 0], "max": [0.8, 0.6, 0.24] },
+    "liquids": [
+      { "name": "water", "restDensity": 1000 },
+      { "name": "oil", "restDensity": 800, "xsphViscosity": 0.05 }
+    ],
+    "fluid": [
+      { "type": "box", "min": [0, 0, 0], "max": [0.24, 0.4, 0.24], "liquid": "water" },
+      { "type": "box", "min": [0.4, 0, 0], "max": [0.8, 0.12, 0.24], "liquid": "oil" }
+    ],
+    "emitters": [ { "center": [0.6, 0.45, 0.12], "direction": [0, -1, 0], "radius": 0.05,
+      "speed": 1.0, "start": 0.1, "stop": 0.3, "liquid": "oil" } ]
+  })");
 }
 
 Scene damBreakWithSolids()

@@ -64,6 +64,10 @@ void expectBitIdentical(const Snapshot<Real>& a, const Snapshot<Real>& b)
   EXPECT_EQ(std::memcmp(a.pressure.data(), b.pressure.data(), n * sizeof(a.pressure[0])), 0);
 }
 
+// Two liquids that move: a water column (1000 kg/m^3) breaking onto a pool of oil (800, its own
+// XSPH alpha of 0.05), and a nozzle that adds oil from 0.1 s to 0.3 s.
+Scene twoLiquids();
+
 // The dam break with a box solid cutting into the column (its fluid removed, the rest touching
 // it from the first step) and a sphere in the surge's way.
 Scene damBreakWithSolids();
