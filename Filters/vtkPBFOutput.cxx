@@ -21,6 +21,7 @@
 #include "vtkTransform.h"
 #include "vtkTransformPolyDataFilter.h"
 #include "vtkTypeInt64Array.h"
+#include "vtkUnsignedCharArray.h"
 
 #include "ParameterTable.h"
 #include "Parameters.h"
@@ -108,7 +109,7 @@ vtkSmartPointer<Array> NewOutputArray(
 // arrays' memory: pbf::Vec3 is three packed reals, as VTK's interleaved arrays are, and the ids
 // are 64-bit like vtkIdType. No per-point call, no copy in between.
 template <class Real>
-void FillParticlesOf(const pbf::Stepper& stepper, bool pinned,
+void FillParticlesOf(const pbf::Stepper& stepper, bool pinned, bool liquids,
   vtkSmartPointer<vtkCellArray>& vertices, vtkPolyData* output)
 {
   static_assert(sizeof(pbf::Vec3<Real>) == 3 * sizeof(Real), "pbf::Vec3 must be 3 packed reals");
@@ -120,6 +121,9 @@ void FillParticlesOf(const pbf::Stepper& stepper, bool pinned,
   auto lambda = NewOutputArray<RealArray<Real>>("lambda", 1, n, pinned);
   auto pressure = NewOutputArray<RealArray<Real>>("pressure", 1, n, pinned);
   auto id = NewOutputArray<vtkIdTypeArray>("id", 1, n, pinned);
+  // Each particle's liquid, its index in the field data's LiquidNames, where the scene names any.
+  vtkSmartPointer<vtkUnsignedCharArray> liquid =
+    liquids ? NewOutputArray<vtkUnsignedCharArray>("liquid", 1, n, pinned) : nullptr;
   if (n > 0)
   {
     pbf::SnapshotView<Real> view;
@@ -129,6 +133,7 @@ void FillParticlesOf(const pbf::Stepper& stepper, bool pinned,
     view.lambda = lambda->GetPointer(0);
     view.pressure = pressure->GetPointer(0);
     view.id = reinterpret_cast<std::int64_t*>(id->GetPointer(0));
+    view.liquid = liquid ? liquid->GetPointer(0) : nullptr;
     stepper.readInto(view);
   }
   if (!vertices || vertices->GetNumberOfCells() != n)
@@ -145,6 +150,10 @@ void FillParticlesOf(const pbf::Stepper& stepper, bool pinned,
   pointData->AddArray(density);
   pointData->AddArray(lambda);
   pointData->AddArray(pressure);
+  if (liquid)
+  {
+    pointData->AddArray(liquid);
+  }
   // Active scalars and vectors, so that a view colors by |velocity| on first show.
   pointData->SetScalars(velocity);
   pointData->SetVectors(velocity);
@@ -347,6 +356,26 @@ vtkSmartPointer<vtkFieldData> vtkPBFOutput::FrameFieldData(
   }
   AddInteger(fieldData, "AdaptiveIterations", p.densityErrorTolerance > 0 ? 1 : 0);
   AddValue(fieldData, "XSPHKinematicViscosity", p.xsphNu());
+  if (!p.liquids.empty())
+  {
+    // The point array "liquid" indexes these: the scene's liquids, their rest densities and
+    // XSPH kinematic viscosities.
+    vtkNew<vtkStringArray> names;
+    names->SetName("LiquidNames");
+    vtkNew<vtkDoubleArray> densities;
+    densities->SetName("LiquidRestDensities");
+    vtkNew<vtkDoubleArray> viscosities;
+    viscosities->SetName("LiquidXSPHKinematicViscosities");
+    for (int l = 0; l < p.liquidCount(); ++l)
+    {
+      names->InsertNextValue(p.liquids[static_cast<std::size_t>(l)].name);
+      densities->InsertNextValue(p.liquidRestDensity(l));
+      viscosities->InsertNextValue(p.liquidXsphNu(l));
+    }
+    fieldData->AddArray(names);
+    fieldData->AddArray(densities);
+    fieldData->AddArray(viscosities);
+  }
   // sqrt(v0^2 + 2 |g| L): the scale of the scene's speeds, where a display's velocity color map
   // starts before the fluid moves (Plugin/vtkPBFDisplayDefaults.h).
   AddValue(fieldData, "SceneSpeed", p.sceneSpeed());
@@ -373,16 +402,16 @@ vtkSmartPointer<vtkFieldData> vtkPBFOutput::FrameFieldData(
 
 
 //------------------------------------------------------------------------------
-void vtkPBFOutput::FillParticles(const pbf::Stepper& stepper, bool pinned,
+void vtkPBFOutput::FillParticles(const pbf::Stepper& stepper, bool pinned, bool liquids,
   vtkSmartPointer<vtkCellArray>& vertices, vtkPolyData* output)
 {
   if (stepper.precision() == pbf::Precision::Double)
   {
-    FillParticlesOf<double>(stepper, pinned, vertices, output);
+    FillParticlesOf<double>(stepper, pinned, liquids, vertices, output);
   }
   else
   {
-    FillParticlesOf<float>(stepper, pinned, vertices, output);
+    FillParticlesOf<float>(stepper, pinned, liquids, vertices, output);
   }
 }
 

@@ -41,7 +41,8 @@ public:
   // The particles in the solver's (cell-sorted) order with point arrays density, lambda,
   // velocity (the active scalars and vectors) and id (the GlobalIds); `vertices` is reused
   // while the particle count stays.
-  static void FillParticles(const pbf::Stepper& stepper, bool pinned,
+  // With `liquids` (the scene names them) the point array "liquid" too.
+  static void FillParticles(const pbf::Stepper& stepper, bool pinned, bool liquids,
     vtkSmartPointer<vtkCellArray>& vertices, vtkPolyData* output);
 
   // The parameters that produced the frame, as the solver saw them (domain included), so that a

@@ -479,7 +479,7 @@ void vtkPBFSimulationInternals::Deliver(const vtkPBFSettings& settings, const Fr
   vtkNew<vtkPolyData> result;
   vtkPBFOutput::FillParticles(simulation.stepper(),
     settings.PageLockedOutput && simulation.stepper().backend() == pbf::Backend::CUDA,
-    this->Vertices, result);
+    !simulation.parameters().liquids.empty(), this->Vertices, result);
   vtkSmartPointer<vtkFieldData> fieldData = vtkPBFOutput::FrameFieldData(
     simulation, r.Frame, settings.FrameInterval, settings.SubstepsPerFrame);
   vtkPBFOutput::AddInteger(fieldData, "RequestSteps", static_cast<vtkIdType>(reached.steps));

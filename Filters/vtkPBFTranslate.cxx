@@ -46,7 +46,19 @@ pbf::ParticleBatch vtkPBFBatchFromInput(vtkPointSet* input)
       std::to_string(velocity->GetNumberOfComponents()) +
       " components: an initial velocity needs 3 (rename the array to ignore it)");
   }
+  // Each point's liquid, its index in the scene's "liquids" (whose count the stepper checks).
+  vtkDataArray* liquid = input->GetPointData()->GetArray("liquid");
+  if (liquid && liquid->GetNumberOfComponents() != 1)
+  {
+    throw pbf::InvalidInput("input point array \"liquid\" has " +
+      std::to_string(liquid->GetNumberOfComponents()) +
+      " components: a point's liquid is one index into the scene's \"liquids\"");
+  }
   pbf::ParticleBatch batch;
+  if (liquid)
+  {
+    batch.liquid.resize(static_cast<std::size_t>(n));
+  }
   batch.position.resize(static_cast<std::size_t>(n));
   batch.velocity.resize(static_cast<std::size_t>(n), pbf::Vec3d{ 0, 0, 0 });
   batch.id.resize(static_cast<std::size_t>(n));
@@ -73,6 +85,17 @@ pbf::ParticleBatch vtkPBFBatchFromInput(vtkPointSet* input)
       batch.velocity[k] = pbf::Vec3d{ v[0], v[1], v[2] };
     }
     batch.id[k] = static_cast<std::int64_t>(i);
+    if (liquid)
+    {
+      const double l = liquid->GetTuple1(i);
+      if (!(l >= 0 && l < pbf::kMaxLiquids && l == std::floor(l)))
+      {
+        throw pbf::InvalidInput("input liquid of point " + std::to_string(i) + " = " +
+          std::to_string(l) + ": must be an index into the scene's \"liquids\" (0 to " +
+          std::to_string(pbf::kMaxLiquids - 1) + ")");
+      }
+      batch.liquid[k] = static_cast<std::uint8_t>(l);
+    }
   }
   return batch;
 }
@@ -116,7 +139,8 @@ std::string vtkPBFInUserTerms(std::string text)
     for (std::size_t at = text.find(field.first); at != std::string::npos;
          at = text.find(field.first, at + 1))
     {
-      const bool whole = (at == 0 || !isWordCharacter(text[at - 1])) &&
+      // After a '.' it is a key of a scene file (".liquids[1].restDensity"), not a property.
+      const bool whole = (at == 0 || (!isWordCharacter(text[at - 1]) && text[at - 1] != '.')) &&
         (at + length == text.size() || !isWordCharacter(text[at + length]));
       if (whole)
       {

@@ -89,34 +89,37 @@ void validateLiquids(const Parameters& p)
   for (std::size_t l = 0; l < p.liquids.size(); ++l)
   {
     const Liquid& liquid = p.liquids[l];
-    const std::string field = "liquid \"" + liquid.name + "\" ";
+    // Named as the scene names them: liquids[1].restDensity, and the liquid's name in the rule.
+    const std::string field = "liquids[" + std::to_string(l) + "].";
+    const std::string of = " (liquid \"" + liquid.name + "\")";
     if (liquid.name.empty())
     {
-      reject("liquids[" + std::to_string(l) + "].name", 0, "every liquid needs a name");
+      reject(field + "name", 0, "every liquid needs a name");
     }
     for (std::size_t k = 0; k < l; ++k)
     {
       if (p.liquids[k].name == liquid.name)
       {
-        reject(field + "name", static_cast<double>(l), "two liquids have this name");
+        reject(field + "name", static_cast<double>(l), "liquids[" + std::to_string(k) +
+          "] has the same name" + of);
       }
     }
-    requireFinite(field + "restDensity", liquid.restDensity);
-    if (!(liquid.restDensity > 0.0))
+    if (!(liquid.restDensity > 0.0) || !std::isfinite(liquid.restDensity))
     {
-      reject(field + "restDensity", liquid.restDensity, "must be > 0 [kg/m^3]");
+      reject(field + "restDensity", liquid.restDensity, "must be a finite number > 0 [kg/m^3]" + of);
     }
     const double ratio = liquid.restDensity / p.restDensity;
     if (ratio > kMostDensityRatio || ratio < 1.0 / kMostDensityRatio)
     {
       std::ostringstream rule;
       rule << "must be within " << kMostDensityRatio << " times restDensity (" << p.restDensity
-           << " kg/m^3), the reference the particles' volume is calibrated at";
+           << " kg/m^3), the reference the particles' volume is calibrated at" << of;
       reject(field + "restDensity", liquid.restDensity, rule.str());
     }
-    if (!std::isnan(liquid.xsphViscosity))
+    if (!std::isnan(liquid.xsphViscosity) &&
+      !(liquid.xsphViscosity >= 0.0 && std::isfinite(liquid.xsphViscosity)))
     {
-      requireNonNegative(field + "xsphViscosity", liquid.xsphViscosity);
+      reject(field + "xsphViscosity", liquid.xsphViscosity, "must be a finite number >= 0" + of);
     }
   }
 }

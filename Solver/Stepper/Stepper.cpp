@@ -62,6 +62,7 @@ void readThroughSnapshot(const Stepper& stepper, const SnapshotView<Real>& out)
   copy(snapshot.lambda, out.lambda);
   copy(snapshot.pressure, out.pressure);
   copy(snapshot.id, out.id);
+  copy(snapshot.liquid, out.liquid); // nothing where the scene names no liquids
 }
 
 } // namespace

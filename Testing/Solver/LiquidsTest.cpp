@@ -131,8 +131,9 @@ TEST(Liquids, BadLiquidsAreNamedWithTheirValues)
   }
   catch (const InvalidInput& e)
   {
-    EXPECT_NE(std::string(e.what()).find("liquid \"oil\" restDensity = 1e+06"), std::string::npos)
-      << e.what();
+    EXPECT_NE(std::string(e.what()).find("liquids[1].restDensity = 1e+06: must be within 100 times"),
+      std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("(liquid \"oil\")"), std::string::npos) << e.what();
   }
   p.liquids[1].restDensity = 800;
   ParticleBatch batch = fillScene(parseScene(kLayers), p);
