@@ -476,6 +476,35 @@ vtkSmartPointer<vtkTable> vtkPBFOutput::DiagnosticsTable(
 }
 
 //------------------------------------------------------------------------------
+void vtkPBFOutput::AppendMesh(const pbf::SurfaceMesh& more, pbf::SurfaceMesh& mesh)
+{
+  const auto first = static_cast<std::uint32_t>(mesh.points.size());
+  auto append = [](auto& to, const auto& from) { to.insert(to.end(), from.begin(), from.end()); };
+  append(mesh.points, more.points);
+  append(mesh.normals, more.normals);
+  append(mesh.velocity, more.velocity);
+  append(mesh.density, more.density);
+  for (const auto& t : more.triangles)
+  {
+    mesh.triangles.push_back({ t[0] + first, t[1] + first, t[2] + first });
+  }
+  mesh.sampledBlocks += more.sampledBlocks;
+  mesh.keptBlocks += more.keptBlocks;
+  mesh.sampledNodes += more.sampledNodes;
+  mesh.peakBytes = std::max(mesh.peakBytes, more.peakBytes);
+}
+
+//------------------------------------------------------------------------------
+void vtkPBFOutput::AddLiquids(const std::vector<unsigned char>& liquid, vtkPolyData* surface)
+{
+  vtkNew<vtkUnsignedCharArray> array;
+  array->SetName("liquid");
+  array->SetNumberOfValues(static_cast<vtkIdType>(liquid.size()));
+  std::copy(liquid.begin(), liquid.end(), array->GetPointer(0));
+  surface->GetPointData()->AddArray(array);
+}
+
+//------------------------------------------------------------------------------
 vtkSmartPointer<vtkPolyData> vtkPBFOutput::Surface(
   const pbf::SurfaceMesh& mesh, double milliseconds, const std::string& device)
 {

@@ -66,6 +66,11 @@ public:
   // The fluid's surface (port 3): its triangles, Normals, velocity (the active vectors) and
   // density (the active scalars), and field data SurfaceTriangles, SurfaceMilliseconds,
   // SurfaceBytes and SurfaceDevice (where it was made: "CPU" or the GPU's name).
+  // Several liquids' surfaces as one mesh: `more`'s points, arrays and triangles after `mesh`'s.
+  static void AppendMesh(const pbf::SurfaceMesh& more, pbf::SurfaceMesh& mesh);
+  // The point array "liquid" of a surface made of several liquids' meshes (AppendMesh).
+  static void AddLiquids(const std::vector<unsigned char>& liquid, vtkPolyData* surface);
+
   static vtkSmartPointer<vtkPolyData> Surface(
     const pbf::SurfaceMesh& mesh, double milliseconds, const std::string& device);
 

@@ -317,22 +317,59 @@ void vtkPBFSimulationInternals::DeliverSurface(
     const double time =
       info->Has(vtkDataObject::DATA_TIME_STEP()) ? info->Get(vtkDataObject::DATA_TIME_STEP()) : 0.0;
     const pbf::SurfaceSolids solids = live->surfaceSolids(time);
+    // Several liquids: one closed surface per liquid, each made from its own particles as a
+    // fluid of its rest density (their point array "liquid" says which).
+    vtkDataArray* liquidArray = particles->GetPointData()->GetArray("liquid");
+    const int liquids = !p.liquids.empty() && liquidArray ? p.liquidCount() : 0;
+    std::vector<unsigned char> meshLiquid;
     // The frame's own arrays, in the run's precision, read in place.
     auto extract = [&](auto real) {
       using Real = decltype(real);
       auto pointer = [](vtkDataArray* a) { return a ? static_cast<Real*>(a->GetVoidPointer(0)) : nullptr; };
+      auto extractOf = [&](const pbf::Vec3<Real>* px, const pbf::Vec3<Real>* pv, const Real* prho,
+                         std::size_t count, const pbf::Parameters& of) {
+        pbf::SurfaceMesh made;
+        if (decomposed)
+        {
+          made = pbf::extractSurfaceShare<Real>(
+            *this->Ranks, decomposed->slabs(), px, pv, prho, count, of, used, true, solids);
+        }
+        else if (!this->ExtractOnGpu(
+                   live->stepper(), px, pv, prho, count, of, used, solids, made, device))
+        {
+          made = pbf::extractSurface<Real>(px, pv, prho, count, of, used, true, {}, solids);
+          device = "CPU";
+        }
+        return made;
+      };
       const auto* px = reinterpret_cast<const pbf::Vec3<Real>*>(pointer(x));
       const auto* pv = reinterpret_cast<const pbf::Vec3<Real>*>(pointer(v));
-      if (decomposed)
+      if (liquids == 0)
       {
-        mesh = pbf::extractSurfaceShare<Real>(*this->Ranks, decomposed->slabs(), px, pv,
-          pointer(rho), n, p, used, true, solids);
+        mesh = extractOf(px, pv, pointer(rho), n, p);
+        return;
       }
-      else if (!this->ExtractOnGpu(
-                 live->stepper(), px, pv, pointer(rho), n, p, used, solids, mesh, device))
+      const auto* liquid = static_cast<const unsigned char*>(liquidArray->GetVoidPointer(0));
+      for (int l = 0; l < liquids; ++l)
       {
-        mesh = pbf::extractSurface<Real>(px, pv, pointer(rho), n, p, used, true, {}, solids);
-        device = "CPU";
+        std::vector<pbf::Vec3<Real>> lx, lv;
+        std::vector<Real> lrho;
+        for (std::size_t i = 0; i < n; ++i)
+        {
+          if (liquid[i] == l)
+          {
+            lx.push_back(px[i]);
+            lv.push_back(pv ? pv[i] : pbf::Vec3<Real>{});
+            lrho.push_back(pointer(rho) ? pointer(rho)[i] : Real(0));
+          }
+        }
+        pbf::Parameters own = p;
+        own.restDensity = p.liquidRestDensity(l);
+        own.liquids.clear();
+        const pbf::SurfaceMesh part = extractOf(lx.data(), pv ? lv.data() : nullptr,
+          pointer(rho) ? lrho.data() : nullptr, lx.size(), own);
+        vtkPBFOutput::AppendMesh(part, mesh);
+        meshLiquid.resize(mesh.points.size(), static_cast<unsigned char>(l));
       }
     };
     const int type = x ? x->GetDataType() : VTK_FLOAT;
@@ -352,6 +389,10 @@ void vtkPBFSimulationInternals::DeliverSurface(
     const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     this->LastSurface = vtkPBFOutput::Surface(mesh, ms, device);
+    if (liquids > 0)
+    {
+      vtkPBFOutput::AddLiquids(meshLiquid, this->LastSurface);
+    }
     this->LastSurfaceOf = of.str();
   }
   surface->ShallowCopy(this->LastSurface);

@@ -10,21 +10,29 @@ namespace pbf::validation
 
 namespace
 {
+
 constexpr double kPi = 3.14159265358979323846;
+
+// Two named liquids, liquid 0 the one that starts below.
+std::vector<Liquid> twoLiquids(
+  const char* lowerName, double lowerDensity, const char* upperName, double upperDensity)
+{
+  Liquid lower, upper;
+  lower.name = lowerName;
+  lower.restDensity = lowerDensity;
+  upper.name = upperName;
+  upper.restDensity = upperDensity;
+  return { lower, upper };
 }
+
+} // namespace
 
 Scene layeredScene(double lowerDensity, double upperDensity, double depth)
 {
   Scene scene;
   scene.name = "two layers";
   scene.domain = { { 0, 0, 0 }, { kLayerTankLength, kLayerTankHeight, kLayerTankWidth } };
-  Liquid lower;
-  lower.name = "lower";
-  lower.restDensity = lowerDensity;
-  Liquid upper;
-  upper.name = "upper";
-  upper.restDensity = upperDensity;
-  scene.liquids = { lower, upper };
+  scene.liquids = twoLiquids("lower", lowerDensity, "upper", upperDensity);
   scene.boxes.push_back({ { 0, 0, 0 }, { kLayerTankLength, depth, kLayerTankWidth }, {}, 0 });
   scene.boxes.push_back(
     { { 0, depth, 0 }, { kLayerTankLength, 2 * depth, kLayerTankWidth }, {}, 1 });
@@ -100,13 +108,7 @@ Scene rayleighTaylorScene(double light, double heavy, double depth, double thick
   Scene scene;
   scene.name = "Rayleigh-Taylor";
   scene.domain = { { 0, 0, 0 }, { kRayleighTaylorLength, 2.5 * depth, thickness } };
-  Liquid lower;
-  lower.name = "light";
-  lower.restDensity = light;
-  Liquid upper;
-  upper.name = "heavy";
-  upper.restDensity = heavy;
-  scene.liquids = { lower, upper };
+  scene.liquids = twoLiquids("light", light, "heavy", heavy);
   scene.boxes.push_back({ { 0, 0, 0 }, { kRayleighTaylorLength, 2 * depth, thickness }, {}, 0 });
   return scene;
 }

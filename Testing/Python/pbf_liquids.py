@@ -17,6 +17,8 @@ T.load_plugin(globals())
 expect = T.expect
 from paraview.simple import ProgrammableSource  # noqa: E402
 from vtkmodules.util import numpy_support  # noqa: E402
+from vtkmodules.vtkFiltersCore import vtkFeatureEdges, vtkThreshold  # noqa: E402
+from vtkmodules.vtkFiltersGeometry import vtkGeometryFilter  # noqa: E402
 
 folder = tempfile.mkdtemp(prefix="pbf_liquids_")
 SCENE = {"name": "water_and_oil", "domain": {"min": [0, 0, 0], "max": [0.4, 0.5, 0.16]},
@@ -70,6 +72,40 @@ expect(abs(numpy.median(water) - 1000) < 20 and abs(numpy.median(oil) - 800) < 1
        % (numpy.median(water), numpy.median(oil)))
 expect(numpy.median(later["points"][liquid == 1, 1]) > numpy.median(later["points"][liquid == 0, 1]),
        "the oil is not above the water")
+
+# The surface: one closed surface per liquid, its points marked by their liquid, the oil's above
+# the water's.
+layers.GenerateSurface = 1
+layers.UpdatePipeline(0.5)
+surface = layers.GetClientSideObject().GetOutputDataObject(3)
+marks = surface.GetPointData().GetArray("liquid")
+expect(marks is not None, "the surface has no point array \"liquid\"")
+marks = numpy_support.vtk_to_numpy(marks)
+heights = numpy_support.vtk_to_numpy(surface.GetPoints().GetData())[:, 1]
+expect(set(numpy.unique(marks)) == {0, 1}, "the surface's liquids %r" % numpy.unique(marks))
+expect(heights[marks == 1].max() > heights[marks == 0].max() + 0.08,
+       "the oil's surface does not reach above the water's")
+for liquid_index in (0, 1):
+    part = vtkThreshold()
+    part.SetInputData(surface)
+    part.SetInputArrayToProcess(0, 0, 0, 0, "liquid")
+    part.SetLowerThreshold(liquid_index)
+    part.SetUpperThreshold(liquid_index)
+    part.Update()
+    closed = vtkGeometryFilter()
+    closed.SetInputConnection(part.GetOutputPort())
+    edges = vtkFeatureEdges()
+    edges.SetInputConnection(closed.GetOutputPort())
+    edges.BoundaryEdgesOn()
+    edges.FeatureEdgesOff()
+    edges.NonManifoldEdgesOff()
+    edges.ManifoldEdgesOff()
+    edges.Update()
+    expect(part.GetOutput().GetNumberOfCells() > 100 and edges.GetOutput().GetNumberOfCells() == 0,
+           "liquid %d's surface: %d triangles, %d open edges" % (
+               liquid_index, part.GetOutput().GetNumberOfCells(),
+               edges.GetOutput().GetNumberOfCells()))
+layers.GenerateSurface = 0
 
 # From Points: the input's point array "liquid" gives each point its liquid.
 LATTICE = """

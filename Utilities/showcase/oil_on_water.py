@@ -53,8 +53,8 @@ def main(spacing, at, folder):
     particles.SetScalarBarVisibility(view, True)
     simple.Show(simple.OutputPort(source, 2), view)
     simple.Render(view)  # the first render frames everything; the camera is set after it
-    view.CameraPosition = [0.5, 0.75, 1.6]
-    view.CameraFocalPoint = [0.5, 0.15, 0.2]
+    view.CameraPosition = [0.5, 0.95, 2.1]
+    view.CameraFocalPoint = [0.5, 0.28, 0.2]
     view.CameraViewUp = [0, 1, 0]
     simple.Render(view)
     simple.SaveScreenshot(os.path.join(folder, "oil_on_water.png"), view,
