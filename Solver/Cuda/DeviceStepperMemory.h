@@ -217,15 +217,7 @@ void DeviceStepper<Real, Device>::copyInto(const SnapshotView<Out>& out) const
       device_->synchronize();
       if (out.density)
       {
-        double ratio[kMaxLiquids];
-        for (int l = 0; l < parameters_.liquidCount(); ++l)
-        {
-          ratio[l] = parameters_.liquidRestDensity(l) / parameters_.restDensity;
-        }
-        for (std::size_t i = 0; i < n; ++i)
-        {
-          out.density[i] = static_cast<Real>(out.density[i] * ratio[liquid[i]]);
-        }
+        toLiquidDensities(parameters_, liquid, out.density, n);
       }
     }
     device_->synchronize();
