@@ -426,21 +426,30 @@ struct VorticityPass
   }
 };
 
-// The confinement pass (XSPH, its bi-Laplacian, eq. 16) into velocity[i]; with SmoothTwice false
-// the bi-Laplacian is compiled out.
-template <bool SmoothTwice>
+// The confinement pass (XSPH, its bi-Laplacian, eq. 16, the cohesion) into velocity[i]; with
+// SmoothTwice false the bi-Laplacian is compiled out, with Cohesion false the surface tension.
+template <bool SmoothTwice, bool Cohesion>
 struct ConfinementPass
 {
 };
 
-template <class Real, class Exec, class Particles, bool SmoothTwice>
+template <class Real, class Exec, class Particles, bool SmoothTwice, bool Cohesion>
 void confinementPass(Exec& exec, std::uint32_t n, Particles particles,
-  const FluidView<Real, MaskedNeighbors<Real>>& f, Vec3<Real>* velocity, ConfinementPass<SmoothTwice>)
+  const FluidView<Real, MaskedNeighbors<Real>>& f, Vec3<Real>* velocity,
+  ConfinementPass<SmoothTwice, Cohesion>)
 {
   exec.forEach(ConfinementStage{}, n, [=] PBF_HD(std::uint32_t k) {
-    vorticityConfinement<Real, MaskedNeighbors<Real>, SmoothTwice>(particles(k), f, velocity);
+    vorticityConfinement<Real, MaskedNeighbors<Real>, SmoothTwice, Cohesion>(
+      particles(k), f, velocity);
   });
 }
+
+// A bool as a type, for withPass.
+template <bool On>
+struct BoolTag
+{
+  static constexpr bool value = On;
+};
 
 // run(Pass<true>{}) when `on`, else run(Pass<false>{}): a pass whose optional terms are compiled
 // out when unused (VorticityPass: wall friction; ConfinementPass: the bi-Laplacian), because
@@ -456,6 +465,18 @@ void withPass(bool on, Run&& run)
   {
     run(Pass<false>{});
   }
+}
+
+// run(ConfinementPass<...>{}) with the bi-Laplacian and the cohesion compiled in only where the
+// coefficients use them (withPass's reason, for two terms).
+template <class Real, class Run>
+void withConfinementPass(const Coefficients<Real>& c, Run&& run)
+{
+  withPass<BoolTag>(c.xsphHyper, [&](auto hyper) {
+    withPass<BoolTag>(c.cohesion, [&](auto cohesion) {
+      run(ConfinementPass<decltype(hyper)::value, decltype(cohesion)::value>{});
+    });
+  });
 }
 
 // Lines 10-19 and, in the last iteration, 21: delta p_i (eq. 14) into f.scratch, then the Jacobi

@@ -8,9 +8,11 @@
 #include "HostDevice.h"
 #include "Kernels.h"
 #include "Parameters.h"
+#include "SurfaceTension.h"
 #include "Vec3.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 namespace pbf
@@ -36,6 +38,8 @@ struct Coefficients
   bool mirrorWalls;
   Real wallFriction;        // phi of wallFrictionImage: 0 free-slip, 1 no-slip
   bool xsphHyper;           // alpha_4 > 0: the confinement pass reads the neighbours' XSPH sums
+  bool cohesion;            // a surface tension > 0: the confinement pass adds the cohesion
+  Real inverseH;            // 1 / h: the cohesion spline's argument q = r / h
 
   // Throws InvalidInput when a constant does not fit Real (validatePrecision).
   static Coefficients make(const Parameters& p)
@@ -64,6 +68,8 @@ struct Coefficients
     c.mirrorWalls = p.mirrorWalls;
     c.wallFriction = static_cast<Real>(p.wallFriction);
     c.xsphHyper = p.xsphHyperViscosity > 0;
+    c.cohesion = p.largestSurfaceTension() > 0;
+    c.inverseH = static_cast<Real>(1.0 / h);
     return c;
   }
 };
@@ -91,6 +97,13 @@ struct StepTime
   Real liquidXsph[kMaxLiquids];
   Real liquidWeight[kMaxLiquids];
   Real liquidDensityRatio[kMaxLiquids];
+  // Surface tension (SurfaceTension.h), per liquid l with the pair energy e_l = t_l^2: a pair
+  // moves particle i by cohesionStep[l_i] cohesionPair[l_j] c(r / h) towards j in a step, with
+  // cohesionPair = t_l / t_max and cohesionStep = dt t_l t_max 32 / (pi h^3) / m_l (m_l the
+  // liquid's particle mass), so the pair energy is t_a t_b and the numbers stay near 1. Zero for
+  // a liquid without surface tension.
+  Real cohesionStep[kMaxLiquids];
+  Real cohesionPair[kMaxLiquids];
 
   static StepTime make(const Parameters& p, const LatticeCalibration& lattice, double dt)
   {
@@ -117,6 +130,24 @@ struct StepTime
       t.liquidWeight[l] = static_cast<Real>(named ? p.restDensity / p.liquidRestDensity(l) : 1.0);
       t.liquidDensityRatio[l] =
         static_cast<Real>(named ? p.liquidRestDensity(l) / p.restDensity : 1.0);
+    }
+    double pairEnergy[kMaxLiquids]; // t_l = sqrt(e_l), e_l = 2 sigma_l s^2 / cohesionWork
+    double largestPair = 0.0;
+    for (int l = 0; l < kMaxLiquids; ++l)
+    {
+      const double sigma = l < p.liquidCount() ? p.liquidSurfaceTension(l) : 0.0;
+      pairEnergy[l] = std::sqrt(
+        2.0 * sigma * p.particleSpacing * p.particleSpacing / lattice.cohesionWork);
+      largestPair = std::max(largestPair, pairEnergy[l]);
+    }
+    const double h = p.smoothingLength();
+    const double spline = 32.0 / (3.14159265358979323846 * h * h * h);
+    for (int l = 0; l < kMaxLiquids; ++l)
+    {
+      const double mass =
+        lattice.mass * (l < p.liquidCount() ? p.liquidRestDensity(l) : p.restDensity) / p.restDensity;
+      t.cohesionPair[l] = static_cast<Real>(largestPair > 0 ? pairEnergy[l] / largestPair : 0.0);
+      t.cohesionStep[l] = static_cast<Real>(dt * pairEnergy[l] * largestPair * spline / mass);
     }
     const double c = p.liquidXsphNu(0) * dt / lattice.xsphSecondMoment;
     t.xsph = static_cast<Real>(clamped ? kMaxXsphBlend * (c / (largest + c4)) : c);
@@ -697,6 +728,13 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   f.smoothing[i] = smoothing;
 }
 
+// Particle j's share of a pair's cohesion energy (StepTime::cohesionPair).
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE Real cohesionPairOf(std::uint32_t j, const FluidView<Real, Neighbors>& f)
+{
+  return f.liquid ? f.time->cohesionPair[f.liquid[j]] : f.time->cohesionPair[0];
+}
+
 // The step's new velocity into velocityOut[i]: XSPH, v_i + c S_i (eq. 17), minus c_4 times S
 // smoothed once more, S(S)_i = sum_j V_j (S_j - S_i) W_ij (Parameters::xsphHyperViscosity; a
 // pattern of gain g under S is damped by c g + c_4 g^2, so long waves, g ~ (k h)^2, hardly feel
@@ -705,8 +743,9 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
 // against |omega| the direction N is noise, and the force is dropped. velocityOut may be f.v or
 // f.omega: each particle reads only its own of those. SmoothTwice = false compiles the
 // bi-Laplacian out: the GPU launches that pass when alpha_4 is 0 (its registers made the double
-// precision pass spill).
-template <class Real, class Neighbors, bool SmoothTwice = true>
+// precision pass spill). Then surface tension (SurfaceTension.h): each neighbour's cohesion,
+// dt times its acceleration; Cohesion = false compiles it out, as SmoothTwice does.
+template <class Real, class Neighbors, bool SmoothTwice = true, bool Cohesion = true>
 PBF_HD PBF_INLINE void vorticityConfinement(
   std::uint32_t i, const FluidView<Real, Neighbors>& f, Vec3<Real>* velocityOut)
 {
@@ -715,8 +754,10 @@ PBF_HD PBF_INLINE void vorticityConfinement(
   const Real magI = omegaLengthOf(i, f);
   const Vec3<Real> si = f.smoothing[i];
   const bool smoothTwice = SmoothTwice && f.time->xsphHyper != Real(0);
+  const bool cohesion = Cohesion && f.c.cohesion;
   Vec3<Real> eta{ Real(0), Real(0), Real(0) };
   Vec3<Real> hyper{ Real(0), Real(0), Real(0) };
+  Vec3<Real> pull{ Real(0), Real(0), Real(0) };
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
     const Vec3<Real> r = pi - f.p[j];
     const Real r2 = dot(r, r);
@@ -728,6 +769,11 @@ PBF_HD PBF_INLINE void vorticityConfinement(
       {
         hyper += (f.smoothing[j] - si) * (volume * f.c.kernels.poly6Within(r2));
       }
+      if (cohesion && r2 > Real(0))
+      {
+        const Real inverse = Real(1) / squareRoot(r2);
+        pull += r * (cohesionPairOf(j, f) * cohesionSpline(r2 * inverse * f.c.inverseH) * inverse);
+      }
     }
   });
   // XSPH (eq. 17) and its bi-Laplacian: v + c S_i - c_4 S(S)_i.
@@ -735,6 +781,11 @@ PBF_HD PBF_INLINE void vorticityConfinement(
   if (smoothTwice)
   {
     v -= hyper * f.time->xsphHyper;
+  }
+  if (cohesion)
+  {
+    // The pull is along r_ij = p_i - p_j, so an attraction (c > 0) moves i against it.
+    v -= pull * (f.liquid ? f.time->cohesionStep[f.liquid[i]] : f.time->cohesionStep[0]);
   }
   const Real etaLength = length(eta);
   if (etaLength * f.c.kernels.h > Real(1e-4) * magI && etaLength > Real(0))

@@ -121,6 +121,12 @@ void validateLiquids(const Parameters& p)
     {
       reject(field + "xsphViscosity", liquid.xsphViscosity, "must be a finite number >= 0" + of);
     }
+    if (!std::isnan(liquid.surfaceTension) &&
+      !(liquid.surfaceTension >= 0.0 && std::isfinite(liquid.surfaceTension)))
+    {
+      reject(field + "surfaceTension", liquid.surfaceTension,
+        "must be a finite number >= 0 [N/m]" + of);
+    }
   }
 }
 
@@ -240,7 +246,8 @@ std::string describe(const Parameters& p)
       << " xsphNu=" << p.xsphNu();
   for (const Liquid& liquid : p.liquids)
   {
-    out << " liquid=" << liquid.name << ":" << liquid.restDensity << ":" << liquid.xsphViscosity;
+    out << " liquid=" << liquid.name << ":" << liquid.restDensity << ":" << liquid.xsphViscosity << ":"
+        << liquid.surfaceTension;
   }
   out << " dt="
       << (p.timeStepping == TimeStepping::Automatic ? "automatic" : "fixed");

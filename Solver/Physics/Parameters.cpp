@@ -1,6 +1,7 @@
 #include "Parameters.h"
 
 #include "Kernels.h"
+#include "SurfaceTension.h"
 
 #include <algorithm>
 #include <cmath>
@@ -104,6 +105,23 @@ double Parameters::largestXsphNu() const
   return largest;
 }
 
+double Parameters::liquidSurfaceTension(int l) const
+{
+  const double sigma =
+    liquids.empty() ? surfaceTension : liquids[static_cast<std::size_t>(l)].surfaceTension;
+  return std::isnan(sigma) ? surfaceTension : sigma;
+}
+
+double Parameters::largestSurfaceTension() const
+{
+  double largest = 0.0;
+  for (int l = 0; l < liquidCount(); ++l)
+  {
+    largest = std::max(largest, liquidSurfaceTension(l));
+  }
+  return largest;
+}
+
 double Parameters::sceneSpeed() const
 {
   if (sceneSpeedHint > 0)
@@ -135,6 +153,7 @@ LatticeCalibration calibrateLattice(const Parameters& p)
   double tensile = 0.0;     // below a surface site: sites with j <= 0, pushing along +y
   double secondMoment = 0.0;
   double firstMoment = 0.0;
+  double cohesionWork = 0.0; // above the site: sites with j >= 1, counted j times
   for (int i = -reach; i <= reach; ++i)
   {
     for (int j = -reach; j <= reach; ++j)
@@ -150,6 +169,10 @@ LatticeCalibration calibrateLattice(const Parameters& p)
         gradient2 += dot(g, g);
         secondMoment += w * r2;
         firstMoment += dot(r, g);
+        if (j >= 1 && r2 < kernels.h2)
+        {
+          cohesionWork += j * cohesionPotential(std::sqrt(r2) / h);
+        }
         if (j <= 0 && r2 < kernels.h2 && r2 > 0.0)
         {
           tensile += std::pow(w / wDeltaQ, p.sCorrN) * -g.y;
@@ -166,6 +189,8 @@ LatticeCalibration calibrateLattice(const Parameters& p)
   c.tensileSurfacePush = massOverRho0 * tensile;
   c.xsphSecondMoment = massOverRho0 * secondMoment / 6.0;
   c.gradientMoment = -massOverRho0 * firstMoment / 3.0;
+  // Phi(r) = 32 / (pi h^2) times the dimensionless potential.
+  c.cohesionWork = 32.0 / (3.14159265358979323846 * h * h) * cohesionWork;
   return c;
 }
 

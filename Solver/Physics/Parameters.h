@@ -40,6 +40,8 @@ struct Liquid
   double restDensity = 1000.0;   // its rho_0 [kg/m^3]
   // Its alpha, as Parameters::xsphViscosity; NaN (unset): Parameters::xsphViscosity.
   double xsphViscosity = std::numeric_limits<double>::quiet_NaN();
+  // Its sigma [N/m], as Parameters::surfaceTension; NaN (unset): Parameters::surfaceTension.
+  double surfaceTension = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct Box
@@ -123,6 +125,11 @@ struct Parameters
   // and slows a bore, a surge front or an impact jet less (Documentation/Validation.md).
   double xsphHyperViscosity = 0.05;
   double vorticityEpsilon = 0.01; // epsilon of eq. 16 [m/s]: confinement acceleration per |omega|
+  // Surface tension sigma [N/m] (0.072 is water against air; 0: off): cohesion between particle
+  // pairs calibrated on the rest lattice so that parting it along a plane costs 2 sigma per area
+  // (SurfaceTension.h). It is felt on the scale of the capillary length sqrt(sigma / (rho g)),
+  // 2.7 mm for water on Earth: a droplet, a thin jet, a film, not a tank of spacing 1 cm.
+  double surfaceTension = 0.0;
   bool unilateral = true;       // clamp C_i at 0: a free surface is not pulled together
   bool mirrorWalls = true;      // walls mirror the fluid near them (Equations.h, WallMirrors)
   // Friction of the walls and solids, phi in [0, 1]: 0 lets the fluid slide along them
@@ -158,6 +165,9 @@ struct Parameters
   int liquidCount() const { return liquids.empty() ? 1 : static_cast<int>(liquids.size()); }
   // The largest XSPH nu of the liquids: what bounds the explicit smoothing's step.
   double largestXsphNu() const;
+  // Liquid l's sigma (surfaceTension when there are no liquids or l's is unset), and the largest.
+  double liquidSurfaceTension(int l) const;
+  double largestSurfaceTension() const;
 
   // Throws InvalidInput naming the first bad field and its value.
   void validate() const;
@@ -191,6 +201,11 @@ struct LatticeCalibration
   // the fluid up against gravity through the discrete gradient is 1 / G times rho_0 g d, so
   // the reported pressure is G times the corrections' (Equations.h's recordPressure).
   double gradientMoment = 0;
+  // sum over the sites j above a site i, j - i = (a, k, b) s with k >= 1, of k Phi(r_ij) / e
+  // (SurfaceTension.h) [1/m^2]: the pairs that a plane between two layers parts, per site of a
+  // layer (k planes lie between i and j). Parting costs e cohesionWork / s^2 per area, which
+  // is 2 sigma for the pair energy e = 2 sigma s^2 / cohesionWork.
+  double cohesionWork = 0;
   // The Jacobi projection's largest gain on the lattice, max over wave vectors k of
   // |G(k)|^2 / D, G(k) = sum_j grad W_ij sin(k . r_ij), D = sum_j |grad W_ij|^2: a correction
   // pattern of wave vector k is multiplied by 1 - omega |G(k)|^2 / D per projection, so omega

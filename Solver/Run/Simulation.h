@@ -244,6 +244,10 @@ private:
   // automatic step. Valid when healthValid_.
   Health health_;
   bool healthValid_ = false;
+  // cflNumber sqrt(rho s^3 / sigma) [s] over the liquids (capillaryStepLimit); infinity without
+  // surface tension.
+  double capillaryStepLimit_ = 0;
+  static double capillaryStepLimit(const Parameters& p);
   double xsphStepLimit_ = 0; // kMaxXsphBlend beta h^2 / (nu + nu_4) [s]; infinity without XSPH
   std::int64_t nextId_ = 0;
   std::vector<Vec3d> solidCentres_; // per solid, its centre of mass in its own frame

@@ -258,7 +258,8 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
   return solids;
 }
 
-// "liquids": [{"name": "water", "restDensity": 1000, "xsphViscosity": 0.0125}, ...]: the
+// "liquids": [{"name": "water", "restDensity": 1000, "xsphViscosity": 0.0125,
+// "surfaceTension": 0.072}, ...]: the
 // scene's liquids, which its regions and emitters name.
 std::vector<Liquid> parseLiquids(const json& liquids)
 {
@@ -272,7 +273,8 @@ std::vector<Liquid> parseLiquids(const json& liquids)
   {
     const std::string path = ".liquids[" + std::to_string(k) + "]";
     const json& item = liquids[k];
-    requireKeys(item, path, { "name", "restDensity", "xsphViscosity" }, { "name", "restDensity" });
+    requireKeys(item, path, { "name", "restDensity", "xsphViscosity", "surfaceTension" },
+      { "name", "restDensity" });
     if (!item["name"].is_string() || item["name"].get<std::string>().empty())
     {
       reject(path + ".name", item["name"], "must be a non-empty string");
@@ -293,6 +295,14 @@ std::vector<Liquid> parseLiquids(const json& liquids)
       if (liquid.xsphViscosity < 0)
       {
         reject(path + ".xsphViscosity", item["xsphViscosity"], "must be >= 0");
+      }
+    }
+    if (item.contains("surfaceTension"))
+    {
+      liquid.surfaceTension = number(item, path, "surfaceTension");
+      if (liquid.surfaceTension < 0)
+      {
+        reject(path + ".surfaceTension", item["surfaceTension"], "must be >= 0");
       }
     }
     out.push_back(liquid);

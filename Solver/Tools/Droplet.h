@@ -1,0 +1,43 @@
+// A droplet without gravity, the check of surface tension (Documentation/Validation.md, "Surface
+// tension"): a block of liquid, longer along x than across, pulls itself into a sphere and
+// oscillates about it in Rayleigh's l = 2 mode, whose period for a sphere of radius R is
+// T = 2 pi sqrt(rho R^3 / (8 sigma)) (Rayleigh 1879; Lamb, Hydrodynamics, section 275).
+#pragma once
+
+#include "Simulation.h"
+
+#include <vector>
+
+namespace pbf::validation
+{
+
+// The drop's block: `aspect` times as long along x as across, of the volume of a sphere of
+// `radius`, at the centre of a cube 4 radii wide; no gravity.
+Scene dropletScene(double radius, double aspect);
+
+// Rayleigh's l = 2 period [s] of a drop of this radius, rest density and surface tension.
+double rayleighPeriod(double radius, double density, double sigma);
+
+// The l = 2 deformation of a state: <(x - c)^2> - (<(y - c)^2> + <(z - c)^2>) / 2 over its
+// particles [m^2] (c their centre): positive while the drop is long along x.
+double deformation(const Snapshot<double>& state);
+
+// A run of dropletScene to `until`, sampling the deformation every `sample` seconds, and the
+// period measured from it: twice the mean time between the deformation's crossings of its mean
+// over the run's second half, from the first crossing on.
+struct DropletRun
+{
+  std::size_t particles = 0;
+  std::vector<double> t, deformation;
+  double period = 0;  // [s]; 0 where fewer than 3 crossings were found
+  int crossings = 0;
+  double theory = 0;  // Rayleigh's period [s]
+  double steps = 0;   // solver steps taken
+  // The mean pressure of the particles within half a radius of the centre at the end [Pa], and
+  // Laplace's 2 sigma / R.
+  double pressure = 0, laplace = 0;
+};
+DropletRun runDroplet(const Parameters& parameters, Backend backend, Precision precision,
+  double radius, double aspect, double until, double sample);
+
+} // namespace pbf::validation
