@@ -37,6 +37,19 @@ bool cudaAvailable(std::string* why)
 namespace
 {
 
+// Surface tension runs on the CPU backends for now: the GPU steppers do not keep the colour
+// gradient that its curvature is read from (SurfaceTension.h).
+void refuseSurfaceTensionOnCuda(const Parameters& parameters)
+{
+  const double sigma = parameters.largestSurfaceTension();
+  if (sigma > 0)
+  {
+    throw InvalidInput("surfaceTension = " + std::to_string(sigma) +
+      ": the CUDA backend does not simulate surface tension yet; run the scene on the Serial or "
+      "OpenMP backend (Auto does)");
+  }
+}
+
 // Several liquids run on every backend but CUDA ranks: the decomposed GPU stepper does not carry a
 // particle's liquid yet.
 void refuseLiquidsOnCudaRanks(const Parameters& parameters)
@@ -79,6 +92,7 @@ std::unique_ptr<Stepper> makeStepper(Backend backend, Precision precision,
       {
         throw std::runtime_error("CUDA backend unavailable: " + why);
       }
+      refuseSurfaceTensionOnCuda(parameters);
 #ifdef PBF_WITH_CUDA
       return makeCudaStepper(precision, parameters, initial);
 #endif
@@ -101,6 +115,7 @@ std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backen
     std::string why;
     chooseBackend(BackendRequest::CUDA, cudaAvailable(&why), why, &communicator);
     refuseLiquidsOnCudaRanks(parameters);
+    refuseSurfaceTensionOnCuda(parameters);
 #ifdef PBF_WITH_CUDA
     return cuda::makeCudaSubdomainStepper(communicator, precision, parameters, everything,
       localRank(communicator) % cuda::cudaDeviceCount());
@@ -120,10 +135,15 @@ std::unique_ptr<Stepper> makeSubdomainStepperAuto(Communicator& communicator, Pr
   const Parameters& parameters, const ParticleBatch& everything, Backend cpu)
 {
   std::string why;
-  const bool cuda = cudaAvailable(&why) && parameters.liquids.empty();
+  const bool cuda = cudaAvailable(&why) && parameters.liquids.empty() &&
+    !(parameters.largestSurfaceTension() > 0);
   if (!parameters.liquids.empty())
   {
     why = "the scene names liquids, which CUDA ranks do not run yet";
+  }
+  else if (parameters.largestSurfaceTension() > 0)
+  {
+    why = "surface tension runs on the CPU backends only for now";
   }
   const BackendChoice choice = chooseBackend(BackendRequest::Auto, cuda, why, &communicator);
   const Backend backend = choice.backend == Backend::CUDA ? Backend::CUDA : cpu;

@@ -54,6 +54,7 @@ struct HostFluid
     f.liquid = liquid.empty() ? nullptr : liquid.data();
     f.scratch = scratch.data();
     f.omega = omega.data();
+    f.colour = colour.empty() ? nullptr : colour.data();
     // XSPH's sum goes where delta p was: the solve is over when it is written.
     f.smoothing = scratch.data();
     f.grid = GridView<Real>{ geometry, cellOffsets.data(), keys.data() };
@@ -155,6 +156,7 @@ struct HostFluid
     p.resize(n);
     scratch.resize(n);
     omega.resize(n);
+    colour.resize(coefficients.surfaceTension ? n : 0);
     density.resize(n);
     lambda.resize(n);
     pressure.resize(n);
@@ -174,6 +176,8 @@ struct HostFluid
   GridGeometry<Real> geometry;
 
   std::vector<Vec3<Real>> x, p, v, scratch, omega;
+  // grad c per particle, for surface tension (FluidView::colour); empty without it.
+  std::vector<Vec3<Real>> colour;
   std::vector<Real> density, lambda, pressure;
   std::vector<std::int64_t> id;
   // Each particle's liquid (Parameters::liquids); empty where the scene names none.

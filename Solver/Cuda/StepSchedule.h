@@ -426,20 +426,20 @@ struct VorticityPass
   }
 };
 
-// The confinement pass (XSPH, its bi-Laplacian, eq. 16, the cohesion) into velocity[i]; with
-// SmoothTwice false the bi-Laplacian is compiled out, with Cohesion false the surface tension.
-template <bool SmoothTwice, bool Cohesion>
+// The confinement pass (XSPH, its bi-Laplacian, eq. 16, surface tension) into velocity[i]; with
+// SmoothTwice false the bi-Laplacian is compiled out, with Tension false the surface tension.
+template <bool SmoothTwice, bool Tension>
 struct ConfinementPass
 {
 };
 
-template <class Real, class Exec, class Particles, bool SmoothTwice, bool Cohesion>
+template <class Real, class Exec, class Particles, bool SmoothTwice, bool Tension>
 void confinementPass(Exec& exec, std::uint32_t n, Particles particles,
   const FluidView<Real, MaskedNeighbors<Real>>& f, Vec3<Real>* velocity,
-  ConfinementPass<SmoothTwice, Cohesion>)
+  ConfinementPass<SmoothTwice, Tension>)
 {
   exec.forEach(ConfinementStage{}, n, [=] PBF_HD(std::uint32_t k) {
-    vorticityConfinement<Real, MaskedNeighbors<Real>, SmoothTwice, Cohesion>(
+    vorticityConfinement<Real, MaskedNeighbors<Real>, SmoothTwice, Tension>(
       particles(k), f, velocity);
   });
 }
@@ -467,14 +467,14 @@ void withPass(bool on, Run&& run)
   }
 }
 
-// run(ConfinementPass<...>{}) with the bi-Laplacian and the cohesion compiled in only where the
+// run(ConfinementPass<...>{}) with the bi-Laplacian and surface tension compiled in only where the
 // coefficients use them (withPass's reason, for two terms).
 template <class Real, class Run>
 void withConfinementPass(const Coefficients<Real>& c, Run&& run)
 {
   withPass<BoolTag>(c.xsphHyper, [&](auto hyper) {
-    withPass<BoolTag>(c.cohesion, [&](auto cohesion) {
-      run(ConfinementPass<decltype(hyper)::value, decltype(cohesion)::value>{});
+    withPass<BoolTag>(c.surfaceTension, [&](auto tension) {
+      run(ConfinementPass<decltype(hyper)::value, decltype(tension)::value>{});
     });
   });
 }

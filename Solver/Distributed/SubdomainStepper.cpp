@@ -271,6 +271,7 @@ void SubdomainStepper<Real>::receiveGhosts()
   fluid_.pressure.resize(n);
   fluid_.scratch.resize(n);
   fluid_.omega.resize(n);
+  fluid_.colour.resize(fluid_.coefficients.surfaceTension ? n : 0);
   fluid_.keys.resize(n);
   tag_.resize(n);
   for (std::size_t i = 0; i < n; ++i)
@@ -450,6 +451,7 @@ void SubdomainStepper<Real>::predict()
   fluid_.p.resize(fluid_.x.size());
   fluid_.scratch.resize(fluid_.x.size());
   fluid_.omega.resize(fluid_.x.size());
+  fluid_.colour.resize(fluid_.coefficients.surfaceTension ? fluid_.x.size() : 0);
   fluid_.keys.resize(fluid_.x.size());
   const FluidView<Real> f = fluid_.view();
   forOwned([&](std::uint32_t i) { predictPosition(i, f); });
@@ -490,6 +492,11 @@ void SubdomainStepper<Real>::refresh(HostField field)
       {
         // XSPH's sum (HostFluid::view puts it in scratch), which the bi-Laplacian smooths.
         refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.scratch[i]; });
+      }
+      if (!fluid_.colour.empty())
+      {
+        // grad c, whose normals the confinement's surface tension reads (SurfaceTension.h).
+        refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.colour[i]; });
       }
       break;
   }

@@ -38,8 +38,9 @@ struct Coefficients
   bool mirrorWalls;
   Real wallFriction;        // phi of wallFrictionImage: 0 free-slip, 1 no-slip
   bool xsphHyper;           // alpha_4 > 0: the confinement pass reads the neighbours' XSPH sums
-  bool cohesion;            // a surface tension > 0: the confinement pass adds the cohesion
-  Real inverseH;            // 1 / h: the cohesion spline's argument q = r / h
+  bool surfaceTension;      // a surface tension > 0: the confinement pass adds its force
+  Real colourScale;         // 6 K of poly6 W = K (h^2 - r^2)^3 (SurfaceTension.h)
+  Real inverseH2;           // 1 / h^2
 
   // Throws InvalidInput when a constant does not fit Real (validatePrecision).
   static Coefficients make(const Parameters& p)
@@ -68,8 +69,9 @@ struct Coefficients
     c.mirrorWalls = p.mirrorWalls;
     c.wallFriction = static_cast<Real>(p.wallFriction);
     c.xsphHyper = p.xsphHyperViscosity > 0;
-    c.cohesion = p.largestSurfaceTension() > 0;
-    c.inverseH = static_cast<Real>(1.0 / h);
+    c.surfaceTension = p.largestSurfaceTension() > 0;
+    c.colourScale = static_cast<Real>(6.0 * k64.poly6Scale);
+    c.inverseH2 = static_cast<Real>(1.0 / (h * h));
     return c;
   }
 };
@@ -97,13 +99,10 @@ struct StepTime
   Real liquidXsph[kMaxLiquids];
   Real liquidWeight[kMaxLiquids];
   Real liquidDensityRatio[kMaxLiquids];
-  // Surface tension (SurfaceTension.h), per liquid l with the pair energy e_l = t_l^2: a pair
-  // moves particle i by cohesionStep[l_i] cohesionPair[l_j] c(r / h) towards j in a step, with
-  // cohesionPair = t_l / t_max and cohesionStep = dt t_l t_max 32 / (pi h^3) / m_l (m_l the
-  // liquid's particle mass), so the pair energy is t_a t_b and the numbers stay near 1. Zero for
-  // a liquid without surface tension.
-  Real cohesionStep[kMaxLiquids];
-  Real cohesionPair[kMaxLiquids];
+  // Surface tension (SurfaceTension.h) per liquid l: dt sigma_l / (rho_l surfaceColour), the
+  // velocity its force density per unit sigma gives in the step (LatticeCalibration's
+  // surfaceColour: the share of the colour's drop that particles carry). Zero without it.
+  Real tension[kMaxLiquids];
 
   static StepTime make(const Parameters& p, const LatticeCalibration& lattice, double dt)
   {
@@ -131,23 +130,12 @@ struct StepTime
       t.liquidDensityRatio[l] =
         static_cast<Real>(named ? p.liquidRestDensity(l) / p.restDensity : 1.0);
     }
-    double pairEnergy[kMaxLiquids]; // t_l = sqrt(e_l), e_l = 2 sigma_l s^2 / cohesionWork
-    double largestPair = 0.0;
     for (int l = 0; l < kMaxLiquids; ++l)
     {
-      const double sigma = l < p.liquidCount() ? p.liquidSurfaceTension(l) : 0.0;
-      pairEnergy[l] = std::sqrt(
-        2.0 * sigma * p.particleSpacing * p.particleSpacing / lattice.cohesionWork);
-      largestPair = std::max(largestPair, pairEnergy[l]);
-    }
-    const double h = p.smoothingLength();
-    const double spline = 32.0 / (3.14159265358979323846 * h * h * h);
-    for (int l = 0; l < kMaxLiquids; ++l)
-    {
-      const double mass =
-        lattice.mass * (l < p.liquidCount() ? p.liquidRestDensity(l) : p.restDensity) / p.restDensity;
-      t.cohesionPair[l] = static_cast<Real>(largestPair > 0 ? pairEnergy[l] / largestPair : 0.0);
-      t.cohesionStep[l] = static_cast<Real>(dt * pairEnergy[l] * largestPair * spline / mass);
+      t.tension[l] = static_cast<Real>(
+        l < p.liquidCount()
+          ? dt * p.liquidSurfaceTension(l) / (p.liquidRestDensity(l) * lattice.surfaceColour)
+          : 0.0);
     }
     const double c = p.liquidXsphNu(0) * dt / lattice.xsphSecondMoment;
     t.xsph = static_cast<Real>(clamped ? kMaxXsphBlend * (c / (largest + c4)) : c);
@@ -183,6 +171,9 @@ struct FluidView
   Real* pressure;
   // Each particle's liquid (Parameters::liquids); null: one liquid, and no particle reads it.
   const std::uint8_t* liquid;
+  // grad c_i, the colour field's gradient (SurfaceTension.h), written by the vorticity pass and
+  // read for the neighbours by the confinement; null without surface tension.
+  Vec3<Real>* colour;
   Neighbors grid;
   Coefficients<Real> c;
   const StepTime<Real>* time; // this step's dt and what follows from it
@@ -677,6 +668,7 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   const Vec3<Real> vi = f.v[i];
   Vec3<Real> omega{ Real(0), Real(0), Real(0) };
   Vec3<Real> smoothing{ Real(0), Real(0), Real(0) };
+  Vec3<Real> colour{ Real(0), Real(0), Real(0) };
   const Real friction = Friction ? Real(-2) * f.c.wallFriction : Real(0);
   WallMirrors<Real> mirrors{ { 1, 1, 1 }, { { Real(0), Real(0) }, { Real(0), Real(0) }, { Real(0), Real(0) } } };
   if (Friction && friction != Real(0))
@@ -694,6 +686,10 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
       const Vec3<Real> vij = f.v[j] - vi;
       omega += cross(f.c.kernels.spikyGradientWithin(r, r2), vij) * volume;
       smoothing += vij * (volume * f.c.kernels.poly6Within(r2));
+      if (f.colour)
+      {
+        colour += colourGradientTerm(r, f.c.kernels.h2 - r2, f.c.colourScale * volume);
+      }
     }
     if (Friction && images && r2 < f.c.kernels.h2)
     {
@@ -726,13 +722,10 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
     f.omegaLength[i] = length(omega);
   }
   f.smoothing[i] = smoothing;
-}
-
-// Particle j's share of a pair's cohesion energy (StepTime::cohesionPair).
-template <class Real, class Neighbors>
-PBF_HD PBF_INLINE Real cohesionPairOf(std::uint32_t j, const FluidView<Real, Neighbors>& f)
-{
-  return f.liquid ? f.time->cohesionPair[f.liquid[j]] : f.time->cohesionPair[0];
+  if (f.colour)
+  {
+    f.colour[i] = colour;
+  }
 }
 
 // The step's new velocity into velocityOut[i]: XSPH, v_i + c S_i (eq. 17), minus c_4 times S
@@ -743,9 +736,10 @@ PBF_HD PBF_INLINE Real cohesionPairOf(std::uint32_t j, const FluidView<Real, Nei
 // against |omega| the direction N is noise, and the force is dropped. velocityOut may be f.v or
 // f.omega: each particle reads only its own of those. SmoothTwice = false compiles the
 // bi-Laplacian out: the GPU launches that pass when alpha_4 is 0 (its registers made the double
-// precision pass spill). Then surface tension (SurfaceTension.h): each neighbour's cohesion,
-// dt times its acceleration; Cohesion = false compiles it out, as SmoothTwice does.
-template <class Real, class Neighbors, bool SmoothTwice = true, bool Cohesion = true>
+// precision pass spill). Then surface tension (SurfaceTension.h): dt times its acceleration,
+// from the colour field's gradient and Hessian summed in the same walk; Tension = false compiles
+// it out, as SmoothTwice does.
+template <class Real, class Neighbors, bool SmoothTwice = true, bool Tension = true>
 PBF_HD PBF_INLINE void vorticityConfinement(
   std::uint32_t i, const FluidView<Real, Neighbors>& f, Vec3<Real>* velocityOut)
 {
@@ -754,10 +748,21 @@ PBF_HD PBF_INLINE void vorticityConfinement(
   const Real magI = omegaLengthOf(i, f);
   const Vec3<Real> si = f.smoothing[i];
   const bool smoothTwice = SmoothTwice && f.time->xsphHyper != Real(0);
-  const bool cohesion = Cohesion && f.c.cohesion;
+  // Surface tension where particle i is on the surface (SurfaceTension.h).
+  Real weight = Real(0);
+  Vec3<Real> gradC{ Real(0), Real(0), Real(0) };
+  if (Tension && f.colour)
+  {
+    gradC = f.colour[i];
+    weight = surfaceWeight(squareRoot(dot(gradC, gradC)) * f.c.kernels.h);
+  }
+  const bool tension = weight > Real(0);
+  const Vec3<Real> ni = tension ? gradC * (Real(1) / squareRoot(dot(gradC, gradC)))
+                                : Vec3<Real>{ Real(0), Real(0), Real(0) };
+  SurfaceDivergence<Real> divergence(tension ? ni : Vec3<Real>{ Real(0), Real(0), Real(1) });
+  const Real gate2 = Real(kSurfaceGate * kSurfaceGate) * f.c.inverseH2;
   Vec3<Real> eta{ Real(0), Real(0), Real(0) };
   Vec3<Real> hyper{ Real(0), Real(0), Real(0) };
-  Vec3<Real> pull{ Real(0), Real(0), Real(0) };
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
     const Vec3<Real> r = pi - f.p[j];
     const Real r2 = dot(r, r);
@@ -769,10 +774,15 @@ PBF_HD PBF_INLINE void vorticityConfinement(
       {
         hyper += (f.smoothing[j] - si) * (volume * f.c.kernels.poly6Within(r2));
       }
-      if (cohesion && r2 > Real(0))
+      if (tension)
       {
-        const Real inverse = Real(1) / squareRoot(r2);
-        pull += r * (cohesionPairOf(j, f) * cohesionSpline(r2 * inverse * f.c.inverseH) * inverse);
+        const Vec3<Real> gj = f.colour[j];
+        const Real gj2 = dot(gj, gj);
+        if (gj2 > gate2) // j on the surface too (the particle itself adds zeros)
+        {
+          divergence.add(gj * (Real(1) / squareRoot(gj2)), r,
+            f.c.kernels.spikyGradientWithin(r, r2), volume);
+        }
       }
     }
   });
@@ -782,10 +792,11 @@ PBF_HD PBF_INLINE void vorticityConfinement(
   {
     v -= hyper * f.time->xsphHyper;
   }
-  if (cohesion)
+  if (tension)
   {
-    // The pull is along r_ij = p_i - p_j, so an attraction (c > 0) moves i against it.
-    v -= pull * (f.liquid ? f.time->cohesionStep[f.liquid[i]] : f.time->cohesionStep[0]);
+    // f = -sigma (div n) grad c, as a velocity change dt f / rho_l.
+    v -= gradC * (divergence.divergence(f.c.kernels.h) * weight *
+      (f.liquid ? f.time->tension[f.liquid[i]] : f.time->tension[0]));
   }
   const Real etaLength = length(eta);
   if (etaLength * f.c.kernels.h > Real(1e-4) * magI && etaLength > Real(0))

@@ -152,11 +152,12 @@ std::vector<ParameterSpec> forceRows()
     { "surfaceTension", "SurfaceTension", "surface-tension", "Surface Tension", "Solver", "N/m",
       T::Real, nonNegative, 0.0, 1.0, false, nullptr, "",
       "Surface tension sigma [N/m] of the liquid against the empty space around it (0.072 is "
-      "water and air; 0, the default, turns it off): cohesion between particle pairs, "
-      "calibrated so that parting the fluid along a plane costs 2 sigma per area at any "
-      "spacing. It shows where the capillary length sqrt(sigma / (rho g)) is a few spacings or "
-      "more (2.7 mm for water on Earth): droplets, jets, films; a drop without gravity becomes a "
-      "sphere. Automatic time steps then stay below the capillary wave limit.",
+      "water and air; 0, the default, turns it off): the continuum surface force, sigma times "
+      "the curvature of the fluid's surface, so the pressure inside a drop of radius R rises by "
+      "2 sigma / R at any spacing and a flat surface feels nothing. It shows where the capillary "
+      "length sqrt(sigma / (rho g)) is a few spacings or more (2.7 mm for water on Earth): "
+      "droplets, jets, films; a drop without gravity becomes a sphere. Automatic time steps then "
+      "stay below the capillary wave limit.",
       PBF_SCALAR(surfaceTension) },
     { "unilateral", "Unilateral", "unilateral", "Unilateral", "Solver", "", T::Boolean, boolean,
       0, 1, true, nullptr, "",

@@ -139,6 +139,42 @@ double Parameters::sceneSpeed() const
   return std::sqrt(2.0 * g * extent);
 }
 
+namespace
+{
+
+// LatticeCalibration::surfaceColour: the particle k layers below a flat surface (along y) sees
+// the sites at offsets (i, j, l) s with j <= k.
+double surfaceColourShare(double s, double h, double volume)
+{
+  const auto kernels = Kernels<double>::make(h);
+  const int reach = static_cast<int>(std::ceil(h / s));
+  double share = 0.0;
+  for (int layer = 0; layer <= reach; ++layer)
+  {
+    Vec3d gradient{ 0, 0, 0 };
+    for (int i = -reach; i <= reach; ++i)
+    {
+      for (int j = -reach; j <= layer; ++j)
+      {
+        for (int k = -reach; k <= reach; ++k)
+        {
+          const Vec3d r{ -i * s, -j * s, -k * s };
+          const double r2 = dot(r, r);
+          if (r2 < kernels.h2)
+          {
+            gradient += colourGradientTerm(r, kernels.h2 - r2, 6.0 * kernels.poly6Scale * volume);
+          }
+        }
+      }
+    }
+    const double g = length(gradient);
+    share += volume / (s * s) * g * surfaceWeight(g * h);
+  }
+  return share;
+}
+
+} // namespace
+
 LatticeCalibration calibrateLattice(const Parameters& p)
 {
   // Sums over every lattice site within h of a site at the origin.
@@ -153,7 +189,6 @@ LatticeCalibration calibrateLattice(const Parameters& p)
   double tensile = 0.0;     // below a surface site: sites with j <= 0, pushing along +y
   double secondMoment = 0.0;
   double firstMoment = 0.0;
-  double cohesionWork = 0.0; // above the site: sites with j >= 1, counted j times
   for (int i = -reach; i <= reach; ++i)
   {
     for (int j = -reach; j <= reach; ++j)
@@ -169,10 +204,6 @@ LatticeCalibration calibrateLattice(const Parameters& p)
         gradient2 += dot(g, g);
         secondMoment += w * r2;
         firstMoment += dot(r, g);
-        if (j >= 1 && r2 < kernels.h2)
-        {
-          cohesionWork += j * cohesionPotential(std::sqrt(r2) / h);
-        }
         if (j <= 0 && r2 < kernels.h2 && r2 > 0.0)
         {
           tensile += std::pow(w / wDeltaQ, p.sCorrN) * -g.y;
@@ -189,8 +220,7 @@ LatticeCalibration calibrateLattice(const Parameters& p)
   c.tensileSurfacePush = massOverRho0 * tensile;
   c.xsphSecondMoment = massOverRho0 * secondMoment / 6.0;
   c.gradientMoment = -massOverRho0 * firstMoment / 3.0;
-  // Phi(r) = 32 / (pi h^2) times the dimensionless potential.
-  c.cohesionWork = 32.0 / (3.14159265358979323846 * h * h) * cohesionWork;
+  c.surfaceColour = surfaceColourShare(s, h, massOverRho0);
   return c;
 }
 

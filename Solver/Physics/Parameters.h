@@ -125,10 +125,11 @@ struct Parameters
   // and slows a bore, a surge front or an impact jet less (Documentation/Validation.md).
   double xsphHyperViscosity = 0.05;
   double vorticityEpsilon = 0.01; // epsilon of eq. 16 [m/s]: confinement acceleration per |omega|
-  // Surface tension sigma [N/m] (0.072 is water against air; 0: off): cohesion between particle
-  // pairs calibrated on the rest lattice so that parting it along a plane costs 2 sigma per area
-  // (SurfaceTension.h). It is felt on the scale of the capillary length sqrt(sigma / (rho g)),
-  // 2.7 mm for water on Earth: a droplet, a thin jet, a film, not a tank of spacing 1 cm.
+  // Surface tension sigma [N/m] (0.072 is water against air; 0: off): Brackbill's continuum
+  // surface force, sigma times the curvature of the fluid's smoothed colour field, on the
+  // particles of its surface (SurfaceTension.h). It is felt on the scale of the capillary length
+  // sqrt(sigma / (rho g)), 2.7 mm for water on Earth: a droplet, a thin jet, a film, not a tank
+  // of spacing 1 cm.
   double surfaceTension = 0.0;
   bool unilateral = true;       // clamp C_i at 0: a free surface is not pulled together
   bool mirrorWalls = true;      // walls mirror the fluid near them (Equations.h, WallMirrors)
@@ -201,11 +202,11 @@ struct LatticeCalibration
   // the fluid up against gravity through the discrete gradient is 1 / G times rho_0 g d, so
   // the reported pressure is G times the corrections' (Equations.h's recordPressure).
   double gradientMoment = 0;
-  // sum over the sites j above a site i, j - i = (a, k, b) s with k >= 1, of k Phi(r_ij) / e
-  // (SurfaceTension.h) [1/m^2]: the pairs that a plane between two layers parts, per site of a
-  // layer (k planes lie between i and j). Parting costs e cohesionWork / s^2 per area, which
-  // is 2 sigma for the pair energy e = 2 sigma s^2 / cohesionWork.
-  double cohesionWork = 0;
+  // sum over the layers k = 0, 1, ... below a flat free surface of the lattice of
+  // (V / s^2) |grad c_k| w_k (SurfaceTension.h: c the colour, w its surface weight): the share of
+  // the colour's drop from 1 to 0 that the particles carry. The rest lies outside the fluid,
+  // where there are none (0.53 at h = 2 s), so the surface force is divided by it.
+  double surfaceColour = 0;
   // The Jacobi projection's largest gain on the lattice, max over wave vectors k of
   // |G(k)|^2 / D, G(k) = sum_j grad W_ij sin(k . r_ij), D = sum_j |grad W_ij|^2: a correction
   // pattern of wave vector k is multiplied by 1 - omega |G(k)|^2 / D per projection, so omega

@@ -1,37 +1,114 @@
-// Surface tension as cohesion between particle pairs (Akinci, Akinci and Teschner 2013's
-// cohesion kernel C(r)), in physical units: Parameters::surfaceTension sigma [N/m].
+// Surface tension as Brackbill, Kothe and Zemach (1992)'s continuum surface force:
+// f = -sigma (div n) grad c [N/m^3], c = sum_j V_j W_ij the fluid's smoothed colour (1 inside,
+// as the lattice's mass calibrates it; 0 outside) and n = grad c / |grad c| its normal, pointing
+// into the fluid. Across a surface f integrates to sigma kappa, so the pressure inside a drop of
+// radius R rises by 2 sigma / R whatever the spacing; a flat surface feels nothing, so a tank at
+// rest is as without it, and no pair force holds particles in place.
 //
-// A pair at distance r holds the potential energy -e Phi(r), Phi(r) = integral from r to h of
-// C, so it attracts with e C(r) (C > 0 beyond 0.28 h; closer it repels, which keeps cohesion
-// from clumping pairs). The pair energy e comes from the rest lattice, as s_corr's push does
-// (LatticeCalibration::cohesionWork): parting the lattice along a plane costs 2 sigma per unit
-// area, the work of the two surfaces it makes. So sigma means the same at any spacing and
-// smoothing ratio, and a liquid's pressure rises by 2 sigma / R inside a drop of radius R.
-// Between liquids a and b the pair energy is sqrt(e_a e_b) (a geometric mean), which makes their
-// interfacial tension (sqrt(sigma_a) - sqrt(sigma_b))^2.
-//
-// The attraction acts on the velocity in the confinement pass, on the step's final positions, so
-// the next step's prediction carries it (as gravity): no pass is added.
+// Two neighbour walks, those the step already makes after its projections:
+// - the vorticity pass sums grad c_i (poly6's gradient) into the particle's colour gradient;
+// - the confinement pass takes div n_i from its neighbours' normals, only those on the surface
+//   (|grad c| h > kSurfaceGate; inside, n is noise), as the divergence in the tangent plane
+//   renormalised on the neighbours found there (Bonet and Lok 1999's corrected gradient): with
+//   t_1, t_2 the plane's axes, G_ab = sum_j V_j t_a.(n_j - n_i) t_b.grad W_ij and
+//   M_ab = sum_j V_j t_a.(p_j - p_i) t_b.grad W_ij, div n = tr(G M^-1). A linear field's
+//   divergence comes out exact on whatever neighbours the surface leaves, so the kernel's
+//   truncation there does not bias the curvature. (The curvature of c's level set from c's own
+//   Hessian at the particle was tried first: the lattice's ripple in c biases it by about 1 / s,
+//   ten times the curvature of a drop of 20 spacings.)
+// The force then acts on the velocity in the confinement pass, on the step's final positions, so
+// the next step's prediction carries it, as gravity's.
 #pragma once
 
 #include "HostDevice.h"
+#include "Math.h"
+#include "Vec3.h"
 
 namespace pbf
 {
 
-// C(r) = 32 / (pi h^3) c(q) with q = r / h: Akinci's spline, dimensionless,
-//   c(q) = (1 - q)^3 q^3                     for 1/2 < q <= 1,
-//   c(q) = 2 (1 - q)^3 q^3 - 1/64            for 0 < q <= 1/2.
+// A particle is on the surface where |grad c| h exceeds this (1.06 on a flat surface of the
+// lattice at h = 2 s, 0 a layer below); its force is faded in linearly up to twice it.
+constexpr double kSurfaceGate = 0.1;
+
+// grad c's share of neighbour j at r = p_i - p_j, d = h^2 - r^2: poly6's gradient -6 K d^2 r
+// times V_j (scale = 6 K V_j).
 template <class Real>
-PBF_HD PBF_INLINE Real cohesionSpline(Real q)
+PBF_HD PBF_INLINE Vec3<Real> colourGradientTerm(const Vec3<Real>& r, Real d, Real scale)
 {
-  const Real a = (Real(1) - q) * q;
-  const Real a3 = a * a * a;
-  return q > Real(0.5) ? a3 : Real(2) * a3 - Real(1) / Real(64);
+  return r * (-scale * d * d);
 }
 
-// Phi(r) h^2 pi / 32 = integral from q to 1 of c, in closed form (host only, for the
-// calibration): with F(v) = v^4/4 - 3 v^5/5 + v^6/2 - v^7/7 the antiderivative of (1 - v)^3 v^3.
-double cohesionPotential(double q);
+// The surface's divergence of n around particle i, summed over the neighbours on the surface.
+template <class Real>
+struct SurfaceDivergence
+{
+  Vec3<Real> n;    // n_i
+  Vec3<Real> t[2]; // the tangent plane's axes
+  Real G[4] = { Real(0), Real(0), Real(0), Real(0) }; // row-major 2 x 2
+  Real M[4] = { Real(0), Real(0), Real(0), Real(0) };
+
+  // From n_i (unit): t_1 along the axis least aligned with n, t_2 = n x t_1.
+  PBF_HD PBF_INLINE explicit SurfaceDivergence(const Vec3<Real>& normal) : n(normal)
+  {
+    const Real ax = n.x < Real(0) ? -n.x : n.x;
+    const Real ay = n.y < Real(0) ? -n.y : n.y;
+    const Real az = n.z < Real(0) ? -n.z : n.z;
+    const Vec3<Real> e = ax <= ay && ax <= az ? Vec3<Real>{ Real(1), Real(0), Real(0) }
+      : (ay <= az ? Vec3<Real>{ Real(0), Real(1), Real(0) } : Vec3<Real>{ Real(0), Real(0), Real(1) });
+    const Vec3<Real> a = e - n * dot(e, n);
+    t[0] = a * (Real(1) / squareRoot(dot(a, a)));
+    t[1] = cross(n, t[0]);
+  }
+
+  // Neighbour j on the surface with normal nj, at r = p_i - p_j, of volume V_j and with
+  // gradient grad W_ij.
+  PBF_HD PBF_INLINE void add(const Vec3<Real>& nj, const Vec3<Real>& r, const Vec3<Real>& gradW,
+    Real volume)
+  {
+    const Vec3<Real> dn = nj - n;
+    const Real b[2] = { dot(t[0], gradW) * volume, dot(t[1], gradW) * volume };
+    const Real x[2] = { -dot(t[0], r), -dot(t[1], r) };
+    const Real e[2] = { dot(t[0], dn), dot(t[1], dn) };
+    for (int a = 0; a < 2; ++a)
+    {
+      for (int c = 0; c < 2; ++c)
+      {
+        G[2 * a + c] += e[a] * b[c];
+        M[2 * a + c] += x[a] * b[c];
+      }
+    }
+  }
+
+  // tr(G M^-1), bounded by 2 / h (the most a kernel of support h resolves: a drop of a few
+  // particles would otherwise fling them); 0 where M is near singular (fewer than two
+  // independent neighbours on the surface).
+  PBF_HD PBF_INLINE Real divergence(Real h) const
+  {
+    const Real det = M[0] * M[3] - M[1] * M[2];
+    const Real scale = M[0] * M[0] + M[1] * M[1] + M[2] * M[2] + M[3] * M[3];
+    if (!(det * det > Real(1e-4) * scale * scale))
+    {
+      return Real(0);
+    }
+    // M^-1 = [M3 -M1; -M2 M0] / det; tr(G M^-1) = (G0 M3 - G1 M2 - G2 M1 + G3 M0) / det.
+    Real div = (G[0] * M[3] - G[1] * M[2] - G[2] * M[1] + G[3] * M[0]) / det;
+    const Real most = Real(2) / h;
+    return div > most ? most : (div < -most ? -most : div);
+  }
+};
+
+// How much of the force particle i feels, from |grad c_i| h: 0 below kSurfaceGate, 1 above twice
+// it, linear between.
+template <class Real>
+PBF_HD PBF_INLINE Real surfaceWeight(Real gradientTimesH)
+{
+  const Real gate = Real(kSurfaceGate);
+  if (!(gradientTimesH > gate))
+  {
+    return Real(0);
+  }
+  return gradientTimesH < Real(2) * gate ? (gradientTimesH - gate) / gate : Real(1);
+}
 
 } // namespace pbf
