@@ -671,7 +671,7 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   Vec3<Real> colour{ Real(0), Real(0), Real(0) };
   const Real friction = Friction ? Real(-2) * f.c.wallFriction : Real(0);
   WallMirrors<Real> mirrors{ { 1, 1, 1 }, { { Real(0), Real(0) }, { Real(0), Real(0) }, { Real(0), Real(0) } } };
-  if (Friction && friction != Real(0))
+  if ((Friction && friction != Real(0)) || f.colour)
   {
     mirrors = nearWalls(pi, f.c);
   }
@@ -691,7 +691,16 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
         colour += colourGradientTerm(r, f.c.kernels.h2 - r2, f.c.colourScale * volume);
       }
     }
-    if (Friction && images && r2 < f.c.kernels.h2)
+    if (f.colour && images && r2 < f.c.kernels.h2)
+    {
+      // The walls' images continue the colour as they continue the density: a wall is no
+      // surface, and the surface meets it at a right angle (no adhesion).
+      const Real scale = f.c.colourScale * volumeOf(j, f);
+      forEachReflectionWithin(mirrors, pi, pj, f.c.kernels.h2, [&](const Vec3<Real>& ri, Real ri2) {
+        colour += colourGradientTerm(ri, f.c.kernels.h2 - ri2, scale);
+      });
+    }
+    if (Friction && friction != Real(0) && images && r2 < f.c.kernels.h2)
     {
       // An image is never closer than its neighbour (both on the fluid's side of the wall).
       const Vec3<Real> vj = f.v[j];

@@ -32,17 +32,34 @@ double interiorPressure(const Snapshot<double>& state, double within)
 }
 } // namespace
 
-Scene dropletScene(double radius, double aspect)
+Scene dropletScene(double radius)
 {
   Scene scene;
   scene.name = "droplet";
-  const double half = 2 * radius;
-  scene.domain = { { -half, -half, -half }, { half, half, half } };
-  // a b^2 = 4/3 pi R^3 with a = aspect b.
-  const double b = std::cbrt(4.0 / 3.0 * kPi * radius * radius * radius / aspect);
-  const double a = aspect * b;
-  scene.boxes.push_back({ { -a / 2, -b / 2, -b / 2 }, { a / 2, b / 2, b / 2 }, {}, 0 });
+  scene.domain = { { 0, 0, 0 }, { 4 * radius, 4 * radius, 4 * radius } };
+  // The region the lattice is cut from (dropletFluid keeps the spheroid's sites).
+  scene.boxes.push_back({ { 0, 0, 0 }, { 4 * radius, 4 * radius, 4 * radius }, {}, 0 });
   return scene;
+}
+
+ParticleBatch dropletFluid(
+  const Scene& scene, const Parameters& parameters, double radius, double elongation)
+{
+  const ParticleBatch lattice = fillScene(scene, withSceneDomain(parameters, scene));
+  const double a = radius * (1 + elongation), b = radius / std::sqrt(1 + elongation);
+  const Vec3d centre{ 2 * radius, 2 * radius, 2 * radius };
+  ParticleBatch batch;
+  for (const Vec3d& x : lattice.position)
+  {
+    const Vec3d d = x - centre;
+    if (d.x * d.x / (a * a) + (d.y * d.y + d.z * d.z) / (b * b) <= 1)
+    {
+      batch.position.push_back(x);
+      batch.velocity.push_back({ 0, 0, 0 });
+      batch.id.push_back(static_cast<std::int64_t>(batch.id.size()));
+    }
+  }
+  return batch;
 }
 
 double rayleighPeriod(double radius, double density, double sigma)
@@ -70,12 +87,12 @@ double deformation(const Snapshot<double>& state)
 }
 
 DropletRun runDroplet(const Parameters& parameters, Backend backend, Precision precision,
-  double radius, double aspect, double until, double sample)
+  double radius, double elongation, double until, double sample)
 {
   Parameters p = parameters;
   p.gravity = { 0, 0, 0 };
-  const Scene scene = dropletScene(radius, aspect);
-  Simulation simulation(scene, p, backend, precision);
+  const Scene scene = dropletScene(radius);
+  Simulation simulation(scene, p, backend, precision, dropletFluid(scene, p, radius, elongation));
   DropletRun run;
   run.theory = rayleighPeriod(radius, p.restDensity, p.surfaceTension);
   const int samples = static_cast<int>(std::lround(until / sample));

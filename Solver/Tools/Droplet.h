@@ -1,7 +1,9 @@
 // A droplet without gravity, the check of surface tension (Documentation/Validation.md, "Surface
-// tension"): a block of liquid, longer along x than across, pulls itself into a sphere and
+// tension"): a spheroid of liquid, longer along x than across, pulls itself towards a sphere and
 // oscillates about it in Rayleigh's l = 2 mode, whose period for a sphere of radius R is
-// T = 2 pi sqrt(rho R^3 / (8 sigma)) (Rayleigh 1879; Lamb, Hydrodynamics, section 275).
+// T = 2 pi sqrt(rho R^3 / (8 sigma)) (Rayleigh 1879; Lamb, Hydrodynamics, section 275). A
+// spheroid starts that mode alone; a block (the issue's cube) starts l = 4 and more as well, and
+// the crossings of its deformation wander by a quarter of a period between runs.
 #pragma once
 
 #include "Simulation.h"
@@ -11,9 +13,13 @@
 namespace pbf::validation
 {
 
-// The drop's block: `aspect` times as long along x as across, of the volume of a sphere of
-// `radius`, at the centre of a cube 4 radii wide; no gravity.
-Scene dropletScene(double radius, double aspect);
+// The domain, a cube 4 radii wide with the drop at its centre (2 R, 2 R, 2 R), away from the
+// origin; no gravity.
+Scene dropletScene(double radius);
+// The lattice's sites inside the spheroid x^2 / a^2 + (y^2 + z^2) / b^2 <= 1 about the centre,
+// a = R (1 + elongation), b = R / sqrt(1 + elongation): the volume of the sphere of radius R.
+ParticleBatch dropletFluid(
+  const Scene& scene, const Parameters& parameters, double radius, double elongation);
 
 // Rayleigh's l = 2 period [s] of a drop of this radius, rest density and surface tension.
 double rayleighPeriod(double radius, double density, double sigma);
@@ -22,7 +28,7 @@ double rayleighPeriod(double radius, double density, double sigma);
 // particles [m^2] (c their centre): positive while the drop is long along x.
 double deformation(const Snapshot<double>& state);
 
-// A run of dropletScene to `until`, sampling the deformation every `sample` seconds, and the
+// A run of dropletFluid to `until`, sampling the deformation every `sample` seconds, and the
 // period measured from it: twice the mean time between the deformation's crossings of its mean
 // over the run's second half, from the first crossing on.
 struct DropletRun
@@ -38,6 +44,6 @@ struct DropletRun
   double pressure = 0, laplace = 0;
 };
 DropletRun runDroplet(const Parameters& parameters, Backend backend, Precision precision,
-  double radius, double aspect, double until, double sample);
+  double radius, double elongation, double until, double sample);
 
 } // namespace pbf::validation

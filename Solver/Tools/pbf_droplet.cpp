@@ -1,5 +1,5 @@
-// pbf_droplet: a drop without gravity (Droplet.h) at one or more spacings: a block of liquid
-// --aspect times as long as it is wide, of a sphere's volume of --radius, pulls itself round
+// pbf_droplet: a drop without gravity (Droplet.h) at one or more spacings: a spheroid of liquid
+// --elongation longer than the sphere of --radius along x, of its volume, pulls itself round
 // under --surface-tension and oscillates; the l = 2 period measured from its deformation against
 // Rayleigh's. --series 1 prints the deformation every --sample seconds as well.
 // Documentation/Validation.md has the figures.
@@ -19,7 +19,7 @@ int main(int argc, char** argv)
   const std::map<std::string, std::string> keys = {
     { "spacings", "comma-separated particle spacings [m] (default 0.01)" },
     { "radius", "the drop's radius [m] (default 0.1)" },
-    { "aspect", "the block's length over its width (default 1.5)" },
+    { "elongation", "the spheroid's long semi-axis over the radius, less 1 (default 0.15)" },
     { "until", "simulated time [s] (default 2.5 Rayleigh periods)" },
     { "sample", "sampling interval [s] (default a 40th of Rayleigh's period)" },
     { "series", "1: print the deformation's samples (default 0)" },
@@ -33,7 +33,7 @@ int main(int argc, char** argv)
     }
     const std::vector<double> spacings = toolReals(options, "spacings", 0.01);
     const double radius = toolReal(options, "radius", 0.1);
-    const double aspect = toolReal(options, "aspect", 1.5);
+    const double elongation = toolReal(options, "elongation", 0.15);
     const double theory = rayleighPeriod(
       radius, options.parameters.restDensity, options.parameters.surfaceTension);
     const double until = toolReal(options, "until", 2.5 * theory);
@@ -47,7 +47,7 @@ int main(int argc, char** argv)
       p.particleSpacing = s;
       const auto start = std::chrono::steady_clock::now();
       const DropletRun run =
-        runDroplet(p, options.backend, options.precision, radius, aspect, until, sample);
+        runDroplet(p, options.backend, options.precision, radius, elongation, until, sample);
       const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       if (series)

@@ -1,0 +1,197 @@
+// Surface tension (Parameters::surfaceTension, Solver/Physics/SurfaceTension.h): bad values are
+// named, a drop at rest is pulled in by about 2 sigma / R over its surface while a flat surface
+// feels nothing, and every CPU backend agrees. The drop's oscillation against Rayleigh's period
+// is in Testing/Validation (Droplet.*).
+#include "Backends.h"
+#include "Distributed/SubdomainStepper.h"
+#include "Distributed/ThreadCluster.h"
+#include "TestScenes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+using namespace pbf;
+
+namespace
+{
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::string errorOf(const Parameters& p)
+{
+  try
+  {
+    p.validate();
+  }
+  catch (const InvalidInput& e)
+  {
+    return e.what();
+  }
+  return "";
+}
+
+// A sphere of `radius` on the lattice of spacing s at the centre (2 R, 2 R, 2 R) of a cube 4 R
+// wide (away from the origin, where a relative error has no scale), without gravity, s_corr,
+// viscosity or vorticity: what moves it in its first step is the surface force alone.
+struct Drop
+{
+  Scene scene;
+  Parameters parameters;
+  ParticleBatch fluid;
+};
+Drop dropAtRest(double radius, double s, double sigma)
+{
+  Drop d;
+  d.scene.domain = { { 0, 0, 0 }, { 4 * radius, 4 * radius, 4 * radius } };
+  d.scene.spheres.push_back({ { 2 * radius, 2 * radius, 2 * radius }, radius, {}, 0 });
+  d.parameters = withSceneDomain(Parameters(), d.scene);
+  d.parameters.particleSpacing = s;
+  d.parameters.gravity = { 0, 0, 0 };
+  d.parameters.surfaceTension = sigma;
+  d.parameters.sCorrK = 0;
+  d.parameters.xsphViscosity = 0;
+  d.parameters.xsphHyperViscosity = 0;
+  d.parameters.vorticityEpsilon = 0;
+  d.parameters.timeStepping = TimeStepping::Fixed;
+  d.parameters.timeStep = 1e-3;
+  d.fluid = fillScene(d.scene, d.parameters);
+  return d;
+}
+
+} // namespace
+
+TEST(SurfaceTension, BadValuesAreNamed)
+{
+  Parameters p;
+  p.surfaceTension = -1;
+  EXPECT_NE(errorOf(p).find("surfaceTension = -1"), std::string::npos) << errorOf(p);
+  p.surfaceTension = 0.072;
+  Liquid water, oil;
+  water.name = "water";
+  oil.name = "oil";
+  oil.restDensity = 800;
+  oil.surfaceTension = -0.5;
+  p.liquids = { water, oil };
+  EXPECT_NE(errorOf(p).find("liquids[1].surfaceTension = -0.5"), std::string::npos) << errorOf(p);
+  EXPECT_NE(errorOf(p).find("\"oil\""), std::string::npos) << errorOf(p);
+  // A liquid without its own takes the parameter's.
+  p.liquids[1].surfaceTension = 0.03;
+  EXPECT_EQ(errorOf(p), "");
+  EXPECT_EQ(p.liquidSurfaceTension(0), 0.072);
+  EXPECT_EQ(p.liquidSurfaceTension(1), 0.03);
+  EXPECT_EQ(p.largestSurfaceTension(), 0.072);
+  const std::string scene = R"({ "name": "x", "domain": { "min": [0, 0, 0], "max": [1, 1, 1] },
+    "liquids": [ { "name": "water", "restDensity": 1000, "surfaceTension": -2 } ],
+    "fluid": [ { "type": "box", "min": [0, 0, 0], "max": [0.2, 0.2, 0.2] } ] })";
+  try
+  {
+    parseScene(scene);
+    ADD_FAILURE() << "a negative surface tension parsed";
+  }
+  catch (const InvalidInput& e)
+  {
+    EXPECT_NE(std::string(e.what()).find(".liquids[0].surfaceTension = -2"), std::string::npos)
+      << e.what();
+  }
+}
+
+// A drop of 10 spacings at rest: in its first step each particle's velocity is dt times its
+// surface acceleration, whose inward pull summed over the drop, sum m a . (-x / |x|), is the
+// Laplace pressure over the surface, 2 sigma / R 4 pi R^2. The lattice's sphere is ragged on the
+// scale of a spacing and its outer layers lie inside R, where the curvature is larger: measured
+// +25.5 %. A sign error or a lost calibration (without the colour share it is about half)
+// fails the 35 % bound.
+TEST(SurfaceTension, ADropAtRestIsPulledInByTheLaplacePressure)
+{
+  const double radius = 0.1, s = 0.01, sigma = 2.0;
+  const Drop d = dropAtRest(radius, s, sigma);
+  auto stepper = makeStepper(Backend::OpenMP, Precision::Double, d.parameters, d.fluid);
+  stepper->step();
+  Snapshot<double> out;
+  stepper->read(out);
+  const double m = calibratedParticleMass(d.parameters);
+  double inward = 0;
+  const Vec3d centre{ 2 * radius, 2 * radius, 2 * radius };
+  for (std::size_t i = 0; i < out.position.size(); ++i)
+  {
+    const Vec3d x = out.position[i] - centre;
+    if (length(x) > s / 2) // the centre's particle has no direction (and feels nothing)
+    {
+      inward -= m * dot(out.velocity[i], x) / (length(x) * d.parameters.timeStep);
+    }
+  }
+  const double laplace = 2 * sigma / radius * 4 * kPi * radius * radius;
+  std::printf("inward pull %.4f N against 2 sigma / R 4 pi R^2 = %.4f N (%+.1f %%), %zu particles\n",
+    inward, laplace, 100 * (inward / laplace - 1), out.position.size());
+  EXPECT_NEAR(inward, laplace, 0.35 * laplace);
+}
+
+// A flat surface feels nothing: fluid filling the bottom of a box without gravity stays at rest
+// in its first step, up to the walls, whose mirror images continue the colour (the surface meets
+// them at a right angle).
+TEST(SurfaceTension, AFlatSurfaceFeelsNothing)
+{
+  Scene scene;
+  scene.domain = { { 0, 0, 0 }, { 0.2, 0.2, 0.2 } };
+  scene.boxes.push_back({ { 0, 0, 0 }, { 0.2, 0.1, 0.2 }, {}, 0 });
+  Parameters p = dropAtRest(0.1, 0.01, 2.0).parameters;
+  p.domain = scene.domain;
+  auto stepper = makeStepper(Backend::OpenMP, Precision::Double, p, fillScene(scene, p));
+  stepper->step();
+  Snapshot<double> out;
+  stepper->read(out);
+  double fastest = 0;
+  for (std::size_t i = 0; i < out.position.size(); ++i)
+  {
+    fastest = std::max(fastest, length(out.velocity[i]));
+  }
+  // Rounding only (measured 1.4e-14 m/s); a drop's surface of this spacing moves at about
+  // 1e-3 m/s in its first step, and the same fluid without the walls' images in the colour
+  // moved at 0.025 m/s where its surface meets them.
+  EXPECT_LT(fastest, 1e-9) << "the flat surface moved";
+}
+
+// OpenMP is bit-identical to serial and one rank too; two and three ranks are within 1e-9
+// (DistributedTest's bound), which needs each ghost's colour gradient.
+TEST(SurfaceTension, EveryCpuBackendAgrees)
+{
+  Drop d = dropAtRest(0.06, 0.01, std::getenv("PBF_SIGMA0") ? 0.0 : 2.0);
+  d.parameters.sCorrK = 0.1;
+  d.parameters.densityErrorTolerance = 0;
+  d.parameters.solverIterations = 4;
+  auto run = [&](Backend backend) {
+    auto stepper = makeStepper(backend, Precision::Double, d.parameters, d.fluid);
+    for (int s = 0; s < 20; ++s)
+    {
+      stepper->step();
+    }
+    Snapshot<double> out;
+    stepper->read(out);
+    return out;
+  };
+  const Snapshot<double> serial = run(Backend::Serial);
+  test::expectBitIdentical(serial, run(Backend::OpenMP));
+  double moved = 0;
+  for (std::size_t i = 0; i < serial.position.size(); ++i)
+  {
+    moved = std::max(moved, length(serial.velocity[i]));
+  }
+  EXPECT_GT(moved, 1e-4) << "the drop's surface did not move";
+  for (int ranks : { 1, 2, 3 })
+  {
+    std::vector<Snapshot<double>> parts(static_cast<std::size_t>(ranks));
+    distributed::runThreadCluster(ranks, [&](distributed::Communicator& communicator) {
+      distributed::SubdomainStepper<double> stepper(communicator, false, d.parameters, d.fluid);
+      for (int s = 0; s < 20; ++s)
+      {
+        stepper.step();
+      }
+      stepper.read(parts[static_cast<std::size_t>(communicator.rank())]);
+    });
+    EXPECT_LE(test::maxRelativePositionError(test::joined(parts), serial), ranks == 1 ? 0.0 : 1e-9)
+      << ranks << " ranks";
+  }
+}
