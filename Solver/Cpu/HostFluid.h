@@ -55,7 +55,6 @@ struct HostFluid
     f.scratch = scratch.data();
     f.omega = omega.data();
     f.colour = colour.empty() ? nullptr : colour.data();
-    f.curvature = curvature.empty() ? nullptr : curvature.data();
     // XSPH's sum goes where delta p was: the solve is over when it is written.
     f.smoothing = scratch.data();
     f.grid = GridView<Real>{ geometry, cellOffsets.data(), keys.data() };
@@ -158,7 +157,6 @@ struct HostFluid
     scratch.resize(n);
     omega.resize(n);
     colour.resize(coefficients.surfaceTension ? n : 0);
-    curvature.resize(coefficients.surfaceTension ? n : 0);
     density.resize(n);
     lambda.resize(n);
     pressure.resize(n);
@@ -180,7 +178,6 @@ struct HostFluid
   std::vector<Vec3<Real>> x, p, v, scratch, omega;
   // grad c per particle, for surface tension (FluidView::colour); empty without it.
   std::vector<Vec3<Real>> colour;
-  std::vector<Real> curvature; // div n per particle (FluidView::curvature); empty without it
   std::vector<Real> density, lambda, pressure;
   std::vector<std::int64_t> id;
   // Each particle's liquid (Parameters::liquids); empty where the scene names none.
@@ -224,8 +221,7 @@ enum class HostField
   DensityAndLambda, // after the density pass
   Predicted,        // p, after each position correction
   Velocity,         // after the velocity update
-  Vorticity,        // omega and XSPH's sum, before the confinement
-  Curvature         // the surface's curvature (surfaceCurvature), before the confinement
+  Vorticity         // omega and XSPH's sum, before the confinement
 };
 
 } // namespace pbf

@@ -156,11 +156,6 @@ public:
     const FluidView<Real>& f = f_;
     owner_.forEach([&](std::uint32_t i) { pbf::vorticityAndXsph(i, f); });
     owner_.refresh(HostField::Vorticity);
-    if (f.curvature)
-    {
-      owner_.forEach([&](std::uint32_t i) { surfaceCurvature(i, f); });
-      owner_.refresh(HostField::Curvature);
-    }
   }
 
   // The velocity in place: each particle reads only its own.

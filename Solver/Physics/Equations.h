@@ -174,9 +174,6 @@ struct FluidView
   // grad c_i, the colour field's gradient (SurfaceTension.h), written by the vorticity pass and
   // read for the neighbours by the confinement; null without surface tension.
   Vec3<Real>* colour;
-  // div n_i of a particle on the surface (surfaceCurvature), 0 elsewhere; null without surface
-  // tension.
-  Real* curvature;
   Neighbors grid;
   Coefficients<Real> c;
   const StepTime<Real>* time; // this step's dt and what follows from it
@@ -740,39 +737,6 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   }
 }
 
-// div n_i into f.curvature[i] for a particle on the surface (SurfaceTension.h), from its surface
-// neighbours' normals; 0 elsewhere. Between the vorticity pass, which writes every colour
-// gradient, and the confinement, which averages these.
-template <class Real, class Neighbors>
-PBF_HD PBF_INLINE void surfaceCurvature(std::uint32_t i, const FluidView<Real, Neighbors>& f)
-{
-  const Vec3<Real> gi = f.colour[i];
-  const Real gate2 = Real(kSurfaceGate * kSurfaceGate) * f.c.inverseH2;
-  const Real gi2 = dot(gi, gi);
-  if (!(gi2 > gate2))
-  {
-    f.curvature[i] = Real(0);
-    return;
-  }
-  const Vec3<Real> pi = f.p[i];
-  SurfaceDivergence<Real> divergence(gi * (Real(1) / squareRoot(gi2)));
-  forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
-    const Vec3<Real> r = pi - f.p[j];
-    const Real r2 = dot(r, r);
-    if (r2 < f.c.kernels.h2)
-    {
-      const Vec3<Real> gj = f.colour[j];
-      const Real gj2 = dot(gj, gj);
-      if (gj2 > gate2) // the particle itself adds zeros
-      {
-        divergence.add(gj * (Real(1) / squareRoot(gj2)), r, f.c.kernels.spikyGradientWithin(r, r2),
-          volumeOf(j, f));
-      }
-    }
-  });
-  f.curvature[i] = divergence.divergence(f.c.kernels.h);
-}
-
 // The step's new velocity into velocityOut[i]: XSPH, v_i + c S_i (eq. 17), minus c_4 times S
 // smoothed once more, S(S)_i = sum_j V_j (S_j - S_i) W_ij (Parameters::xsphHyperViscosity; a
 // pattern of gain g under S is damped by c g + c_4 g^2, so long waves, g ~ (k h)^2, hardly feel
@@ -802,8 +766,10 @@ PBF_HD PBF_INLINE void vorticityConfinement(
     weight = surfaceWeight(squareRoot(dot(gradC, gradC)) * f.c.kernels.h);
   }
   const bool tension = weight > Real(0);
+  const Vec3<Real> ni = tension ? gradC * (Real(1) / squareRoot(dot(gradC, gradC)))
+                                : Vec3<Real>{ Real(0), Real(0), Real(0) };
+  SurfaceDivergence<Real> divergence(tension ? ni : Vec3<Real>{ Real(0), Real(0), Real(1) });
   const Real gate2 = Real(kSurfaceGate * kSurfaceGate) * f.c.inverseH2;
-  Real curvatureSum = Real(0), curvatureWeight = Real(0);
   Vec3<Real> eta{ Real(0), Real(0), Real(0) };
   Vec3<Real> hyper{ Real(0), Real(0), Real(0) };
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
@@ -820,11 +786,11 @@ PBF_HD PBF_INLINE void vorticityConfinement(
       if (tension)
       {
         const Vec3<Real> gj = f.colour[j];
-        if (dot(gj, gj) > gate2) // j on the surface too
+        const Real gj2 = dot(gj, gj);
+        if (gj2 > gate2) // j on the surface too (the particle itself adds zeros)
         {
-          const Real w = volume * f.c.kernels.poly6Within(r2);
-          curvatureSum += f.curvature[j] * w;
-          curvatureWeight += w;
+          divergence.add(gj * (Real(1) / squareRoot(gj2)), r,
+            f.c.kernels.spikyGradientWithin(r, r2), volume);
         }
       }
     }
@@ -838,8 +804,7 @@ PBF_HD PBF_INLINE void vorticityConfinement(
   if (tension)
   {
     // f = -sigma (div n) grad c, as a velocity change dt f / rho_l.
-    // The surface neighbours' curvatures averaged (Shepard): one particle's is noisy.
-    v -= gradC * (curvatureSum / curvatureWeight * weight *
+    v -= gradC * (divergence.divergence(f.c.kernels.h) * weight *
       (f.liquid ? f.time->tension[f.liquid[i]] : f.time->tension[0]));
   }
   const Real etaLength = length(eta);
