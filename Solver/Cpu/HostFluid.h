@@ -55,6 +55,7 @@ struct HostFluid
     f.scratch = scratch.data();
     f.omega = omega.data();
     f.colour = colour.empty() ? nullptr : colour.data();
+    f.normal = normal.empty() ? nullptr : normal.data();
     // XSPH's sum goes where delta p was: the solve is over when it is written.
     f.smoothing = scratch.data();
     f.grid = GridView<Real>{ geometry, cellOffsets.data(), keys.data() };
@@ -157,6 +158,7 @@ struct HostFluid
     scratch.resize(n);
     omega.resize(n);
     colour.resize(coefficients.surfaceTension ? n : 0);
+    normal.resize(coefficients.surfaceTension ? n : 0);
     density.resize(n);
     lambda.resize(n);
     pressure.resize(n);
@@ -178,6 +180,7 @@ struct HostFluid
   std::vector<Vec3<Real>> x, p, v, scratch, omega;
   // grad c per particle, for surface tension (FluidView::colour); empty without it.
   std::vector<Vec3<Real>> colour;
+  std::vector<Vec3<Real>> normal; // grad c smoothed (FluidView::normal); empty without it
   std::vector<Real> density, lambda, pressure;
   std::vector<std::int64_t> id;
   // Each particle's liquid (Parameters::liquids); empty where the scene names none.
@@ -221,7 +224,8 @@ enum class HostField
   DensityAndLambda, // after the density pass
   Predicted,        // p, after each position correction
   Velocity,         // after the velocity update
-  Vorticity         // omega and XSPH's sum, before the confinement
+  Vorticity,        // omega and XSPH's sum, before the confinement
+  Normal            // grad c smoothed (smoothColour), before the confinement
 };
 
 } // namespace pbf

@@ -156,6 +156,11 @@ public:
     const FluidView<Real>& f = f_;
     owner_.forEach([&](std::uint32_t i) { pbf::vorticityAndXsph(i, f); });
     owner_.refresh(HostField::Vorticity);
+    if (f.normal)
+    {
+      owner_.forEach([&](std::uint32_t i) { smoothColour(i, f); });
+      owner_.refresh(HostField::Normal);
+    }
   }
 
   // The velocity in place: each particle reads only its own.

@@ -272,6 +272,7 @@ void SubdomainStepper<Real>::receiveGhosts()
   fluid_.scratch.resize(n);
   fluid_.omega.resize(n);
   fluid_.colour.resize(fluid_.coefficients.surfaceTension ? n : 0);
+  fluid_.normal.resize(fluid_.coefficients.surfaceTension ? n : 0);
   fluid_.keys.resize(n);
   tag_.resize(n);
   for (std::size_t i = 0; i < n; ++i)
@@ -452,6 +453,7 @@ void SubdomainStepper<Real>::predict()
   fluid_.scratch.resize(fluid_.x.size());
   fluid_.omega.resize(fluid_.x.size());
   fluid_.colour.resize(fluid_.coefficients.surfaceTension ? fluid_.x.size() : 0);
+  fluid_.normal.resize(fluid_.coefficients.surfaceTension ? fluid_.x.size() : 0);
   fluid_.keys.resize(fluid_.x.size());
   const FluidView<Real> f = fluid_.view();
   forOwned([&](std::uint32_t i) { predictPosition(i, f); });
@@ -498,6 +500,9 @@ void SubdomainStepper<Real>::refresh(HostField field)
         // grad c, whose normals the confinement's surface tension reads (SurfaceTension.h).
         refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.colour[i]; });
       }
+      break;
+    case HostField::Normal:
+      refreshGhosts([&](std::uint32_t i) -> Vec3<Real>& { return fluid_.normal[i]; });
       break;
   }
 }

@@ -174,6 +174,9 @@ struct FluidView
   // grad c_i, the colour field's gradient (SurfaceTension.h), written by the vorticity pass and
   // read for the neighbours by the confinement; null without surface tension.
   Vec3<Real>* colour;
+  // grad c averaged over the neighbours (smoothColour), whose directions the curvature is taken
+  // from; null without surface tension.
+  Vec3<Real>* normal;
   Neighbors grid;
   Coefficients<Real> c;
   const StepTime<Real>* time; // this step's dt and what follows from it
@@ -737,6 +740,28 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   }
 }
 
+// grad c averaged over particle i's neighbours (Shepard's weights V_j W_ij) into f.normal[i]:
+// the directions the curvature is taken from, smoothed over twice the kernel's support, so that
+// a surface rough on the particles' scale does not read as curved (SurfaceTension.h).
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE void smoothColour(std::uint32_t i, const FluidView<Real, Neighbors>& f)
+{
+  const Vec3<Real> pi = f.p[i];
+  Vec3<Real> sum{ Real(0), Real(0), Real(0) };
+  Real weight = Real(0);
+  forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
+    const Vec3<Real> r = pi - f.p[j];
+    const Real r2 = dot(r, r);
+    if (r2 < f.c.kernels.h2)
+    {
+      const Real w = volumeOf(j, f) * f.c.kernels.poly6Within(r2);
+      sum += f.colour[j] * w;
+      weight += w;
+    }
+  });
+  f.normal[i] = sum * (Real(1) / weight);
+}
+
 // The step's new velocity into velocityOut[i]: XSPH, v_i + c S_i (eq. 17), minus c_4 times S
 // smoothed once more, S(S)_i = sum_j V_j (S_j - S_i) W_ij (Parameters::xsphHyperViscosity; a
 // pattern of gain g under S is damped by c g + c_4 g^2, so long waves, g ~ (k h)^2, hardly feel
@@ -766,8 +791,8 @@ PBF_HD PBF_INLINE void vorticityConfinement(
     weight = surfaceWeight(squareRoot(dot(gradC, gradC)) * f.c.kernels.h);
   }
   const bool tension = weight > Real(0);
-  const Vec3<Real> ni = tension ? gradC * (Real(1) / squareRoot(dot(gradC, gradC)))
-                                : Vec3<Real>{ Real(0), Real(0), Real(0) };
+  const Vec3<Real> smooth = tension ? f.normal[i] : Vec3<Real>{ Real(0), Real(0), Real(1) };
+  const Vec3<Real> ni = smooth * (Real(1) / squareRoot(dot(smooth, smooth)));
   SurfaceDivergence<Real> divergence(tension ? ni : Vec3<Real>{ Real(0), Real(0), Real(1) });
   const Real gate2 = Real(kSurfaceGate * kSurfaceGate) * f.c.inverseH2;
   Vec3<Real> eta{ Real(0), Real(0), Real(0) };
@@ -786,10 +811,10 @@ PBF_HD PBF_INLINE void vorticityConfinement(
       if (tension)
       {
         const Vec3<Real> gj = f.colour[j];
-        const Real gj2 = dot(gj, gj);
-        if (gj2 > gate2) // j on the surface too (the particle itself adds zeros)
+        if (dot(gj, gj) > gate2) // j on the surface too (the particle itself adds zeros)
         {
-          divergence.add(gj * (Real(1) / squareRoot(gj2)), r,
+          const Vec3<Real> nj = f.normal[j];
+          divergence.add(nj * (Real(1) / squareRoot(dot(nj, nj))), r,
             f.c.kernels.spikyGradientWithin(r, r2), volume);
         }
       }
