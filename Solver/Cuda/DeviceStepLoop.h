@@ -178,7 +178,7 @@ public:
   {
     const FluidView<Real, MaskedNeighbors<Real>> f = afterView();
     Vec3<Real>* const velocity = f.scratch;
-    detail::withConfinementPass(k_.c, [&](auto pass) {
+    detail::withPass<detail::ConfinementPass>(k_.c.xsphHyper, [&](auto pass) {
       detail::confinementPass(exec_, n_, detail::AllParticles{}, f, velocity, pass);
     });
   }

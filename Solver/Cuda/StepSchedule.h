@@ -422,34 +422,27 @@ struct VorticityPass
   template <class Real, class Neighbors>
   PBF_HD PBF_INLINE void operator()(std::uint32_t i, const FluidView<Real, Neighbors>& f) const
   {
-    vorticityAndXsph<Real, Neighbors, Friction>(i, f);
+    vorticityAndXsph<Real, Neighbors, Friction, false>(i, f);
   }
 };
 
-// The confinement pass (XSPH, its bi-Laplacian, eq. 16, surface tension) into velocity[i]; with
-// SmoothTwice false the bi-Laplacian is compiled out, with Tension false the surface tension.
-template <bool SmoothTwice, bool Tension>
+// The confinement pass (XSPH, its bi-Laplacian, eq. 16) into velocity[i]; with SmoothTwice false
+// the bi-Laplacian is compiled out. Surface tension is compiled out of this pass and of the
+// vorticity pass: the GPU steppers refuse it for now (Backends.cpp), as they keep no colour
+// gradients.
+template <bool SmoothTwice>
 struct ConfinementPass
 {
 };
 
-template <class Real, class Exec, class Particles, bool SmoothTwice, bool Tension>
+template <class Real, class Exec, class Particles, bool SmoothTwice>
 void confinementPass(Exec& exec, std::uint32_t n, Particles particles,
-  const FluidView<Real, MaskedNeighbors<Real>>& f, Vec3<Real>* velocity,
-  ConfinementPass<SmoothTwice, Tension>)
+  const FluidView<Real, MaskedNeighbors<Real>>& f, Vec3<Real>* velocity, ConfinementPass<SmoothTwice>)
 {
   exec.forEach(ConfinementStage{}, n, [=] PBF_HD(std::uint32_t k) {
-    vorticityConfinement<Real, MaskedNeighbors<Real>, SmoothTwice, Tension>(
-      particles(k), f, velocity);
+    vorticityConfinement<Real, MaskedNeighbors<Real>, SmoothTwice, false>(particles(k), f, velocity);
   });
 }
-
-// A bool as a type, for withPass.
-template <bool On>
-struct BoolTag
-{
-  static constexpr bool value = On;
-};
 
 // run(Pass<true>{}) when `on`, else run(Pass<false>{}): a pass whose optional terms are compiled
 // out when unused (VorticityPass: wall friction; ConfinementPass: the bi-Laplacian), because
@@ -465,18 +458,6 @@ void withPass(bool on, Run&& run)
   {
     run(Pass<false>{});
   }
-}
-
-// run(ConfinementPass<...>{}) with the bi-Laplacian and surface tension compiled in only where the
-// coefficients use them (withPass's reason, for two terms).
-template <class Real, class Run>
-void withConfinementPass(const Coefficients<Real>& c, Run&& run)
-{
-  withPass<BoolTag>(c.xsphHyper, [&](auto hyper) {
-    withPass<BoolTag>(c.surfaceTension, [&](auto tension) {
-      run(ConfinementPass<decltype(hyper)::value, decltype(tension)::value>{});
-    });
-  });
 }
 
 // Lines 10-19 and, in the last iteration, 21: delta p_i (eq. 14) into f.scratch, then the Jacobi

@@ -355,7 +355,7 @@ template <class Real, class Exec>
 void confine(Exec& exec, std::uint32_t n, const std::uint32_t* list,
   const FluidView<Real, MaskedNeighbors<Real>>& f)
 {
-  detail::withConfinementPass(f.c, [&](auto pass) {
+  detail::withPass<detail::ConfinementPass>(f.c.xsphHyper, [&](auto pass) {
     detail::confinementPass(exec, n, detail::ListedParticles{ list }, f, f.v, pass);
   });
 }

@@ -664,17 +664,18 @@ PBF_HD PBF_INLINE Vec3<Real> wallFrictionImage(
 // one neighbour walk, so the GPU stages its neighbour rows once. Friction = false compiles them
 // out: the GPU launches that pass when the friction is 0, as the images' code made the kernel
 // slower even where they were not visited (3 % a step in double at 1M particles on the H200).
-template <class Real, class Neighbors, bool Friction = true>
+template <class Real, class Neighbors, bool Friction = true, bool Colour = true>
 PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
   const Vec3<Real> pi = f.p[i];
   const Vec3<Real> vi = f.v[i];
   Vec3<Real> omega{ Real(0), Real(0), Real(0) };
   Vec3<Real> smoothing{ Real(0), Real(0), Real(0) };
-  Vec3<Real> colour{ Real(0), Real(0), Real(0) };
+  Vec3<Real> gradC{ Real(0), Real(0), Real(0) };
   const Real friction = Friction ? Real(-2) * f.c.wallFriction : Real(0);
   WallMirrors<Real> mirrors{ { 1, 1, 1 }, { { Real(0), Real(0) }, { Real(0), Real(0) }, { Real(0), Real(0) } } };
-  if ((Friction && friction != Real(0)) || f.colour)
+  const bool colour = Colour && f.colour;
+  if ((Friction && friction != Real(0)) || colour)
   {
     mirrors = nearWalls(pi, f.c);
   }
@@ -689,18 +690,18 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
       const Vec3<Real> vij = f.v[j] - vi;
       omega += cross(f.c.kernels.spikyGradientWithin(r, r2), vij) * volume;
       smoothing += vij * (volume * f.c.kernels.poly6Within(r2));
-      if (f.colour)
+      if (colour)
       {
-        colour += colourGradientTerm(r, f.c.kernels.h2 - r2, f.c.colourScale * volume);
+        gradC += colourGradientTerm(r, f.c.kernels.h2 - r2, f.c.colourScale * volume);
       }
     }
-    if (f.colour && images && r2 < f.c.kernels.h2)
+    if (colour && images && r2 < f.c.kernels.h2)
     {
       // The walls' images continue the colour as they continue the density: a wall is no
       // surface, and the surface meets it at a right angle (no adhesion).
       const Real scale = f.c.colourScale * volumeOf(j, f);
       forEachReflectionWithin(mirrors, pi, pj, f.c.kernels.h2, [&](const Vec3<Real>& ri, Real ri2) {
-        colour += colourGradientTerm(ri, f.c.kernels.h2 - ri2, scale);
+        gradC += colourGradientTerm(ri, f.c.kernels.h2 - ri2, scale);
       });
     }
     if (Friction && friction != Real(0) && images && r2 < f.c.kernels.h2)
@@ -734,9 +735,9 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
     f.omegaLength[i] = length(omega);
   }
   f.smoothing[i] = smoothing;
-  if (f.colour)
+  if (colour)
   {
-    f.colour[i] = colour;
+    f.colour[i] = gradC;
   }
 }
 
@@ -771,8 +772,8 @@ PBF_HD PBF_INLINE void smoothColour(std::uint32_t i, const FluidView<Real, Neigh
 // f.omega: each particle reads only its own of those. SmoothTwice = false compiles the
 // bi-Laplacian out: the GPU launches that pass when alpha_4 is 0 (its registers made the double
 // precision pass spill). Then surface tension (SurfaceTension.h): dt times its acceleration,
-// from the colour field's gradient and Hessian summed in the same walk; Tension = false compiles
-// it out, as SmoothTwice does.
+// -sigma (div n) grad c_i / rho, with div n from the surface neighbours' smoothed normals in the
+// same walk; Tension = false compiles it out, as SmoothTwice does.
 template <class Real, class Neighbors, bool SmoothTwice = true, bool Tension = true>
 PBF_HD PBF_INLINE void vorticityConfinement(
   std::uint32_t i, const FluidView<Real, Neighbors>& f, Vec3<Real>* velocityOut)
@@ -792,8 +793,7 @@ PBF_HD PBF_INLINE void vorticityConfinement(
   }
   const bool tension = weight > Real(0);
   const Vec3<Real> smooth = tension ? f.normal[i] : Vec3<Real>{ Real(0), Real(0), Real(1) };
-  const Vec3<Real> ni = smooth * (Real(1) / squareRoot(dot(smooth, smooth)));
-  SurfaceDivergence<Real> divergence(tension ? ni : Vec3<Real>{ Real(0), Real(0), Real(1) });
+  SurfaceDivergence<Real> divergence(smooth * (Real(1) / squareRoot(dot(smooth, smooth))));
   const Real gate2 = Real(kSurfaceGate * kSurfaceGate) * f.c.inverseH2;
   Vec3<Real> eta{ Real(0), Real(0), Real(0) };
   Vec3<Real> hyper{ Real(0), Real(0), Real(0) };

@@ -5,17 +5,27 @@
 // radius R rises by 2 sigma / R whatever the spacing; a flat surface feels nothing, so a tank at
 // rest is as without it, and no pair force holds particles in place.
 //
-// Two neighbour walks, those the step already makes after its projections:
-// - the vorticity pass sums grad c_i (poly6's gradient) into the particle's colour gradient;
-// - the confinement pass takes div n_i from its neighbours' normals, only those on the surface
+// Three neighbour walks, the first and last those the step already makes after its projections:
+// - the vorticity pass sums grad c_i (poly6's gradient; the walls' mirror images count, so a
+//   wall is no surface) into the particle's colour gradient;
+// - smoothColour averages grad c over the neighbours (Shepard): the normals the curvature is
+//   taken from are smoothed over twice the kernel's support;
+// - the confinement pass takes div n_i from its surface neighbours' smoothed normals
 //   (|grad c| h > kSurfaceGate; inside, n is noise), as the divergence in the tangent plane
 //   renormalised on the neighbours found there (Bonet and Lok 1999's corrected gradient): with
 //   t_1, t_2 the plane's axes, G_ab = sum_j V_j t_a.(n_j - n_i) t_b.grad W_ij and
 //   M_ab = sum_j V_j t_a.(p_j - p_i) t_b.grad W_ij, div n = tr(G M^-1). A linear field's
 //   divergence comes out exact on whatever neighbours the surface leaves, so the kernel's
-//   truncation there does not bias the curvature. (The curvature of c's level set from c's own
-//   Hessian at the particle was tried first: the lattice's ripple in c biases it by about 1 / s,
-//   ten times the curvature of a drop of 20 spacings.)
+//   truncation there does not bias the curvature.
+// The particles carry only part of c's drop from 1 to 0 (the rest lies outside the fluid), so
+// the force is divided by that share on the lattice (LatticeCalibration::surfaceColour).
+//
+// What was measured on the way (Documentation/Validation.md, "Surface tension"): the normals of
+// the particles themselves read a surface rough on the particles' scale as curved, an extra
+// pressure of order sigma / s that stiffened the drop's skin (its l = 2 period came out 45 % long
+// at 20 spacings per radius); c's Hessian at the particle reads the lattice's ripple, about 1 / s;
+// and a pairwise cohesion calibrated to sigma froze the drop (its stress grows as sigma / s).
+//
 // The force then acts on the velocity in the confinement pass, on the step's final positions, so
 // the next step's prediction carries it, as gravity's.
 #pragma once
