@@ -1,6 +1,7 @@
 #include "Droplet.h"
 
 #include <cmath>
+#include <limits>
 
 namespace pbf::validation
 {
@@ -8,6 +9,115 @@ namespace pbf::validation
 namespace
 {
 constexpr double kPi = 3.14159265358979323846;
+
+// D(t) = m + e^(-gamma t) (a cos(omega t) + b sin(omega t)) fitted by least squares: for each
+// (omega, gamma) on a grid (omega from 0.2 to 3 times the guess, gamma up to twice it) the model
+// is linear in m, a and b; the best pair is then refined by halving the grid's steps around it.
+// A fit uses every sample, so a crossing that noise adds near the end of a damped oscillation
+// does not shorten the period as counting crossings did (at 15 spacings per radius: -16 % by
+// crossings where the fit reads the same as at the other step). Also counts the crossings of m.
+struct DampedFit
+{
+  double omega = 0, gamma = 0, misfit = 0;
+  int crossings = 0;
+};
+DampedFit fitDampedOscillation(
+  const std::vector<double>& t, const std::vector<double>& d, double guess)
+{
+  // The residual of the linear least squares for one (omega, gamma), by the normal equations.
+  const auto residual = [&](double omega, double gamma, double* offset) {
+    double A[3][3] = {}, r[3] = {};
+    for (std::size_t k = 0; k < t.size(); ++k)
+    {
+      const double e = std::exp(-gamma * t[k]);
+      const double f[3] = { 1.0, e * std::cos(omega * t[k]), e * std::sin(omega * t[k]) };
+      for (int a = 0; a < 3; ++a)
+      {
+        r[a] += f[a] * d[k];
+        for (int b = 0; b < 3; ++b)
+        {
+          A[a][b] += f[a] * f[b];
+        }
+      }
+    }
+    // Cramer's rule on the 3 x 3 system.
+    const auto det3 = [](const double M[3][3]) {
+      return M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1]) -
+        M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0]) +
+        M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0]);
+    };
+    const double D = det3(A);
+    if (!(std::abs(D) > 0))
+    {
+      return std::numeric_limits<double>::infinity();
+    }
+    double x[3];
+    for (int c = 0; c < 3; ++c)
+    {
+      double M[3][3];
+      for (int a = 0; a < 3; ++a)
+      {
+        for (int b = 0; b < 3; ++b)
+        {
+          M[a][b] = b == c ? r[a] : A[a][b];
+        }
+      }
+      x[c] = det3(M) / D;
+    }
+    double sum = 0;
+    for (std::size_t k = 0; k < t.size(); ++k)
+    {
+      const double e = std::exp(-gamma * t[k]);
+      const double model =
+        x[0] + e * (x[1] * std::cos(omega * t[k]) + x[2] * std::sin(omega * t[k]));
+      sum += (model - d[k]) * (model - d[k]);
+    }
+    if (offset)
+    {
+      *offset = x[0];
+    }
+    return sum;
+  };
+  DampedFit best;
+  best.misfit = std::numeric_limits<double>::infinity();
+  double dOmega = 0.01 * guess, dGamma = 0.02 * guess;
+  for (double omega = 0.2 * guess; omega <= 3 * guess; omega += dOmega)
+  {
+    for (double gamma = 0; gamma <= 2 * guess; gamma += dGamma)
+    {
+      const double e = residual(omega, gamma, nullptr);
+      if (e < best.misfit)
+      {
+        best = { omega, gamma, e, 0 };
+      }
+    }
+  }
+  for (int round = 0; round < 12; ++round)
+  {
+    dOmega /= 2;
+    dGamma /= 2;
+    const DampedFit centre = best;
+    for (int a = -2; a <= 2; ++a)
+    {
+      for (int b = -2; b <= 2; ++b)
+      {
+        const double omega = centre.omega + a * dOmega, gamma = std::max(0.0, centre.gamma + b * dGamma);
+        const double e = residual(omega, gamma, nullptr);
+        if (e < best.misfit)
+        {
+          best = { omega, gamma, e, 0 };
+        }
+      }
+    }
+  }
+  double mean = 0;
+  residual(best.omega, best.gamma, &mean);
+  for (std::size_t k = 1; k < d.size(); ++k)
+  {
+    best.crossings += (d[k - 1] > mean) != (d[k] > mean) ? 1 : 0;
+  }
+  return best;
+}
 
 // The mean pressure of the particles within `within` of the particles' centre.
 double interiorPressure(const Snapshot<double>& state, double within)
@@ -111,31 +221,10 @@ DropletRun runDroplet(const Parameters& parameters, Backend backend, Precision p
   }
   run.laplace = 2 * p.surfaceTension / radius;
   run.steps = static_cast<double>(simulation.stepCount());
-  // The mean the drop oscillates about: that of the second half (the sphere of particles is not
-  // exactly round on the lattice's scale).
-  double mean = 0;
-  int counted = 0;
-  for (std::size_t s = run.t.size() / 2; s < run.t.size(); ++s)
-  {
-    mean += run.deformation[s];
-    ++counted;
-  }
-  mean /= counted > 0 ? counted : 1;
-  std::vector<double> crossings;
-  for (std::size_t s = 1; s < run.t.size(); ++s)
-  {
-    const double a = run.deformation[s - 1] - mean, b = run.deformation[s] - mean;
-    if ((a > 0) != (b > 0) && a != b)
-    {
-      crossings.push_back(run.t[s - 1] + (run.t[s] - run.t[s - 1]) * a / (a - b));
-    }
-  }
-  run.crossings = static_cast<int>(crossings.size());
-  if (crossings.size() >= 3)
-  {
-    run.period = 2 * (crossings.back() - crossings.front()) /
-      static_cast<double>(crossings.size() - 1);
-  }
+  const DampedFit fit = fitDampedOscillation(run.t, run.deformation, 2 * kPi / run.theory);
+  run.period = fit.omega > 0 ? 2 * kPi / fit.omega : 0.0;
+  run.damping = fit.gamma;
+  run.crossings = fit.crossings;
   return run;
 }
 

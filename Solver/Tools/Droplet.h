@@ -29,14 +29,15 @@ double rayleighPeriod(double radius, double density, double sigma);
 double deformation(const Snapshot<double>& state);
 
 // A run of dropletFluid to `until`, sampling the deformation every `sample` seconds, and the
-// period measured from it: twice the mean time between the deformation's crossings of its mean
-// over the run's second half, from the first crossing on.
+// period fitted to it: D(t) = m + e^(-gamma t) (a cos(omega t) + b sin(omega t)) by least
+// squares over every sample, T = 2 pi / omega.
 struct DropletRun
 {
   std::size_t particles = 0;
   std::vector<double> t, deformation;
-  double period = 0;  // [s]; 0 where fewer than 3 crossings were found
-  int crossings = 0;
+  double period = 0;  // [s]
+  double damping = 0; // gamma [1/s]
+  int crossings = 0;  // of the fitted mean m
   double theory = 0;  // Rayleigh's period [s]
   double steps = 0;   // solver steps taken
   // The mean pressure of the particles within half a radius of the centre at the end [Pa], and

@@ -1,7 +1,7 @@
 // pbf_droplet: a drop without gravity (Droplet.h) at one or more spacings: a spheroid of liquid
 // --elongation longer than the sphere of --radius along x, of its volume, pulls itself round
-// under --surface-tension and oscillates; the l = 2 period measured from its deformation against
-// Rayleigh's. --series 1 prints the deformation every --sample seconds as well.
+// under --surface-tension and oscillates; the l = 2 period fitted to its deformation (a damped
+// cosine) against Rayleigh's. --series 1 prints the deformation every --sample seconds as well.
 // Documentation/Validation.md has the figures.
 #include "Droplet.h"
 
@@ -40,7 +40,7 @@ int main(int argc, char** argv)
     const double sample = toolReal(options, "sample", theory / 40);
     const bool series = toolInteger(options, "series", 0, 0) != 0;
     std::printf("spacing,particles,sigma_N_m,radius_m,steps,crossings,period_s,rayleigh_s,"
-                "error%%,pressure_Pa,laplace_Pa,seconds\n");
+                "error%%,damping_1_s,pressure_Pa,laplace_Pa,seconds\n");
     for (double s : spacings)
     {
       Parameters p = options.parameters;
@@ -57,9 +57,9 @@ int main(int argc, char** argv)
           std::printf("# t=%.4f D=%.4e\n", run.t[i], run.deformation[i]);
         }
       }
-      std::printf("%.4g,%zu,%.4g,%.4g,%.0f,%d,%.4f,%.4f,%+.1f,%.3g,%.3g,%.1f\n", s,
+      std::printf("%.4g,%zu,%.4g,%.4g,%.0f,%d,%.4f,%.4f,%+.1f,%.3f,%.3g,%.3g,%.1f\n", s,
         run.particles, p.surfaceTension, radius, run.steps, run.crossings, run.period, run.theory,
-        100 * (run.period / run.theory - 1), run.pressure, run.laplace, seconds);
+        100 * (run.period / run.theory - 1), run.damping, run.pressure, run.laplace, seconds);
       std::fflush(stdout);
     }
   }
