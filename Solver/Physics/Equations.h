@@ -791,6 +791,12 @@ PBF_HD PBF_INLINE void vorticityConfinement(
     gradC = f.colour[i];
     weight = surfaceWeight(squareRoot(dot(gradC, gradC)) * f.c.kernels.h);
   }
+  // A smoothed normal of zero length (a sheet one particle thin, whose sides' gradients cancel)
+  // has no direction: no force, rather than a NaN.
+  if (Tension && f.colour && !(dot(f.normal[i], f.normal[i]) > Real(0)))
+  {
+    weight = Real(0);
+  }
   const bool tension = weight > Real(0);
   const Vec3<Real> smooth = tension ? f.normal[i] : Vec3<Real>{ Real(0), Real(0), Real(1) };
   SurfaceDivergence<Real> divergence(smooth * (Real(1) / squareRoot(dot(smooth, smooth))));
@@ -814,8 +820,12 @@ PBF_HD PBF_INLINE void vorticityConfinement(
         if (dot(gj, gj) > gate2) // j on the surface too (the particle itself adds zeros)
         {
           const Vec3<Real> nj = f.normal[j];
-          divergence.add(nj * (Real(1) / squareRoot(dot(nj, nj))), r,
-            f.c.kernels.spikyGradientWithin(r, r2), volume);
+          const Real nj2 = dot(nj, nj);
+          if (nj2 > Real(0)) // as particle i's own, above
+          {
+            divergence.add(nj * (Real(1) / squareRoot(nj2)), r,
+              f.c.kernels.spikyGradientWithin(r, r2), volume);
+          }
         }
       }
     }
