@@ -183,16 +183,16 @@ pbf::PlaybackKey vtkPBFSimulationInternals::MakeKey(const vtkPBFSettings& settin
   }
   this->Playback.setRanks(ranks);
   key.ranks = r.Decomposed ? r.Pieces : 1;
-  // HasCuda() first: it fills CudaAbsence. CUDA ranks do not run named liquids yet, and no GPU
-  // runs surface tension yet.
+  // HasCuda() first: it fills CudaAbsence. CUDA ranks do not run named liquids or surface
+  // tension yet (one GPU does).
   const bool cuda = this->HasCuda();
   const bool liquidRanks = this->SceneLiquids && ranks;
-  const bool tension = p.surfaceTension > 0;
+  const bool tensionRanks = p.largestSurfaceTension() > 0 && ranks;
   const pbf::BackendChoice choice = pbf::chooseBackend(settings.Backend,
-    cuda && !liquidRanks && !tension,
+    cuda && !liquidRanks && !tensionRanks,
     liquidRanks ? "the scene names liquids, which CUDA ranks do not run yet"
-                : (tension ? "surface tension runs on the CPU backends only for now"
-                           : this->CudaAbsence),
+                : (tensionRanks ? "the scene has surface tension, which CUDA ranks do not run yet"
+                                : this->CudaAbsence),
     ranks);
   key.backend = choice.backend;
   if (!choice.noCuda.empty() && !this->FallbackReported)

@@ -37,16 +37,16 @@ bool cudaAvailable(std::string* why)
 namespace
 {
 
-// Surface tension runs on the CPU backends for now: the GPU steppers do not keep the colour
-// gradient that its curvature is read from (SurfaceTension.h).
-void refuseSurfaceTensionOnCuda(const Parameters& parameters)
+// Surface tension runs on every backend but CUDA ranks: the decomposed GPU stepper does not
+// refresh its ghosts' colour gradients, which the curvature is read from (SurfaceTension.h).
+void refuseSurfaceTensionOnCudaRanks(const Parameters& parameters)
 {
   const double sigma = parameters.largestSurfaceTension();
   if (sigma > 0)
   {
     throw InvalidInput("surfaceTension = " + std::to_string(sigma) +
-      ": the CUDA backend does not simulate surface tension yet; run the scene on the Serial or "
-      "OpenMP backend (Auto does)");
+      ": CUDA ranks do not simulate surface tension yet; run the scene on one GPU, or on Serial "
+      "or OpenMP ranks (Auto does)");
   }
 }
 
@@ -92,7 +92,6 @@ std::unique_ptr<Stepper> makeStepper(Backend backend, Precision precision,
       {
         throw std::runtime_error("CUDA backend unavailable: " + why);
       }
-      refuseSurfaceTensionOnCuda(parameters);
 #ifdef PBF_WITH_CUDA
       return makeCudaStepper(precision, parameters, initial);
 #endif
@@ -115,7 +114,7 @@ std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backen
     std::string why;
     chooseBackend(BackendRequest::CUDA, cudaAvailable(&why), why, &communicator);
     refuseLiquidsOnCudaRanks(parameters);
-    refuseSurfaceTensionOnCuda(parameters);
+    refuseSurfaceTensionOnCudaRanks(parameters);
 #ifdef PBF_WITH_CUDA
     return cuda::makeCudaSubdomainStepper(communicator, precision, parameters, everything,
       localRank(communicator) % cuda::cudaDeviceCount());
@@ -143,7 +142,7 @@ std::unique_ptr<Stepper> makeSubdomainStepperAuto(Communicator& communicator, Pr
   }
   else if (parameters.largestSurfaceTension() > 0)
   {
-    why = "surface tension runs on the CPU backends only for now";
+    why = "the scene has surface tension, which CUDA ranks do not run yet";
   }
   const BackendChoice choice = chooseBackend(BackendRequest::Auto, cuda, why, &communicator);
   const Backend backend = choice.backend == Backend::CUDA ? Backend::CUDA : cpu;

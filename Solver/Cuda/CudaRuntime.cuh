@@ -86,18 +86,27 @@ struct Launch<CorrectionStage>
 };
 // With wall friction the pass also walks each near-wall neighbour's images, and in double
 // precision spills under 7 blocks (72 registers) but not under 5 (96); without friction 7 is
-// faster.
-template <bool Friction>
-struct Launch<VorticityStage<Friction>>
+// faster. The colour gradient (surface tension) walks the images as friction does, under the
+// same cap.
+template <bool Friction, bool Colour>
+struct Launch<VorticityStage<Friction, Colour>>
 {
   static constexpr bool neighborPass = true;
-  static constexpr int minBlocks = Friction ? 5 : 7;
+  static constexpr int minBlocks = Friction || Colour ? 5 : 7;
 };
 template <>
-struct Launch<ConfinementStage>
+struct Launch<SmoothColourStage>
 {
   static constexpr bool neighborPass = true;
   static constexpr int minBlocks = 7;
+};
+// Surface tension's divergence (SurfaceTension.h) adds a 2x2 moment matrix and a normal to the
+// pass's registers: the cap of the friction's pass.
+template <bool Tension>
+struct Launch<ConfinementStage<Tension>>
+{
+  static constexpr bool neighborPass = true;
+  static constexpr int minBlocks = Tension ? 5 : 7;
 };
 constexpr int kMaxBlock = kMaxOptionsBlock;
 static_assert(kMaxBlock <= kMaskBlock, "forEachNeighbor's shared rows hold kMaskBlock threads");

@@ -1,7 +1,8 @@
 // The particle arrays of a GPU stepper, for both (DeviceStepper, DeviceSubdomainStepper): the
 // per-particle part of StepBuffers (four Vec3 buffers, density, lambda, pressure, id, two key buffers, the
-// neighbour masks), the arrays only one of them needs (stored volumes and |omega| for the single
-// GPU; alternates and index lists for a sub-domain's migration and ghosts), and adaptive mode's
+// neighbour masks), the arrays only one of them needs (stored volumes and |omega|, and with
+// surface tension the colour gradients and normals, for the single GPU; alternates and index
+// lists for a sub-domain's migration and ghosts), and adaptive mode's
 // block sums, in one allocation of `capacity` particles on the Device policy. The allocation is
 // checked against the device's free memory first, so that too many particles is an InvalidInput
 // that says what was needed, not a failed allocation.
@@ -33,6 +34,9 @@ struct ParticleArrays
   // The scene's named liquids (Parameters::liquids): with any, a byte per particle (and one
   // more with the alternates); with several, adaptive mode's block sums per liquid.
   int liquids = 0;
+  // Surface tension (SurfaceTension.h): the colour gradient and its smoothed normal, two Vec3 per
+  // particle, written and read within a step (nothing to keep when the store grows).
+  bool colour = false;
 };
 
 constexpr int kMaxParticleLists = 5;
@@ -55,7 +59,7 @@ public:
   static std::size_t bytesPerParticle(const ParticleArrays& a)
   {
     const std::size_t scalars = 3 + (a.volumes ? 2 : 0) + (a.alternates ? 3 : 0);
-    return 4 * sizeof(Vec3<Real>) + scalars * sizeof(Real) +
+    return (a.colour ? 6 : 4) * sizeof(Vec3<Real>) + scalars * sizeof(Real) +
       (a.alternates ? 2 : 1) * sizeof(std::int64_t) + 2 * sizeof(CellKey) +
       (a.liquids > 0 ? (a.alternates ? 2 : 1) : 0) * sizeof(std::uint8_t) +
       (a.masks ? kNeighborRows * sizeof(std::uint32_t) : 0) + (a.moved ? sizeof(float) : 0) +
@@ -63,6 +67,7 @@ public:
   }
 
   std::size_t capacity() const { return capacity_; }
+  const ParticleArrays& arrays() const { return arrays_; }
   // The allocation and the sort's scratch at this capacity.
   std::size_t bytes() const { return bytes_ + tempBytes_; }
 
@@ -165,12 +170,15 @@ public:
     b.moved = p.moved;
     b.stride = static_cast<std::uint32_t>(capacity_);
     b.blockSums = p.blockSums;
+    b.colour = p.colour;
+    b.normal = p.normal;
     return b;
   }
 
   struct Pointers
   {
     Vec3<Real>* vec[4] = {};
+    Vec3<Real> *colour = nullptr, *normal = nullptr;
     Real *density = nullptr, *lambda = nullptr, *volume = nullptr, *omegaLength = nullptr;
     Real *pressure = nullptr;
     Real *densityAlt = nullptr, *lambdaAlt = nullptr, *pressureAlt = nullptr;
@@ -192,6 +200,7 @@ private:
   struct Layout
   {
     std::size_t vec[4] = {};
+    std::size_t colour = 0, normal = 0;
     std::size_t density = 0, lambda = 0, volume = 0, omegaLength = 0;
     std::size_t pressure = 0, densityAlt = 0, lambdaAlt = 0, pressureAlt = 0, id = 0, idAlt = 0;
     std::size_t liquid = 0, liquidAlt = 0;
@@ -215,6 +224,8 @@ private:
     {
       at = place(capacity * sizeof(Vec3<Real>));
     }
+    l.colour = a.colour ? place(capacity * sizeof(Vec3<Real>)) : 0;
+    l.normal = a.colour ? place(capacity * sizeof(Vec3<Real>)) : 0;
     const std::size_t scalar = capacity * sizeof(Real);
     l.density = place(scalar);
     l.lambda = place(scalar);
@@ -253,6 +264,8 @@ private:
     {
       q.vec[i] = static_cast<Vec3<Real>*>(at(l.vec[i]));
     }
+    q.colour = a.colour ? static_cast<Vec3<Real>*>(at(l.colour)) : nullptr;
+    q.normal = a.colour ? static_cast<Vec3<Real>*>(at(l.normal)) : nullptr;
     q.density = static_cast<Real*>(at(l.density));
     q.lambda = static_cast<Real*>(at(l.lambda));
     q.pressure = static_cast<Real*>(at(l.pressure));

@@ -165,22 +165,42 @@ public:
   // other position buffer, where the confinement then writes the velocity over each particle's
   // own omega (the neighbours read |omega_j| from b.omegaLength): v ends in a buffer of x and v's
   // pair, as Roles expects.
+  // With surface tension the same pass sums the colour gradients, and a pass of their own
+  // smooths them into the normals (the buffers exist only then: StepBuffers::colour).
   void vorticityAndXsph()
   {
     const FluidView<Real, MaskedNeighbors<Real>> f = afterView();
-    detail::withPass<detail::VorticityPass>(k_.c.wallFriction != Real(0), [&](auto pass) {
+    auto run = [&](auto pass) {
       detail::firstPassOnPositions(
         exec_, typename decltype(pass)::Stage{}, b_, k_, n_, f, k_.iterations, false, pass);
-    });
+    };
+    const bool friction = k_.c.wallFriction != Real(0);
+    if (f.colour)
+    {
+      detail::withPass<detail::ColourVorticityPass>(friction, run);
+      detail::smoothColourPass(exec_, n_, f);
+    }
+    else
+    {
+      detail::withPass<detail::PlainVorticityPass>(friction, run);
+    }
   }
 
   void confine()
   {
     const FluidView<Real, MaskedNeighbors<Real>> f = afterView();
     Vec3<Real>* const velocity = f.scratch;
-    detail::withPass<detail::ConfinementPass>(k_.c.xsphHyper, [&](auto pass) {
+    auto run = [&](auto pass) {
       detail::confinementPass(exec_, n_, detail::AllParticles{}, f, velocity, pass);
-    });
+    };
+    if (f.colour)
+    {
+      detail::withPass<detail::TensionConfinementPass>(k_.c.xsphHyper, run);
+    }
+    else
+    {
+      detail::withPass<detail::PlainConfinementPass>(k_.c.xsphHyper, run);
+    }
   }
 
   // Line 23, x_i = x*_i: the corrected positions' buffer becomes x.

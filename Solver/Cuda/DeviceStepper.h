@@ -92,8 +92,6 @@ public:
     return { buffers_.vec[roles_.x], buffers_.vec[roles_.v], buffers_.density, n_ };
   }
 
-  // Bytes per particle of capacity that the per-particle arrays take.
-  static std::size_t particleBytes(bool masks);
 
 private:
   struct Graph
@@ -154,16 +152,6 @@ private:
 };
 
 template <class Real, class Device>
-std::size_t DeviceStepper<Real, Device>::particleBytes(bool masks)
-{
-  ParticleArrays a;
-  a.masks = masks;
-  a.moved = masks;
-  a.volumes = true;
-  return DeviceParticleStore<Real, Device>::bytesPerParticle(a);
-}
-
-template <class Real, class Device>
 DeviceStepper<Real, Device>::DeviceStepper(const Parameters& parameters,
   const ParticleBatch& initial, const Options& options, std::unique_ptr<Device> device)
   : parameters_(parameters)
@@ -182,6 +170,7 @@ DeviceStepper<Real, Device>::DeviceStepper(const Parameters& parameters,
   arrays.moved = arrays.masks;
   arrays.volumes = true;
   arrays.liquids = static_cast<int>(parameters_.liquids.size());
+  arrays.colour = constants_.c.surfaceTension;
   store_ = std::make_unique<DeviceParticleStore<Real, Device>>(
     *device_, arrays, std::size_t(constants_.cellCount) + 1, constants_.keyBits);
   try

@@ -121,7 +121,10 @@ Diagnostics DeviceStepper<Real, Device>::diagnostics() const
   d.device = device_->name();
   d.deviceBytes = store_->bytes() + fixedBytes_;
   d.capacity = store_->capacity();
-  d.bytesPerParticle = static_cast<double>(particleBytes(constants_.schedule.enabled != 0));
+  // Bytes per particle of capacity that the per-particle arrays take (with the liquids' bytes
+  // and surface tension's buffers when the scene has them).
+  d.bytesPerParticle =
+    static_cast<double>(DeviceParticleStore<Real, Device>::bytesPerParticle(store_->arrays()));
   d.steps = steps_;
   unsigned long long builds = 0;
   if (buffers_.maskBuilds)

@@ -161,7 +161,7 @@ public:
     const StepConstants<Real> after = afterConstants();
     const FluidView<Real, MaskedNeighbors<Real>> f = afterView();
     Vec3<Real>* const ghostSmoothing = s_.parameters_.xsphHyperViscosity > 0 ? f.smoothing : nullptr;
-    detail::withPass<detail::VorticityPass>(k_.c.wallFriction != Real(0), [&](auto pass) {
+    detail::withPass<detail::PlainVorticityPass>(k_.c.wallFriction != Real(0), [&](auto pass) {
       twoSided<Vec3<Real>>(
         [&](auto& exec, const StepBuffers<Real>& b, std::uint32_t n, detail::ListedParticles on) {
           detail::firstPassOnPositions(exec, typename decltype(pass)::Stage{}, b, after, n, f,

@@ -72,8 +72,12 @@ struct DensityStage {};
 struct CorrectionStage {};
 // Friction: the pass that also smooths with the walls' images (VorticityPass<true>), a kernel of
 // its own with a launch bound of its own.
-template <bool Friction>
+// Colour: the pass also sums the colour gradient (surface tension), a kernel of its own too.
+template <bool Friction, bool Colour = false>
 struct VorticityStage {};
+// smoothColour: the colour gradients averaged into the normals (surface tension only).
+struct SmoothColourStage {};
+template <bool Tension = false>
 struct ConfinementStage {};
 
 // Adaptive mode (Parameters::densityErrorTolerance > 0), kept on the device: after each density
@@ -132,6 +136,10 @@ struct StepBuffers
   std::uint32_t* cellMoved;       // cellCount entries
   AdaptiveState* adaptive;        // adaptive mode only
   double* blockSums;              // adaptive mode: the reduction's partial sums
+  // Surface tension only (null without): grad c and its smoothed normal (FluidView::colour,
+  // FluidView::normal), written and read after the solve.
+  Vec3<Real>* colour;
+  Vec3<Real>* normal;
 };
 
 template <class Real>
@@ -324,6 +332,8 @@ FluidView<Real, MaskedNeighbors<Real>> afterIterationsView(const StepBuffers<Rea
   f.smoothing = f.scratch;
   f.volume = b.volume;
   f.omegaLength = b.omegaLength;
+  f.colour = b.colour;
+  f.normal = b.normal;
   return f;
 }
 
@@ -413,34 +423,51 @@ struct DensityPass
   }
 };
 
-// With Friction false the walls' friction is compiled out (vorticityAndXsph says why).
-template <bool Friction>
+// With Friction false the walls' friction is compiled out (vorticityAndXsph says why); with
+// Colour false the colour gradient (surface tension), for the same reason.
+template <bool Friction, bool Colour>
 struct VorticityPass
 {
-  using Stage = VorticityStage<Friction>;
+  using Stage = VorticityStage<Friction, Colour>;
 
   template <class Real, class Neighbors>
   PBF_HD PBF_INLINE void operator()(std::uint32_t i, const FluidView<Real, Neighbors>& f) const
   {
-    vorticityAndXsph<Real, Neighbors, Friction, false>(i, f);
+    vorticityAndXsph<Real, Neighbors, Friction, Colour>(i, f);
   }
 };
+template <bool Friction>
+using PlainVorticityPass = VorticityPass<Friction, false>;
+template <bool Friction>
+using ColourVorticityPass = VorticityPass<Friction, true>;
 
-// The confinement pass (XSPH, its bi-Laplacian, eq. 16) into velocity[i]; with SmoothTwice false
-// the bi-Laplacian is compiled out. Surface tension is compiled out of this pass and of the
-// vorticity pass: the GPU steppers refuse it for now (Backends.cpp), as they keep no colour
-// gradients.
-template <bool SmoothTwice>
+// The colour gradients averaged into the normals (Equations.h's smoothColour), after the
+// vorticity pass wrote them and before the confinement reads them.
+template <class Real, class Exec>
+void smoothColourPass(Exec& exec, std::uint32_t n, const FluidView<Real, MaskedNeighbors<Real>>& f)
+{
+  exec.forEach(SmoothColourStage{}, n, [=] PBF_HD(std::uint32_t i) { smoothColour(i, f); });
+}
+
+// The confinement pass (XSPH, its bi-Laplacian, eq. 16, surface tension) into velocity[i]; with
+// SmoothTwice false the bi-Laplacian is compiled out, with Tension false surface tension.
+template <bool SmoothTwice, bool Tension>
 struct ConfinementPass
 {
 };
+template <bool SmoothTwice>
+using PlainConfinementPass = ConfinementPass<SmoothTwice, false>;
+template <bool SmoothTwice>
+using TensionConfinementPass = ConfinementPass<SmoothTwice, true>;
 
-template <class Real, class Exec, class Particles, bool SmoothTwice>
+template <class Real, class Exec, class Particles, bool SmoothTwice, bool Tension>
 void confinementPass(Exec& exec, std::uint32_t n, Particles particles,
-  const FluidView<Real, MaskedNeighbors<Real>>& f, Vec3<Real>* velocity, ConfinementPass<SmoothTwice>)
+  const FluidView<Real, MaskedNeighbors<Real>>& f, Vec3<Real>* velocity,
+  ConfinementPass<SmoothTwice, Tension>)
 {
-  exec.forEach(ConfinementStage{}, n, [=] PBF_HD(std::uint32_t k) {
-    vorticityConfinement<Real, MaskedNeighbors<Real>, SmoothTwice, false>(particles(k), f, velocity);
+  exec.forEach(ConfinementStage<Tension>{}, n, [=] PBF_HD(std::uint32_t k) {
+    vorticityConfinement<Real, MaskedNeighbors<Real>, SmoothTwice, Tension>(
+      particles(k), f, velocity);
   });
 }
 

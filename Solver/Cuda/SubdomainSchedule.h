@@ -355,7 +355,9 @@ template <class Real, class Exec>
 void confine(Exec& exec, std::uint32_t n, const std::uint32_t* list,
   const FluidView<Real, MaskedNeighbors<Real>>& f)
 {
-  detail::withPass<detail::ConfinementPass>(f.c.xsphHyper, [&](auto pass) {
+  // Surface tension is compiled out: CUDA ranks refuse it for now (Backends.cpp), as they keep no
+  // ghosts' colour gradients.
+  detail::withPass<detail::PlainConfinementPass>(f.c.xsphHyper, [&](auto pass) {
     detail::confinementPass(exec, n, detail::ListedParticles{ list }, f, f.v, pass);
   });
 }

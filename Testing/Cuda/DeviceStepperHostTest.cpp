@@ -44,6 +44,7 @@ struct Case
   bool graphs = true;
   double hyper = 0;     // xsphHyperViscosity
   double chebyshev = 0; // chebyshevRho
+  double sigma = 0;     // surfaceTension [N/m]
 };
 
 cuda::Options optionsOf(const Case& c)
@@ -75,6 +76,7 @@ Parameters fixedParameters(const Case& c, const Scene& scene)
   p.densityErrorTolerance = c.tolerance;
   p.xsphHyperViscosity = c.hyper;
   p.chebyshevRho = c.chebyshev;
+  p.surfaceTension = c.sigma;
   return withSceneDomain(p, scene);
 }
 
@@ -349,7 +351,8 @@ namespace
 // With `moving`, the sphere rolls into the column and the box turns, their poses set before each
 // step as Simulation sets them.
 template <class Real>
-std::size_t expectSolidsAsSerial(double wallFriction, bool moving = false, double hyper = 0)
+std::size_t expectSolidsAsSerial(
+  double wallFriction, bool moving = false, double hyper = 0, double sigma = 0)
 {
   Scene scene = test::damBreakWithSolids();
   if (moving)
@@ -362,6 +365,7 @@ std::size_t expectSolidsAsSerial(double wallFriction, bool moving = false, doubl
   Parameters p = fixedParameters({ "dam_break", 4, true, 0.02, false }, scene);
   p.wallFriction = wallFriction;
   p.xsphHyperViscosity = hyper;
+  p.surfaceTension = sigma;
   const std::vector<DistanceGrid> solids = solidFields(scene.solids, p);
   const std::vector<SolidMotion> motions = solidMotions(scene.solids);
   std::size_t removed = 0;
@@ -534,7 +538,8 @@ namespace
 // (the emitter is Simulation's, not the stepper's): the same bits, and in adaptive mode the same
 // projections (the mean each step stops at is the most compressed liquid's on both).
 template <class Real>
-void compareTwoLiquids(bool masks, bool graphs, int iterations, double tolerance, int steps)
+void compareTwoLiquids(bool masks, bool graphs, int iterations, double tolerance, int steps,
+  double oilSurfaceTension = 0)
 {
   const Scene scene = test::twoLiquids();
   Parameters p;
@@ -543,6 +548,12 @@ void compareTwoLiquids(bool masks, bool graphs, int iterations, double tolerance
   p.densityErrorTolerance = tolerance;
   p.timeStep = 1.0 / 120.0;
   p = withSceneDomain(p, scene);
+  if (oilSurfaceTension > 0)
+  {
+    // The water takes the run's, the oil its own: each particle's force is its liquid's.
+    p.surfaceTension = 0.07;
+    p.liquids.at(1).surfaceTension = oilSurfaceTension;
+  }
   const ParticleBatch initial = fillScene(scene, p);
   const Precision precision = sizeof(Real) == 4 ? Precision::Single : Precision::Double;
   auto serial = makeStepper(Backend::Serial, precision, p, initial);
@@ -581,6 +592,24 @@ TEST(StepSchedule, TwoLiquidsReproduceTheSerialBackendBitForBit)
   compareTwoLiquids<double>(false, false, 4, 0, 40);
   compareTwoLiquids<float>(true, true, 8, 0.3, 40);
   compareTwoLiquids<double>(true, false, 8, 0.3, 40);
+}
+
+TEST(StepSchedule, SurfaceTensionReproducesTheSerialBackendBitForBit)
+{
+  // The colour gradient (with the walls' images) in the vorticity pass, its smoothed normals in a
+  // pass of their own, and the curvature's force in the confinement pass, in the buffers that
+  // exist only with surface tension: masks and the cell walk, captured and stage by stage, with
+  // the walls' friction and the bi-Laplacian beside it, and per liquid.
+  Case plain{ "dam_break", 4, true, 0.1, false };
+  plain.sigma = 0.5;
+  compareWithSerial<float>(plain, 40);
+  Case walk{ "double_dam_break", 3, false, 0.1, true, 0, false, 0.05 };
+  walk.sigma = 2.0;
+  compareWithSerial<double>(walk, 40);
+  compareTwoLiquids<float>(true, true, 4, 0, 40, 0.03);
+  compareTwoLiquids<double>(false, false, 4, 0, 40, 0.03);
+  // With the walls' friction the vorticity pass walks the images for both.
+  expectSolidsAsSerial<double>(0.7, true, 0, 0.5);
 }
 
 // Through Simulation: the nozzle's oil grows the device arrays (their liquids kept through the
