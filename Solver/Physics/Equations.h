@@ -39,6 +39,7 @@ struct Coefficients
   Real wallFriction;        // phi of wallFrictionImage: 0 free-slip, 1 no-slip
   bool xsphHyper;           // alpha_4 > 0: the confinement pass reads the neighbours' XSPH sums
   bool surfaceTension;      // a surface tension > 0: the confinement pass adds its force
+  bool wallAdhesion;        // a liquid's contact angle with the walls is not 90 degrees
   Real colourScale;         // 6 K of poly6 W = K (h^2 - r^2)^3 (SurfaceTension.h)
   Real inverseH2;           // 1 / h^2
 
@@ -70,6 +71,7 @@ struct Coefficients
     c.wallFriction = static_cast<Real>(p.wallFriction);
     c.xsphHyper = p.xsphHyperViscosity > 0;
     c.surfaceTension = p.largestSurfaceTension() > 0;
+    c.wallAdhesion = p.wallAdhesion() && p.mirrorWalls;
     c.colourScale = static_cast<Real>(6.0 * k64.poly6Scale);
     c.inverseH2 = static_cast<Real>(1.0 / (h * h));
     return c;
@@ -103,6 +105,9 @@ struct StepTime
   // velocity its force density per unit sigma gives in the step (LatticeCalibration's
   // surfaceColour: the share of the colour's drop that particles carry). Zero without it.
   Real tension[kMaxLiquids];
+  // Adhesion per liquid: cos and sin of its contact angle with the walls (SurfaceTension.h).
+  Real wallCos[kMaxLiquids];
+  Real wallSin[kMaxLiquids];
 
   static StepTime make(const Parameters& p, const LatticeCalibration& lattice, double dt)
   {
@@ -136,6 +141,13 @@ struct StepTime
         l < p.liquidCount()
           ? dt * p.liquidSurfaceTension(l) / (p.liquidRestDensity(l) * lattice.surfaceColour)
           : 0.0);
+    }
+    for (int l = 0; l < kMaxLiquids; ++l)
+    {
+      const double theta =
+        (l < p.liquidCount() ? p.liquidWallContactAngle(l) : 90.0) * (3.14159265358979323846 / 180.0);
+      t.wallCos[l] = static_cast<Real>(std::cos(theta));
+      t.wallSin[l] = static_cast<Real>(std::sin(theta));
     }
     const double c = p.liquidXsphNu(0) * dt / lattice.xsphSecondMoment;
     t.xsph = static_cast<Real>(clamped ? kMaxXsphBlend * (c / (largest + c4)) : c);
@@ -741,6 +753,50 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   }
 }
 
+// Adhesion at the walls (SurfaceTension.h's youngForce) for a surface particle at p with smoothed
+// normal n and colour gradient gradC: the nearest wall within h sets it; zero beyond h.
+template <class Real>
+PBF_HD PBF_INLINE Vec3<Real> wallAdhesion(const Vec3<Real>& p, const Vec3<Real>& n,
+  const Vec3<Real>& gradC, const Coefficients<Real>& c, Real cosTheta)
+{
+  const Real pa[3] = { p.x, p.y, p.z };
+  const Real lo[3] = { c.boxMin.x, c.boxMin.y, c.boxMin.z };
+  const Real hi[3] = { c.boxMax.x, c.boxMax.y, c.boxMax.z };
+  Real nearest = c.kernels.h;
+  Vec3<Real> nw{ Real(0), Real(0), Real(0) };
+#if defined(__CUDACC__)
+#pragma unroll
+#endif
+  for (int a = 0; a < 3; ++a)
+  {
+    const Vec3<Real> unit{ a == 0 ? Real(1) : Real(0), a == 1 ? Real(1) : Real(0),
+      a == 2 ? Real(1) : Real(0) };
+    if (pa[a] - lo[a] < nearest)
+    {
+      nearest = pa[a] - lo[a];
+      nw = unit;
+    }
+    if (hi[a] - pa[a] < nearest)
+    {
+      nearest = hi[a] - pa[a];
+      nw = unit * Real(-1);
+    }
+  }
+  if (!(nearest < c.kernels.h))
+  {
+    return Vec3<Real>{ Real(0), Real(0), Real(0) };
+  }
+  return youngForce(n, nw, gradC, cosTheta, nearest < Real(0) ? Real(0) : nearest, c.kernels.h);
+}
+
+// A direction seen in the walls that made an image (forEachReflection's ix, iy, iz): the
+// components along the axes it was reflected along change sign.
+template <class Real>
+PBF_HD PBF_INLINE Vec3<Real> reflected(const Vec3<Real>& v, int ix, int iy, int iz)
+{
+  return Vec3<Real>{ ix != 0 ? -v.x : v.x, iy != 0 ? -v.y : v.y, iz != 0 ? -v.z : v.z };
+}
+
 // grad c averaged over particle i's neighbours (Shepard's weights V_j W_ij) into f.normal[i]:
 // the directions the curvature is taken from, smoothed over twice the kernel's support, so that
 // a surface rough on the particles' scale does not read as curved (SurfaceTension.h).
@@ -750,14 +806,35 @@ PBF_HD PBF_INLINE void smoothColour(std::uint32_t i, const FluidView<Real, Neigh
   const Vec3<Real> pi = f.p[i];
   Vec3<Real> sum{ Real(0), Real(0), Real(0) };
   Real weight = Real(0);
+  // The walls' images take part with their gradients reflected, as in the colour itself: near a
+  // wall the average is over the whole support, so a surface meeting the wall at a right angle
+  // keeps its normal along the wall.
+  const WallMirrors<Real> mirrors = nearWalls(pi, f.c);
+  const bool images = hasReflections(mirrors);
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
-    const Vec3<Real> r = pi - f.p[j];
+    const Vec3<Real> pj = f.p[j];
+    const Vec3<Real> r = pi - pj;
     const Real r2 = dot(r, r);
     if (r2 < f.c.kernels.h2)
     {
-      const Real w = volumeOf(j, f) * f.c.kernels.poly6Within(r2);
-      sum += f.colour[j] * w;
+      const Real volume = volumeOf(j, f);
+      const Real w = volume * f.c.kernels.poly6Within(r2);
+      const Vec3<Real> gj = f.colour[j];
+      sum += gj * w;
       weight += w;
+      if (images)
+      {
+        forEachReflection(mirrors, pj, [&](const Vec3<Real>& image, int ix, int iy, int iz) {
+          const Vec3<Real> ri = pi - image;
+          const Real ri2 = dot(ri, ri);
+          if (ri2 < f.c.kernels.h2)
+          {
+            const Real wi = volume * f.c.kernels.poly6Within(ri2);
+            sum += reflected(gj, ix, iy, iz) * wi;
+            weight += wi;
+          }
+        });
+      }
     }
   });
   f.normal[i] = sum * (Real(1) / weight);
@@ -801,6 +878,14 @@ PBF_HD PBF_INLINE void vorticityConfinement(
   const Vec3<Real> smooth = tension ? f.normal[i] : Vec3<Real>{ Real(0), Real(0), Real(1) };
   SurfaceDivergence<Real> divergence(smooth * (Real(1) / squareRoot(dot(smooth, smooth))));
   const Real gate2 = Real(kSurfaceGate * kSurfaceGate) * f.c.inverseH2;
+  // The walls' images of the surface neighbours take part with their normals reflected
+  // (smoothColour says why).
+  WallMirrors<Real> mirrors{ { 1, 1, 1 }, { { Real(0), Real(0) }, { Real(0), Real(0) }, { Real(0), Real(0) } } };
+  if (tension)
+  {
+    mirrors = nearWalls(pi, f.c);
+  }
+  const bool images = hasReflections(mirrors);
   Vec3<Real> eta{ Real(0), Real(0), Real(0) };
   Vec3<Real> hyper{ Real(0), Real(0), Real(0) };
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
@@ -823,8 +908,21 @@ PBF_HD PBF_INLINE void vorticityConfinement(
           const Real nj2 = dot(nj, nj);
           if (nj2 > Real(0)) // as particle i's own, above
           {
-            divergence.add(nj * (Real(1) / squareRoot(nj2)), r,
-              f.c.kernels.spikyGradientWithin(r, r2), volume);
+            const Vec3<Real> unit = nj * (Real(1) / squareRoot(nj2));
+            divergence.add(unit, r, f.c.kernels.spikyGradientWithin(r, r2), volume);
+            if (images)
+            {
+              const Vec3<Real> pj = f.p[j];
+              forEachReflection(mirrors, pj, [&](const Vec3<Real>& image, int ix, int iy, int iz) {
+                const Vec3<Real> ri = pi - image;
+                const Real ri2 = dot(ri, ri);
+                if (ri2 < f.c.kernels.h2)
+                {
+                  divergence.add(reflected(unit, ix, iy, iz), ri,
+                    f.c.kernels.spikyGradientWithin(ri, ri2), volume);
+                }
+              });
+            }
           }
         }
       }
@@ -839,8 +937,13 @@ PBF_HD PBF_INLINE void vorticityConfinement(
   if (tension)
   {
     // f = -sigma (div n) grad c, as a velocity change dt f / rho_l.
-    v -= gradC * (divergence.divergence(f.c.kernels.h) * weight *
-      (f.liquid ? f.time->tension[f.liquid[i]] : f.time->tension[0]));
+    const int l = f.liquid ? f.liquid[i] : 0;
+    v -= gradC * (divergence.divergence(f.c.kernels.h) * weight * f.time->tension[l]);
+    if (f.c.wallAdhesion)
+    {
+      v += wallAdhesion(pi, f.normal[i], gradC, f.c, f.time->wallCos[l]) *
+        (weight * f.time->tension[l]);
+    }
   }
   const Real etaLength = length(eta);
   if (etaLength * f.c.kernels.h > Real(1e-4) * magI && etaLength > Real(0))

@@ -127,6 +127,12 @@ void validateLiquids(const Parameters& p)
       reject(field + "surfaceTension", liquid.surfaceTension,
         "must be a finite number >= 0 [N/m]" + of);
     }
+    if (!std::isnan(liquid.wallContactAngle) &&
+      !(liquid.wallContactAngle >= 0.0 && liquid.wallContactAngle <= 180.0))
+    {
+      reject(field + "contactAngles.walls", liquid.wallContactAngle,
+        "must lie in [0, 180] [degrees]" + of);
+    }
   }
 }
 
@@ -247,7 +253,7 @@ std::string describe(const Parameters& p)
   for (const Liquid& liquid : p.liquids)
   {
     out << " liquid=" << liquid.name << ":" << liquid.restDensity << ":" << liquid.xsphViscosity << ":"
-        << liquid.surfaceTension;
+        << liquid.surfaceTension << ":" << liquid.wallContactAngle;
   }
   out << " dt="
       << (p.timeStepping == TimeStepping::Automatic ? "automatic" : "fixed");

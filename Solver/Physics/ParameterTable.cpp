@@ -159,6 +159,13 @@ std::vector<ParameterSpec> forceRows()
       "droplets, jets, films; a drop without gravity becomes a sphere. Automatic time steps then "
       "stay below the capillary wave limit.",
       PBF_SCALAR(surfaceTension) },
+    { "contactAngle", "ContactAngle", "contact-angle", "Contact Angle", "Solver", "deg",
+      T::Real, { 0, 180, false, false }, 0.0, 180.0, false, nullptr, "90: neutral",
+      "Adhesion to the domain's walls as the contact angle theta [degrees] that the liquid's "
+      "surface makes with them, measured through the liquid (Brackbill's wall adhesion): 90, "
+      "the default, is neutral; less wets the walls (a drop spreads, the surface climbs a wall), "
+      "more beads up on them. Felt with SurfaceTension only; a scene's liquid sets its own.",
+      PBF_SCALAR(contactAngle) },
     { "unilateral", "Unilateral", "unilateral", "Unilateral", "Solver", "", T::Boolean, boolean,
       0, 1, true, nullptr, "",
       "Clamp the density constraint C_i at 0, so that it only pushes particles apart: a free "

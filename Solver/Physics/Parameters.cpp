@@ -112,6 +112,25 @@ double Parameters::liquidSurfaceTension(int l) const
   return std::isnan(sigma) ? surfaceTension : sigma;
 }
 
+double Parameters::liquidWallContactAngle(int l) const
+{
+  const double theta =
+    liquids.empty() ? contactAngle : liquids[static_cast<std::size_t>(l)].wallContactAngle;
+  return std::isnan(theta) ? contactAngle : theta;
+}
+
+bool Parameters::wallAdhesion() const
+{
+  for (int l = 0; l < liquidCount(); ++l)
+  {
+    if (liquidWallContactAngle(l) != 90.0 && liquidSurfaceTension(l) > 0)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
 double Parameters::largestSurfaceTension() const
 {
   double largest = 0.0;

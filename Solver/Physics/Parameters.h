@@ -42,6 +42,9 @@ struct Liquid
   double xsphViscosity = std::numeric_limits<double>::quiet_NaN();
   // Its sigma [N/m], as Parameters::surfaceTension; NaN (unset): Parameters::surfaceTension.
   double surfaceTension = std::numeric_limits<double>::quiet_NaN();
+  // Its contact angle with the domain's walls [degrees], as Parameters::contactAngle; NaN
+  // (unset): Parameters::contactAngle.
+  double wallContactAngle = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct Box
@@ -131,6 +134,11 @@ struct Parameters
   // sqrt(sigma / (rho g)), 2.7 mm for water on Earth: a droplet, a thin jet, a film, not a tank
   // of spacing 1 cm.
   double surfaceTension = 0.0;
+  // Adhesion as the contact angle theta [degrees] the liquid's surface makes with the walls
+  // (Brackbill's wall adhesion, SurfaceTension.h's contactAngleNormal): 90, the default, is
+  // neutral (the walls' mirror images alone); less wets the wall, more beads up on it. Felt
+  // with surface tension only.
+  double contactAngle = 90.0;
   bool unilateral = true;       // clamp C_i at 0: a free surface is not pulled together
   bool mirrorWalls = true;      // walls mirror the fluid near them (Equations.h, WallMirrors)
   // Friction of the walls and solids, phi in [0, 1]: 0 lets the fluid slide along them
@@ -169,6 +177,10 @@ struct Parameters
   // Liquid l's sigma (surfaceTension when there are no liquids or l's is unset), and the largest.
   double liquidSurfaceTension(int l) const;
   double largestSurfaceTension() const;
+  // Liquid l's contact angle with the walls [degrees] (contactAngle when unset), and whether
+  // any liquid's differs from the neutral 90 degrees.
+  double liquidWallContactAngle(int l) const;
+  bool wallAdhesion() const;
 
   // Throws InvalidInput naming the first bad field and its value.
   void validate() const;

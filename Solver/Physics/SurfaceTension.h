@@ -28,6 +28,14 @@
 //
 // The force then acts on the velocity in the confinement pass, on the step's final positions, so
 // the next step's prediction carries it, as gravity's.
+//
+// Adhesion is Young's force balance at the contact line. The walls' mirror images continue the
+// surface beyond a wall, so where it meets the wall at an angle theta' other than 90 degrees the
+// surface and its image make a corner whose curvature pulls the line with sigma cos(theta') per
+// unit length towards 90 degrees. A wall's adhesion adds sigma cos(theta) along the wall, away
+// from the liquid (youngForce): the line rests where the two balance, at theta' = theta. It is a
+// force per unit length of the line, spread over the surface particles within h of the wall, so
+// theta means the same at any spacing and step.
 #pragma once
 
 #include "HostDevice.h"
@@ -40,6 +48,29 @@ namespace pbf
 // A particle is on the surface where |grad c| h exceeds this (1.06 on a flat surface of the
 // lattice at h = 2 s, 0 a layer below); its force is faded in linearly up to twice it.
 constexpr double kSurfaceGate = 0.1;
+
+// Young's force at a wall, per unit of the surface's force scale (the caller multiplies by
+// dt sigma / (rho surfaceColour) and the surface weight): sigma cos(theta) per unit length of
+// the contact line, along the wall away from the liquid, spread over the particles of the
+// surface within h of the wall. A particle's share of the line is |grad c| (the surface's delta)
+// times 2 (1 - d / h) / h (the wall's, a profile whose layers at d = s / 2, 3 s / 2 sum to 1 / s
+// at h = 2 s), times sin(theta') = the outward normal's component along the wall, which is also
+// the force's direction: a surface meeting the wall at theta' crosses the band of width h over
+// a length h / sin(theta'), so the line gets sigma cos(theta) whatever theta' is, and a film
+// lying on the wall (theta' = 0), whose surface runs along the band, gets none.
+template <class Real>
+PBF_HD PBF_INLINE Vec3<Real> youngForce(const Vec3<Real>& n, const Vec3<Real>& nw,
+  const Vec3<Real>& gradC, Real cosTheta, Real d, Real h)
+{
+  const Vec3<Real> along = nw * dot(n, nw) - n; // -n is outward; its part along the wall
+  const Real nLength = squareRoot(dot(n, n));
+  if (!(nLength > Real(0)))
+  {
+    return Vec3<Real>{ Real(0), Real(0), Real(0) };
+  }
+  const Real line = squareRoot(dot(gradC, gradC)) * (Real(2) * (Real(1) - d / h) / h);
+  return along * (cosTheta * line / nLength);
+}
 
 // grad c's share of neighbour j at r = p_i - p_j, d = h^2 - r^2: poly6's gradient -6 K d^2 r
 // times V_j (scale = 6 K V_j).

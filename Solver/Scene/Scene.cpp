@@ -258,8 +258,31 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
   return solids;
 }
 
+// A liquid's "contactAngles": {"walls": 60}: its contact angle [degrees] with the domain's walls;
+// a key naming a solid is checked by parse() (requireContactSolids).
+void parseContactAngles(const json& angles, const std::string& path, Liquid& liquid)
+{
+  if (!angles.is_object() || angles.empty())
+  {
+    reject(path, angles, "must be an object of contact angles [degrees] by solid name (\"walls\": "
+      "the domain's walls)");
+  }
+  for (auto it = angles.begin(); it != angles.end(); ++it)
+  {
+    const double theta = number(angles, path, it.key());
+    if (!(theta >= 0.0 && theta <= 180.0))
+    {
+      reject(path + "." + it.key(), it.value(), "must lie in [0, 180] [degrees]");
+    }
+    if (it.key() == "walls")
+    {
+      liquid.wallContactAngle = theta;
+    }
+  }
+}
+
 // "liquids": [{"name": "water", "restDensity": 1000, "xsphViscosity": 0.0125,
-// "surfaceTension": 0.072}, ...]: the
+// "surfaceTension": 0.072, "contactAngles": {"walls": 60}}, ...]: the
 // scene's liquids, which its regions and emitters name.
 std::vector<Liquid> parseLiquids(const json& liquids)
 {
@@ -273,7 +296,8 @@ std::vector<Liquid> parseLiquids(const json& liquids)
   {
     const std::string path = ".liquids[" + std::to_string(k) + "]";
     const json& item = liquids[k];
-    requireKeys(item, path, { "name", "restDensity", "xsphViscosity", "surfaceTension" },
+    requireKeys(item, path,
+      { "name", "restDensity", "xsphViscosity", "surfaceTension", "contactAngles" },
       { "name", "restDensity" });
     if (!item["name"].is_string() || item["name"].get<std::string>().empty())
     {
@@ -304,6 +328,10 @@ std::vector<Liquid> parseLiquids(const json& liquids)
       {
         reject(path + ".surfaceTension", item["surfaceTension"], "must be >= 0");
       }
+    }
+    if (item.contains("contactAngles"))
+    {
+      parseContactAngles(item["contactAngles"], path + ".contactAngles", liquid);
     }
     out.push_back(liquid);
   }
@@ -424,6 +452,49 @@ void parseEmitters(const json& emitters, Scene& scene)
   }
 }
 
+// Every solid a liquid's "contactAngles" names is one of the scene's "obstacles".
+void requireContactSolids(const json& root, const Scene& scene)
+{
+  std::string known;
+  for (const SolidRegion& solid : scene.solids)
+  {
+    known += solid.name.empty() ? "" : (known.empty() ? "" : ", ") + solid.name;
+  }
+  if (!root.contains("liquids"))
+  {
+    return;
+  }
+  for (std::size_t l = 0; l < scene.liquids.size(); ++l)
+  {
+    const json& item = root["liquids"][l];
+    if (!item.contains("contactAngles"))
+    {
+      continue;
+    }
+    for (auto it = item["contactAngles"].begin(); it != item["contactAngles"].end(); ++it)
+    {
+      const std::string& name = it.key();
+      if (name == "walls")
+      {
+        continue;
+      }
+      const bool found = std::any_of(scene.solids.begin(), scene.solids.end(),
+        [&](const SolidRegion& solid) { return solid.name == name; });
+      const std::string path = ".liquids[" + std::to_string(l) + "].contactAngles." + name;
+      if (!found)
+      {
+        reject(path, it.value(),
+          "no solid of the scene's \"obstacles\" has this name (named solids: " +
+            (known.empty() ? std::string("none") : known) + "; \"walls\" names the domain's walls)");
+      }
+      // The solids' distance fields do not carry a contact angle yet: their surfaces are neutral.
+      reject(path, it.value(),
+        "a contact angle with a solid is not simulated yet (the solids are neutral, 90 degrees); "
+        "only \"walls\", the domain's walls, takes one");
+    }
+  }
+}
+
 Scene parse(const json& root)
 {
   requireKeys(root, "",
@@ -481,6 +552,7 @@ Scene parse(const json& root)
   {
     scene.solids = parseObstacles(root["obstacles"]);
   }
+  requireContactSolids(root, scene);
   return scene;
 }
 

@@ -45,6 +45,7 @@ struct Case
   double hyper = 0;     // xsphHyperViscosity
   double chebyshev = 0; // chebyshevRho
   double sigma = 0;     // surfaceTension [N/m]
+  double contactAngle = 90; // [degrees]
 };
 
 cuda::Options optionsOf(const Case& c)
@@ -77,6 +78,7 @@ Parameters fixedParameters(const Case& c, const Scene& scene)
   p.xsphHyperViscosity = c.hyper;
   p.chebyshevRho = c.chebyshev;
   p.surfaceTension = c.sigma;
+  p.contactAngle = c.contactAngle;
   return withSceneDomain(p, scene);
 }
 
@@ -606,6 +608,11 @@ TEST(StepSchedule, SurfaceTensionReproducesTheSerialBackendBitForBit)
   Case walk{ "double_dam_break", 3, false, 0.1, true, 0, false, 0.05 };
   walk.sigma = 2.0;
   compareWithSerial<double>(walk, 40);
+  // With adhesion at the walls (Young's force on the surface particles near them).
+  Case wetting{ "dam_break", 4, true, 0.1, false };
+  wetting.sigma = 2.0;
+  wetting.contactAngle = 60;
+  compareWithSerial<float>(wetting, 40);
   compareTwoLiquids<float>(true, true, 4, 0, 40, 0.03);
   compareTwoLiquids<double>(false, false, 4, 0, 40, 0.03);
   // With the walls' friction the vorticity pass walks the images for both.

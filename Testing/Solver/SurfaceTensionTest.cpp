@@ -98,6 +98,64 @@ TEST(SurfaceTension, BadValuesAreNamed)
   }
 }
 
+namespace
+{
+// The message of a scene that does not parse; "" when it parses.
+std::string sceneError(const std::string& liquids, const std::string& obstacles = "")
+{
+  const std::string scene = R"({ "domain": { "min": [0, 0, 0], "max": [1, 1, 1] }, "liquids": )" +
+    liquids + R"(, "fluid": [ { "type": "box", "min": [0, 0, 0], "max": [0.2, 0.2, 0.2] } ])" +
+    obstacles + "}";
+  try
+  {
+    parseScene(scene);
+  }
+  catch (const InvalidInput& e)
+  {
+    return e.what();
+  }
+  return "";
+}
+} // namespace
+
+TEST(SurfaceTension, BadContactAnglesAreNamed)
+{
+  Parameters p;
+  p.contactAngle = 200;
+  EXPECT_NE(errorOf(p).find("contactAngle = 200"), std::string::npos) << errorOf(p);
+  p.contactAngle = 120;
+  Liquid water;
+  water.name = "water";
+  water.wallContactAngle = -5;
+  p.liquids = { water };
+  EXPECT_NE(errorOf(p).find("liquids[0].contactAngles.walls = -5"), std::string::npos)
+    << errorOf(p);
+  // A liquid without its own takes the parameter's; 90 everywhere is no adhesion.
+  p.liquids[0].wallContactAngle = std::nan("");
+  EXPECT_EQ(errorOf(p), "");
+  EXPECT_EQ(p.liquidWallContactAngle(0), 120.0);
+  p.surfaceTension = 0.07;
+  EXPECT_TRUE(p.wallAdhesion());
+  p.contactAngle = 90;
+  EXPECT_FALSE(p.wallAdhesion());
+
+  const std::string cup =
+    R"(, "obstacles": [ { "type": "sphere", "name": "cup", "center": [0.6, 0.6, 0.6], "radius": 0.1 } ])";
+  EXPECT_EQ(sceneError(R"([ { "name": "water", "restDensity": 1000, "contactAngles": { "walls": 60 } } ])"), "");
+  std::string e = sceneError(
+    R"([ { "name": "water", "restDensity": 1000, "contactAngles": { "walls": 190 } } ])");
+  EXPECT_NE(e.find(".liquids[0].contactAngles.walls = 190: must lie in [0, 180]"), std::string::npos) << e;
+  e = sceneError(R"([ { "name": "water", "restDensity": 1000, "contactAngles": { "cupp": 60 } } ])", cup);
+  EXPECT_NE(e.find(".liquids[0].contactAngles.cupp = 60"), std::string::npos) << e;
+  EXPECT_NE(e.find("no solid"), std::string::npos) << e;
+  EXPECT_NE(e.find("named solids: cup"), std::string::npos) << e;
+  e = sceneError(R"([ { "name": "water", "restDensity": 1000, "contactAngles": { "cup": 60 } } ])", cup);
+  EXPECT_NE(e.find(".liquids[0].contactAngles.cup = 60"), std::string::npos) << e;
+  EXPECT_NE(e.find("not simulated yet"), std::string::npos) << e;
+  e = sceneError(R"([ { "name": "water", "restDensity": 1000, "contactAngles": 60 } ])");
+  EXPECT_NE(e.find(".liquids[0].contactAngles = 60"), std::string::npos) << e;
+}
+
 // A drop of 10 spacings at rest: in its first step each particle's velocity is dt times its
 // surface acceleration, whose inward pull summed over the drop, sum m a . (-x / |x|), is the
 // Laplace pressure over the surface, 2 sigma / R 4 pi R^2. The lattice's sphere is ragged on the
