@@ -105,9 +105,8 @@ struct StepTime
   // velocity its force density per unit sigma gives in the step (LatticeCalibration's
   // surfaceColour: the share of the colour's drop that particles carry). Zero without it.
   Real tension[kMaxLiquids];
-  // Adhesion per liquid: cos and sin of its contact angle with the walls (SurfaceTension.h).
+  // Adhesion per liquid: the cosine of its contact angle with the walls (SurfaceTension.h).
   Real wallCos[kMaxLiquids];
-  Real wallSin[kMaxLiquids];
 
   static StepTime make(const Parameters& p, const LatticeCalibration& lattice, double dt)
   {
@@ -147,7 +146,6 @@ struct StepTime
       const double theta =
         (l < p.liquidCount() ? p.liquidWallContactAngle(l) : 90.0) * (3.14159265358979323846 / 180.0);
       t.wallCos[l] = static_cast<Real>(std::cos(theta));
-      t.wallSin[l] = static_cast<Real>(std::sin(theta));
     }
     const double c = p.liquidXsphNu(0) * dt / lattice.xsphSecondMoment;
     t.xsph = static_cast<Real>(clamped ? kMaxXsphBlend * (c / (largest + c4)) : c);
@@ -756,7 +754,7 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
 // Adhesion at the walls (SurfaceTension.h's youngForce) for a surface particle at p with smoothed
 // normal n and colour gradient gradC: the nearest wall within h sets it; zero beyond h.
 template <class Real>
-PBF_HD PBF_INLINE Vec3<Real> wallAdhesion(const Vec3<Real>& p, const Vec3<Real>& n,
+PBF_HD PBF_INLINE Vec3<Real> wallYoungForce(const Vec3<Real>& p, const Vec3<Real>& n,
   const Vec3<Real>& gradC, const Coefficients<Real>& c, Real cosTheta)
 {
   const Real pa[3] = { p.x, p.y, p.z };
@@ -941,7 +939,7 @@ PBF_HD PBF_INLINE void vorticityConfinement(
     v -= gradC * (divergence.divergence(f.c.kernels.h) * weight * f.time->tension[l]);
     if (f.c.wallAdhesion)
     {
-      v += wallAdhesion(pi, f.normal[i], gradC, f.c, f.time->wallCos[l]) *
+      v += wallYoungForce(pi, f.normal[i], gradC, f.c, f.time->wallCos[l]) *
         (weight * f.time->tension[l]);
     }
   }

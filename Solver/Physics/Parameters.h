@@ -135,7 +135,7 @@ struct Parameters
   // of spacing 1 cm.
   double surfaceTension = 0.0;
   // Adhesion as the contact angle theta [degrees] the liquid's surface makes with the walls
-  // (Brackbill's wall adhesion, SurfaceTension.h's contactAngleNormal): 90, the default, is
+  // (Young's force at the contact line, SurfaceTension.h's youngForce): 90, the default, is
   // neutral (the walls' mirror images alone); less wets the wall, more beads up on it. Felt
   // with surface tension only.
   double contactAngle = 90.0;
