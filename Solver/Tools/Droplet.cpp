@@ -1,5 +1,7 @@
 #include "Droplet.h"
 
+#include "LatticeShapes.h"
+
 #include <cmath>
 #include <limits>
 
@@ -155,21 +157,12 @@ Scene dropletScene(double radius)
 ParticleBatch dropletFluid(
   const Scene& scene, const Parameters& parameters, double radius, double elongation)
 {
-  const ParticleBatch lattice = fillScene(scene, withSceneDomain(parameters, scene));
   const double a = radius * (1 + elongation), b = radius / std::sqrt(1 + elongation);
   const Vec3d centre{ 2 * radius, 2 * radius, 2 * radius };
-  ParticleBatch batch;
-  for (const Vec3d& x : lattice.position)
-  {
+  return latticeSitesInside(scene, parameters, [&](const Vec3d& x) {
     const Vec3d d = x - centre;
-    if (d.x * d.x / (a * a) + (d.y * d.y + d.z * d.z) / (b * b) <= 1)
-    {
-      batch.position.push_back(x);
-      batch.velocity.push_back({ 0, 0, 0 });
-      batch.id.push_back(static_cast<std::int64_t>(batch.id.size()));
-    }
-  }
-  return batch;
+    return d.x * d.x / (a * a) + (d.y * d.y + d.z * d.z) / (b * b) <= 1;
+  });
 }
 
 double rayleighPeriod(double radius, double density, double sigma)

@@ -1,5 +1,7 @@
 #include "SessileDrop.h"
 
+#include "LatticeShapes.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -36,20 +38,11 @@ Scene sessileScene(double radius)
 
 ParticleBatch sessileFluid(const Scene& scene, const Parameters& parameters, double radius)
 {
-  const ParticleBatch lattice = fillScene(scene, withSceneDomain(parameters, scene));
   const Vec3d centre{ 2 * radius, 0, 2 * radius };
-  ParticleBatch batch;
-  for (const Vec3d& x : lattice.position)
-  {
+  return latticeSitesInside(scene, parameters, [&](const Vec3d& x) {
     const Vec3d d = x - centre;
-    if (dot(d, d) <= radius * radius)
-    {
-      batch.position.push_back(x);
-      batch.velocity.push_back({ 0, 0, 0 });
-      batch.id.push_back(static_cast<std::int64_t>(batch.id.size()));
-    }
-  }
-  return batch;
+    return dot(d, d) <= radius * radius;
+  });
 }
 
 double capContactAngle(double volume, double centroid)
