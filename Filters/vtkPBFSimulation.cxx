@@ -31,7 +31,7 @@ namespace
 
 // Indexed by vtkPBFSimulation::PresetScenes; the names are pbf::presetScene's.
 const char* const PresetNames[] = { "dam_break", "double_dam_break", "blob", "stream",
-  "marin_dam_break" };
+  "marin_dam_break", "channel" };
 
 } // namespace
 

@@ -112,7 +112,8 @@ public:
     PRESET_DOUBLE_DAM_BREAK = 1,
     PRESET_BLOB = 2,
     PRESET_STREAM = 3,
-    PRESET_MARIN_DAM_BREAK = 4
+    PRESET_MARIN_DAM_BREAK = 4,
+    PRESET_CHANNEL = 5
   };
 
   // The values of pbf::BackendRequest (Solver/Backends/BackendChoice.h).
@@ -140,7 +141,7 @@ public:
   /**
    * The preset scene used when SceneFile is empty. Default PRESET_DAM_BREAK.
    */
-  vtkSetClampMacro(Preset, int, PRESET_DAM_BREAK, PRESET_MARIN_DAM_BREAK);
+  vtkSetClampMacro(Preset, int, PRESET_DAM_BREAK, PRESET_CHANNEL);
   vtkGetMacro(Preset, int);
   ///@}
 

@@ -30,6 +30,13 @@ public:
     evaluateDensityAtRest();
   }
   void setObstaclePoses(const std::vector<SolidPose>& poses) override { fluid_.setPoses(poses); }
+  std::size_t removeOutflow(const std::vector<Box>& zones) override
+  {
+    const std::size_t removed =
+      removeInside(OutflowZones<Real>::make(zones), fluid_.particles());
+    fluid_.resizeWork(fluid_.x.size());
+    return removed;
+  }
   // Nothing else is state: the next step predicts, re-sorts (stably, from this order) and
   // recomputes every other array.
   void load(const Snapshot<float>& state) override { loadState(state); }

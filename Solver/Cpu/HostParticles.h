@@ -3,6 +3,7 @@
 #pragma once
 
 #include "LiquidDensities.h"
+#include "Outflow.h"
 #include "Parameters.h"
 #include "ParticleChecks.h"
 #include "Stepper.h"
@@ -103,6 +104,43 @@ void loadFromSnapshot(
     p.pressure[i] = static_cast<Real>(state.pressure[i]);
   }
   fromLiquidDensities(parameters, p.liquid, p.density);
+}
+
+// Removes the particles whose position lies in an outflow zone, the others kept in their order
+// (the next step's sort is stable, so the steps that follow do not depend on where a hole was);
+// returns how many went. Density, lambda and pressure are the step's, the removed ones counted.
+template <class Real>
+std::size_t removeInside(const OutflowZones<Real>& zones, const HostParticles<Real>& p)
+{
+  const std::size_t n = p.x.size();
+  const bool liquids = !p.liquid.empty();
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    if (zones.contains(p.x[i]))
+    {
+      continue;
+    }
+    p.x[kept] = p.x[i];
+    p.v[kept] = p.v[i];
+    p.density[kept] = p.density[i];
+    p.lambda[kept] = p.lambda[i];
+    p.pressure[kept] = p.pressure[i];
+    p.id[kept] = p.id[i];
+    if (liquids)
+    {
+      p.liquid[kept] = p.liquid[i];
+    }
+    ++kept;
+  }
+  p.x.resize(kept);
+  p.v.resize(kept);
+  p.density.resize(kept);
+  p.lambda.resize(kept);
+  p.pressure.resize(kept);
+  p.id.resize(kept);
+  p.liquid.resize(liquids ? kept : 0);
+  return n - kept;
 }
 
 // The divergence check's scan (Stepper::health) of the particles held here. maxDensity, when

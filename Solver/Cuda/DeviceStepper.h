@@ -24,8 +24,10 @@
 #include "DeviceSolids.h"
 #include "Equations.h"
 #include "LiquidDensities.h"
+#include "Outflow.h"
 #include "ParticleChecks.h"
 #include "StatisticsScan.h"
+#include "SubdomainSchedule.h"
 #include "DeviceStepLoop.h"
 
 #include <algorithm>
@@ -54,6 +56,7 @@ public:
 
   void step() override;
   void append(const ParticleBatch& batch) override;
+  std::size_t removeOutflow(const std::vector<Box>& zones) override;
   void setTimeStep(double dt) override;
   double timeStep() const override { return dt_; }
 
@@ -131,6 +134,7 @@ private:
   void* solids_ = nullptr; // constants_.obstacles and .boundary: the solids' views, table, nodes
   std::vector<DistanceGridView<Real>> solidViews_; // as sampled, for placeSolids
   unsigned long long* healthBits_ = nullptr; // health(): three maxima as double bits
+  std::uint32_t* keptCount_ = nullptr;       // removeOutflow's selection count
 
   std::size_t n_ = 0;
   Roles roles_;

@@ -39,6 +39,7 @@ void DeviceStepper<Real, Device>::allocateFixed()
     masks ? place(static_cast<std::size_t>(k.cellCount) * sizeof(std::uint32_t)) : 0;
   const std::size_t movedAt = place(static_cast<std::size_t>(std::max(k.iterations, 1)) * 8);
   const std::size_t buildsAt = place(8);
+  const std::size_t keptAt = place(sizeof(std::uint32_t));
   const std::size_t adaptiveAt = place(sizeof(AdaptiveState));
   const std::size_t partialsAt = place(device_->statisticsPartialBytes());
   const std::size_t resultAt = place(kStatisticsValues * sizeof(double));
@@ -48,6 +49,7 @@ void DeviceStepper<Real, Device>::allocateFixed()
   deviceTime_ = reinterpret_cast<StepTime<Real>*>(base + timeAt);
   constants_.time = deviceTime_;
   healthBits_ = reinterpret_cast<unsigned long long*>(base + healthAt);
+  keptCount_ = reinterpret_cast<std::uint32_t*>(base + keptAt);
   statisticsPartials_ = reinterpret_cast<double*>(base + partialsAt);
   statisticsResult_ = reinterpret_cast<double*>(base + resultAt);
   StepBuffers<Real>& b = fixedBuffers_;
@@ -179,6 +181,62 @@ void DeviceStepper<Real, Device>::append(const ParticleBatch& batch)
   }
   n_ = n;
   settle();
+}
+
+// The kept particles' indices by a stable selection (into a key buffer: the next step sorts
+// again), then every array of the state gathered through them: x and v into the two free Vec3
+// buffers and copied back as buffers 0 and 1 (the roles the captured graphs start from), the
+// scalars through a free array and copied back. One small wait for the count, which sizes what
+// follows; the step is captured again only when a particle went.
+template <class Real, class Device>
+std::size_t DeviceStepper<Real, Device>::removeOutflow(const std::vector<Box>& zones)
+{
+  const OutflowZones<Real> outflows = OutflowZones<Real>::make(zones);
+  if (zones.empty() || n_ == 0)
+  {
+    return 0;
+  }
+  device_->activate();
+  auto exec = device_->executor();
+  const auto n = static_cast<std::uint32_t>(n_);
+  std::uint32_t* kept = buffers_.keys[0];
+  exec.selectIf(n, OutsideOutflows<Real>{ buffers_.vec[roles_.x], outflows }, kept, keptCount_);
+  std::uint32_t count = 0;
+  device_->download(&count, keptCount_, sizeof count);
+  device_->synchronize();
+  if (count == n)
+  {
+    return 0;
+  }
+  const auto gather = [&exec, kept, count](const auto* from, auto* to) {
+    subdomain::gather<Real>(exec, count, kept, from, to);
+  };
+  // Roles are {x, 1 - x} between steps (captureGraphs), so buffers 2 and 3 are free.
+  Vec3<Real>* const* vec = buffers_.vec;
+  gather(vec[roles_.x], vec[2]);
+  gather(vec[roles_.v], vec[3]);
+  exec.copy(vec[0], vec[2], count * sizeof(Vec3<Real>));
+  exec.copy(vec[1], vec[3], count * sizeof(Vec3<Real>));
+  roles_ = Roles{};
+  auto* ids = reinterpret_cast<std::int64_t*>(vec[2]);
+  gather(buffers_.id, ids);
+  exec.copy(buffers_.id, ids, count * sizeof(std::int64_t));
+  if (buffers_.liquid)
+  {
+    auto* liquids = reinterpret_cast<std::uint8_t*>(vec[3]);
+    gather(buffers_.liquid, liquids);
+    exec.copy(buffers_.liquid, liquids, count);
+  }
+  Real* const scalars[3] = { buffers_.density, buffers_.lambda, buffers_.pressure };
+  for (Real* scalar : scalars)
+  {
+    gather(scalar, buffers_.volume);
+    exec.copy(scalar, buffers_.volume, count * sizeof(Real));
+  }
+  n_ = count;
+  captureGraphs();
+  device_->synchronize();
+  return n - count;
 }
 
 // Straight from the device into the caller's arrays: no host temporaries, no pass over the

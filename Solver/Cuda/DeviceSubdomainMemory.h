@@ -87,6 +87,55 @@ void DeviceSubdomainStepper<Real, Device>::loadState(const Snapshot<In>& state)
   n_ = n;
 }
 
+// The kept owned particles listed by a stable selection, then gathered as keepOwned gathers
+// them (x and v into the free buffers, the scalars into the alternates). Between steps the store
+// holds the owned particles only, so this is the single GPU's removal on this rank's share.
+template <class Real, class Device>
+std::size_t DeviceSubdomainStepper<Real, Device>::removeOutflow(const std::vector<Box>& zones)
+{
+  const OutflowZones<Real> outflows = OutflowZones<Real>::make(zones);
+  std::size_t mine = 0;
+  distributed::together(communicator_, [&] {
+    if (zones.empty() || n_ == 0)
+    {
+      return;
+    }
+    device_->activate();
+    auto exec = device_->executor();
+    const std::uint32_t n = count(n_);
+    exec.selectIf(n, OutsideOutflows<Real>{ vec_[xBuffer_], outflows }, ownedList_, selected_);
+    std::uint32_t kept = 0;
+    device_->download(&kept, selected_, sizeof kept);
+    device_->synchronize();
+    if (kept == n)
+    {
+      return;
+    }
+    const int toX = freeBuffer(xBuffer_, vBuffer_, -1);
+    const int toV = otherBuffer(xBuffer_, vBuffer_, toX);
+    subdomain::gather<Real>(exec, kept, ownedList_, vec_[xBuffer_], vec_[toX]);
+    subdomain::gather<Real>(exec, kept, ownedList_, vec_[vBuffer_], vec_[toV]);
+    subdomain::gather<Real>(exec, kept, ownedList_, density_, densityAlt_);
+    subdomain::gather<Real>(exec, kept, ownedList_, lambda_, lambdaAlt_);
+    subdomain::gather<Real>(exec, kept, ownedList_, pressure_, pressureAlt_);
+    subdomain::gather<Real>(exec, kept, ownedList_, id_, idAlt_);
+    store_->swapAlternates();
+    adoptStore();
+    xBuffer_ = toX;
+    vBuffer_ = toV;
+    n_ = kept;
+    device_->synchronize();
+    mine = n - kept;
+  });
+  double removed = 0;
+  for (const std::vector<double>& r :
+    distributed::allGather(communicator_, { static_cast<double>(mine) }))
+  {
+    removed += r[0];
+  }
+  return static_cast<std::size_t>(removed);
+}
+
 template <class Real, class Device>
 void DeviceSubdomainStepper<Real, Device>::releaseParticles()
 {

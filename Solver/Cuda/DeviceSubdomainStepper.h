@@ -63,6 +63,7 @@
 #include "DeviceHealth.h"
 #include "DeviceParticleStore.h"
 #include "HostParticles.h"
+#include "Outflow.h"
 #include "ParticleChecks.h"
 #include "StepLoop.h"
 #include "StepSchedule.h"
@@ -204,6 +205,8 @@ public:
   {
     distributed::together(communicator_, [&] { setTimeStepAlone(dt); });
   }
+  // Collective: this rank's particles in the zones go; returns the count over every rank.
+  std::size_t removeOutflow(const std::vector<Box>& zones) override;
   void append(const ParticleBatch& batch) override
   {
     distributed::together(communicator_, [&] { appendAlone(batch); });

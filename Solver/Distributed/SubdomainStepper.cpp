@@ -112,6 +112,30 @@ void SubdomainStepper<Real>::append(const ParticleBatch& batch)
 }
 
 template <class Real>
+std::size_t SubdomainStepper<Real>::removeOutflow(const std::vector<Box>& zones)
+{
+  // Between steps the arrays hold the owned particles only (dropGhosts), so a removal here is the
+  // serial backend's on this rank's share.
+  std::size_t mine = 0;
+  together(communicator_, [&] {
+    mine = removeInside(OutflowZones<Real>::make(zones), fluid_.particles());
+  });
+  const std::size_t n = fluid_.x.size();
+  owned_.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    owned_[i] = static_cast<std::uint32_t>(i);
+  }
+  ghostFrom_.assign(n, -1);
+  double removed = 0;
+  for (const std::vector<double>& r : allGather(communicator_, { static_cast<double>(mine) }))
+  {
+    removed += r[0];
+  }
+  return static_cast<std::size_t>(removed);
+}
+
+template <class Real>
 void SubdomainStepper<Real>::evaluateAtRest()
 {
   // As CpuStepper reports them before a step: no ghosts are refreshed after the density pass,

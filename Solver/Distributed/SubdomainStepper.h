@@ -91,6 +91,8 @@ public:
   {
     loadFromSnapshot(fluid_.parameters, state, fluid_.particles());
   }
+  // Collective: this rank's particles in the zones go; returns the count over every rank.
+  std::size_t removeOutflow(const std::vector<Box>& zones) override;
   // Collective: every rank holds every solid (their fields are small beside the fluid), and
   // density and lambda are evaluated again with them, as CpuStepper does.
   void setObstacles(

@@ -1,6 +1,7 @@
 #include "Simulation.h"
 
 #include "MassProperties.h"
+#include "Outflow.h"
 
 #include "Backends.h"
 #include "ParticleChecks.h"
@@ -76,7 +77,14 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
     }
     throw InvalidInput("particle count = 0: the fluid is empty");
   }
+  // An inflow's rate becomes the speed that releases it as whole layers at this spacing.
+  for (Emitter& e : scene_.emitters)
+  {
+    e.speed = emitterSpeed(e, parameters_);
+  }
   checkEmitters(initial.position.size());
+  outflowZones_ = pbf::outflowZones(scene_, parameters_);
+  checkOutflows(initial);
   checkPacking(parameters_, initial, "the domain of scene \"" + scene_.name + "\"");
   // The scene's speed scale, from the initial velocities and the emitters: the floor of the
   // automatic step and the scale of XSPH's viscosity (Parameters::sceneSpeedHint).
@@ -232,6 +240,49 @@ void Simulation::checkEmitters(std::size_t initialParticles) const
   }
 }
 
+void Simulation::checkOutflows(const ParticleBatch& initial) const
+{
+  const OutflowZones<double> all = OutflowZones<double>::make(outflowZones_);
+  for (std::size_t e = 0; e < scene_.emitters.size(); ++e)
+  {
+    for (std::size_t k = 0; k < outflowZones_.size(); ++k)
+    {
+      if (OutflowZones<double>::make({ outflowZones_[k] }).contains(scene_.emitters[e].center))
+      {
+        throw InvalidInput("scene ." + outflowName(scene_, k) + " holds the nozzle of .emitters[" +
+          std::to_string(e) + "]: its layers would leave as they are released");
+      }
+    }
+  }
+  if (outflowZones_.empty() || initial.position.empty() || !scene_.emitters.empty())
+  {
+    return;
+  }
+  std::size_t inside = 0;
+  for (const Vec3d& x : initial.position)
+  {
+    inside += all.contains(x) ? 1 : 0;
+  }
+  if (inside < initial.position.size())
+  {
+    return;
+  }
+  // Name the one zone that holds it all, if one does.
+  std::string which = ".outflows";
+  for (std::size_t k = 0; k < outflowZones_.size(); ++k)
+  {
+    const OutflowZones<double> one = OutflowZones<double>::make({ outflowZones_[k] });
+    if (std::all_of(initial.position.begin(), initial.position.end(),
+          [&](const Vec3d& x) { return one.contains(x); }))
+    {
+      which = "." + outflowName(scene_, k);
+      break;
+    }
+  }
+  throw InvalidInput("scene " + which + " covers all " + std::to_string(inside) +
+    " particles of the fluid and no emitter adds any: the first step would remove them all");
+}
+
 void Simulation::checkDivergence()
 {
   const Health health = stepper_->health();
@@ -356,6 +407,7 @@ void AdvanceReport::add(const AdvanceReport& more)
   maxTimeStep = std::max(maxTimeStep, more.maxTimeStep);
   steps += more.steps;
   iterations += more.iterations;
+  removed += more.removed;
   densityError = more.densityError;
   milliseconds += more.milliseconds;
   seconds += more.seconds;
@@ -430,6 +482,12 @@ void Simulation::stepOnce(double dt, double end, AdvanceReport& report)
   report.seconds += dt;
   ++report.steps;
   addLoads(step.loads, poses, dt, report);
+  if (!outflowZones_.empty())
+  {
+    const std::size_t gone = stepper_->removeOutflow(outflowZones_);
+    removed_ += gone;
+    report.removed += gone;
+  }
 }
 
 AdvanceReport Simulation::advance(std::uint64_t steps)
@@ -521,6 +579,7 @@ SimulationCheckpoint Simulation::checkpoint() const
   c.steps = steps_;
   c.time = time_;
   c.nextId = nextId_;
+  c.removed = removed_;
   c.layersEmitted = layersEmitted_;
   for (const Body& body : bodies_)
   {
@@ -567,6 +626,7 @@ void Simulation::restore(const SimulationCheckpoint& c)
   steps_ = c.steps;
   time_ = c.time;
   nextId_ = c.nextId;
+  removed_ = c.removed;
   layersEmitted_ = c.layersEmitted;
   lastGoodStep_ = steps_;
   // The next automatic step needs the fastest particle, which a fresh scan gives exactly as the

@@ -74,6 +74,7 @@ struct SimulationCheckpoint
   std::uint64_t steps = 0;
   double time = 0; // [s]
   std::int64_t nextId = 0;
+  std::uint64_t removed = 0; // particles gone through the outflows
   std::vector<std::int64_t> layersEmitted;
   std::variant<Snapshot<float>, Snapshot<double>> state;
   // The bodies the fluid moves (Simulation::Body): their states and last loads.
@@ -93,6 +94,7 @@ struct AdvanceReport
   double minTimeStep = 0;    // the smallest and largest dt of the steps [s]; 0 when none
   double maxTimeStep = 0;
   double seconds = 0;        // the simulated time the steps covered [s]
+  std::uint64_t removed = 0; // particles that left through the scene's outflows
   // Per solid of the scene: the force its loads (StepReport::loads) gave over the steps, summed
   // as impulses, force dt [N s], and their torque about the solid's centre of mass (where it was
   // at each step's end) likewise [N m s]; empty where the stepper sums no loads.
@@ -205,8 +207,13 @@ public:
   std::size_t seededInsideSolids() const { return seededInsideSolids_; }
 
   std::uint64_t stepCount() const { return steps_; }
-  // Ids run 0..idCount()-1: the initial particles and every one an emitter has released.
+  // Ids run 0..idCount()-1: the initial particles and every one an emitter has released. An id
+  // that left through an outflow is never given again.
   std::int64_t idCount() const { return nextId_; }
+  // The particles that left through the scene's outflows since step 0 (over every rank).
+  std::uint64_t removedCount() const { return removed_; }
+  // The outflows as the stepper removes by them (outflowZones of the scene at the parameters).
+  const std::vector<Box>& outflowZones() const { return outflowZones_; }
   double time() const { return time_; }
   const Parameters& parameters() const { return parameters_; }
   const Scene& scene() const { return scene_; }
@@ -230,6 +237,9 @@ private:
   double checkedTimeStep() const; // nextTimeStep(), or SimulationDiverged below the smallest
   void emit();
   void checkEmitters(std::size_t initialParticles) const;
+  // InvalidInput naming an outflow that holds the whole fluid, or an emitter whose layers would
+  // be released inside one.
+  void checkOutflows(const ParticleBatch& initial) const;
   // Throws InvalidInput when the scene's speed, gravity or XSPH force an automatic step below
   // the smallest one (the constructor's check).
   void checkAutomaticStep(double sceneSpeed, double v0) const;
@@ -250,6 +260,8 @@ private:
   static double capillaryStepLimit(const Parameters& p);
   double xsphStepLimit_ = 0; // kMaxXsphBlend beta h^2 / (nu + nu_4) [s]; infinity without XSPH
   std::int64_t nextId_ = 0;
+  std::uint64_t removed_ = 0;
+  std::vector<Box> outflowZones_;
   std::vector<Vec3d> solidCentres_; // per solid, its centre of mass in its own frame
   std::vector<Body> bodies_;
   std::vector<std::int64_t> layersEmitted_; // per emitter

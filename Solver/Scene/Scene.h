@@ -31,15 +31,27 @@ struct FluidSphere
 };
 
 // A nozzle that adds a disk of particles, one lattice layer at a time, while start <= t < stop.
+// The file gives its speed, or its volume rate (an inflow's target): Simulation then sets the
+// speed that releases exactly that volume as whole layers at the run's spacing (emitterSpeed).
 struct Emitter
 {
   Vec3d center;
   Vec3d direction{ 1, 0, 0 }; // normalised on load
   double radius = 0;
-  double speed = 0;
+  double speed = 0; // [m/s]; 0 while `rate` is still to be resolved
+  double rate = 0;  // [m^3/s]; 0: the file gave the speed
   double start = 0;
   double stop = 0;
   int liquid = 0;
+};
+
+// Where particles leave the simulation (Physics/Outflow.h): a face of the domain, as the slab
+// `depth` deep inside it, or a box. A face's slab spans the whole face.
+struct Outflow
+{
+  int face = -1;     // -1: a box; 0-5: the domain's -x, +x, -y, +y, -z, +z face
+  double depth = 0;  // [m], a face's; 0: one smoothing length (the wall's reach is gone with it)
+  Box box;           // a box's
 };
 
 struct Scene
@@ -52,6 +64,7 @@ struct Scene
   std::vector<FluidBox> boxes;
   std::vector<FluidSphere> spheres;
   std::vector<Emitter> emitters;
+  std::vector<Outflow> outflows;
   std::vector<SolidRegion> solids; // "obstacles": what the fluid flows around
 };
 
@@ -74,6 +87,19 @@ double estimateParticleCount(const Scene& scene, const Parameters& parameters);
 // The initial particles of a scene at the parameters' spacing, ids 0..N-1. Throws InvalidInput
 // before allocating when the spacing would make more than kMaxParticles.
 ParticleBatch fillScene(const Scene& scene, const Parameters& parameters);
+
+// The lattice sites of an emitter's disk at spacing s: the particles of one layer.
+long emitterSites(const Emitter& emitter, double s);
+// The emitter's speed at the parameters' spacing: the file's, or rate / (sites s^2), so that the
+// whole layers released carry exactly `rate` m^3/s.
+double emitterSpeed(const Emitter& emitter, const Parameters& parameters);
+
+// The outflows as boxes at the parameters' spacing and smoothing length. A face's slab reaches
+// one spacing beyond the domain on every side, as far as particles may stray (checkBatch).
+std::vector<Box> outflowZones(const Scene& scene, const Parameters& parameters);
+
+// The name errors give outflow k: "outflows[k] (face +x)" or "outflows[k] (box)".
+std::string outflowName(const Scene& scene, std::size_t k);
 
 // Parameters with the scene's domain and liquids.
 Parameters withSceneDomain(Parameters parameters, const Scene& scene);

@@ -18,6 +18,17 @@ void Stepper::setObstacles(const std::vector<DistanceGrid>& obstacles, const std
   }
 }
 
+std::size_t Stepper::removeOutflow(const std::vector<Box>& zones)
+{
+  if (!zones.empty())
+  {
+    throw InvalidInput("outflows: " + std::to_string(zones.size()) + " zone(s) given to the " +
+      description() + " backend, which removes no particles (every backend of this build does: a "
+      "stepper outside it must implement Stepper::removeOutflow)");
+  }
+  return 0;
+}
+
 void Stepper::setObstaclePoses(const std::vector<SolidPose>& poses)
 {
   checkPoseCount(poses.size(), 0);

@@ -136,6 +136,12 @@ public:
   virtual void load(const Snapshot<float>& state) = 0;
   virtual void load(const Snapshot<double>& state) = 0;
 
+  // Removes the particles whose position lies in one of the boxes (the scene's outflows,
+  // Physics/Outflow.h), keeping the others in their order; returns how many were removed, over
+  // every rank of a decomposed run (collective there). Nothing else changes: the removed ids are
+  // gone for good. The default, for a stepper without, throws InvalidInput naming the backend.
+  virtual std::size_t removeOutflow(const std::vector<Box>& zones);
+
   // Solid obstacles the fluid flows around, as signed distance grids (Scene/SignedDistance.h,
   // Physics/Boundary.h), replacing any set before; part of the configuration like the
   // parameters. `poses` (none: every solid as sampled) places each solid now (SolidMotion.h):

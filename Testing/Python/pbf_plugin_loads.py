@@ -150,7 +150,8 @@ for proxy, label in ((source, "source"), (fluid_filter, "filter")):
 # The preset enumeration names the scenes compiled in from Data/ (file names without .json).
 enumeration = source.SMProxy.GetProperty("Preset").GetDomain("enum")
 presets = [enumeration.GetEntryText(i) for i in range(enumeration.GetNumberOfEntries())]
-expect(presets == ["dam_break", "double_dam_break", "blob", "stream", "marin_dam_break"],
+expect(presets == ["dam_break", "double_dam_break", "blob", "stream", "marin_dam_break",
+                  "channel"],
        "preset entries %s" % presets)
 expect(source.Preset == "dam_break", "the default preset is %s, not dam_break" % source.Preset)
 data_dir = os.environ.get("PBF_DATA_DIR")

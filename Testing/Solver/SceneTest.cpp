@@ -34,7 +34,7 @@ const char* kValid = R"({"domain": {"min": [0,0,0], "max": [1,1,1]},
 TEST(Scene, EveryPresetParsesAndFills)
 {
   const auto names = presetNames();
-  const std::set<std::string> expected = { "blob", "dam_break", "double_dam_break",
+  const std::set<std::string> expected = { "blob", "channel", "dam_break", "double_dam_break",
     "marin_dam_break", "stream" };
   EXPECT_EQ(std::set<std::string>(names.begin(), names.end()), expected);
   for (const auto& name : names)
