@@ -700,3 +700,51 @@ TEST(DeviceStepperOnHost, TwoLiquidsGrowResumeAndScanAsTheSerialBackend)
   ASSERT_GT(count, 0u);
   EXPECT_NEAR(oil / double(count), 800.0, 80.0);
 }
+
+// Outflows on the GPU schedule: the kept particles selected stably and gathered (x and v back
+// into the buffers the captured steps start from), the step captured again at the new count.
+// Bit-identical to the serial backend's removal, with two liquids (whose bytes go along) and
+// without, captured and stage by stage, over steps that remove particles and steps that do not.
+TEST(DeviceStepperOnHost, OutflowsRemoveWhatTheSerialBackendRemoves)
+{
+  Parameters p;
+  p.particleSpacing = 0.04;
+  p.timeStepping = TimeStepping::Fixed;
+  p.timeStep = 1.0 / 120.0;
+  // A box through the liquids' interface and the floor's right half: particles leave at once
+  // and then as the fluid runs into it.
+  const std::vector<Box> zones = { Box{ { 0.0, 0.25, 0.0 }, { 0.3, 0.35, 0.3 } },
+    Box{ { 0.7, -0.1, -0.1 }, { 1.1, 0.1, 0.7 } } };
+  for (const bool liquids : { true, false })
+  {
+    for (const bool graphs : { true, false })
+    {
+      const Scene scene = liquids ? test::twoLiquids() : presetScene("dam_break");
+      const Parameters q = withSceneDomain(p, scene);
+      const ParticleBatch initial = fillScene(scene, q);
+      auto serial = makeStepper(Backend::Serial, Precision::Double, q, initial);
+      cuda::Options options;
+      options.graphs = graphs;
+      auto device = hostStepper<double>(q, initial, options);
+      std::size_t removed = 0;
+      int quiet = 0; // steps that removed nothing
+      for (int s = 0; s < 30; ++s)
+      {
+        serial->step();
+        device->step();
+        const std::size_t a = serial->removeOutflow(zones);
+        ASSERT_EQ(device->removeOutflow(zones), a) << "step " << s;
+        removed += a;
+        quiet += a == 0 ? 1 : 0;
+      }
+      SCOPED_TRACE(std::string(liquids ? "two liquids" : "one liquid") +
+        (graphs ? ", graphs" : ", stage by stage"));
+      EXPECT_GT(removed, 50u);
+      EXPECT_GT(quiet, 0);
+      EXPECT_EQ(device->size(), initial.position.size() - removed);
+      const Snapshot<double> a = stateOf<double>(*serial), b = stateOf<double>(*device);
+      test::expectBitIdentical(a, b);
+      EXPECT_EQ(a.liquid, b.liquid);
+    }
+  }
+}

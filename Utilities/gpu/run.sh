@@ -213,8 +213,12 @@ sanitize racecheck "$bench" --backend cuda --refined 0.05 --until 0.05 --modes d
 for tool in memcheck initcheck; do
   sanitize "$tool" "$build/Testing/Cuda/pbf_cuda_tests" --gtest_filter='CudaSurface.*'
 done
+# The outflows' removal (a selection, gathers, the step captured again) on one GPU and on ranks.
+sanitize memcheck "$build/Testing/Cuda/pbf_cuda_tests" --gtest_filter='CudaStepper.Outflows*'
+sanitize memcheck "$build/Testing/Cuda/pbf_cuda_subdomain_tests" \
+  --gtest_filter='CudaSubdomain.Outflows*'
 # Every shipped scene at small size under memcheck, racecheck and initcheck.
-for scene in dam_break double_dam_break blob stream; do
+for scene in dam_break double_dam_break blob stream channel; do
   for tool in memcheck racecheck initcheck; do
     sanitize "$tool" "$run" --backend cuda --scene "$scene" --spacing 0.05 --steps 6 --report 3
   done
