@@ -233,11 +233,24 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
 // boxes the fluid moves (addFloatingBoxes; 0: none, the path's own baseline). Each step reads the
 // loads back and places the bodies before the next, so the host waits on the device every step:
 // timed on the host's steady clock, that wait included.
+// --outflow Y adds an outflow: a strip one spacing high at height Y and two spacings wide along
+// the -x wall, which the column's back falls through as it collapses, so that some particles
+// leave at every step while the count stays nearly the same (what the removal costs: a
+// selection, the gathers and, on a GPU, the step captured again).
 Result bodiesBenchmark(const ToolOptions& options, double particles, int warmup, int steps,
-  int bodies)
+  int bodies, double outflowY)
 {
   Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
   addFloatingBoxes(scene, bodies, options.parameters.particleSpacing);
+  if (outflowY > 0)
+  {
+    Outflow slab;
+    slab.box = scene.domain;
+    slab.box.min.y = outflowY;
+    slab.box.max.y = outflowY + options.parameters.particleSpacing;
+    slab.box.max.x = scene.domain.min.x + 2 * options.parameters.particleSpacing;
+    scene.outflows.push_back(slab);
+  }
   Parameters parameters = withSceneDomain(options.parameters, scene);
   parameters.timeStepping = TimeStepping::Fixed;
   const auto setup0 = std::chrono::steady_clock::now();
@@ -248,7 +261,8 @@ Result bodiesBenchmark(const ToolOptions& options, double particles, int warmup,
   r.iterations = parameters.solverIterations;
   r.particles = simulation.stepper().size();
   r.steps = steps;
-  r.neighbors = std::to_string(bodies) + " bod" + (bodies == 1 ? "y" : "ies");
+  r.neighbors = std::to_string(bodies) + " bod" + (bodies == 1 ? "y" : "ies") +
+    (outflowY > 0 ? ", outflow" : "");
   r.device = simulation.stepper().description();
   simulation.advance(static_cast<std::uint64_t>(warmup));
   r.setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - setup0).count();
@@ -261,6 +275,11 @@ Result bodiesBenchmark(const ToolOptions& options, double particles, int warmup,
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
   summarize(ms, simulation.stepper(), r);
+  if (outflowY > 0)
+  {
+    std::printf("# outflow at y = %g m: %llu particles left over the %d warm-up and %d timed steps\n",
+      outflowY, static_cast<unsigned long long>(simulation.removedCount()), warmup, steps);
+  }
   return r;
 }
 
@@ -354,7 +373,8 @@ std::vector<double> parseCounts(const std::string& text)
 void refuseTheOtherBenchmarksOptions(const ToolOptions& options, bool refined)
 {
   const std::vector<std::string> widenedOnly = { "particles", "sweep", "steps", "warmup",
-    "neighbors", "skin", "graphs", "block", "solid", "bodies", "liquids", "json", "label" };
+    "neighbors", "skin", "graphs", "block", "solid", "bodies", "outflow", "liquids", "json",
+    "label" };
   const std::vector<std::string> refinedOnly = { "until", "frame", "modes", "csv" };
   for (const std::string& key : refined ? widenedOnly : refinedOnly)
   {
@@ -406,6 +426,8 @@ int main(int argc, char** argv)
     { "liquids", "1 (default) or 2: the column as water under oil (what several liquids cost)" },
     { "bodies", "N >= 0: run through Simulation with N floating boxes in the surge's way (what "
                 "bodies cost; the loads read back every step), instead of the bare stepper" },
+    { "outflow", "Y [m]: through Simulation as --bodies, with an outflow strip at height Y "
+                 "along the -x wall that the column falls through (what removing costs)" },
     { "solid", "1: a sphere solid in the surge's way, 2: the MARIN box, 3: the sphere rolling "
                "at 1 m/s (what a solid costs; default 0: none)" },
   };
@@ -449,7 +471,12 @@ int main(int argc, char** argv)
     {
       throw InvalidInput("--steps must be >= 1 and --warmup >= 0");
     }
-    const int bodies = std::stoi(extra("bodies", "-1"));
+    const double outflowY = std::stod(extra("outflow", "0"));
+    if (options.extra.count("outflow") && !(outflowY > 0))
+    {
+      throw InvalidInput("--outflow = " + options.extra["outflow"] + ": must be a height > 0 [m]");
+    }
+    const int bodies = std::stoi(extra("bodies", outflowY > 0 ? "0" : "-1"));
     if (options.extra.count("bodies") && (bodies < 0 || solid != "0"))
     {
       throw InvalidInput("--bodies = " + options.extra["bodies"] +
@@ -471,7 +498,7 @@ int main(int argc, char** argv)
     for (double count : counts)
     {
       results.push_back(bodies >= 0
-          ? bodiesBenchmark(options, count, warmup, steps, bodies)
+          ? bodiesBenchmark(options, count, warmup, steps, bodies, outflowY)
           : benchmark(
               options, count, warmup, steps, neighbors, skin, graphs, block, std::stoi(solid),
               liquids));
