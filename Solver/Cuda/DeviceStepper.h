@@ -102,6 +102,7 @@ private:
     typename Device::Graph graph{};
     Roles next;
     const CellKey* sortedKeys = nullptr;
+    bool captured = false;
   };
 
   // The arrays of the particle count and of the grid: the store's, and the fixed ones.
@@ -110,7 +111,10 @@ private:
   void release();
   void releaseGraphs();
   void evaluateAtRest();
+  // Drops the captured steps: the second step() from now captures the one its roles need
+  // (captureGraph).
   void captureGraphs();
+  void captureGraph(int x);
   // Uploads x, v and id of the n_ particles into a fresh allocation.
   void restore(const std::vector<Vec3<Real>>& x, const std::vector<Vec3<Real>>& v,
     const std::vector<std::int64_t>& id, const std::vector<std::uint8_t>& liquid);
@@ -153,6 +157,7 @@ private:
   double* statisticsResult_ = nullptr;
 
   Graph graphs_[2]; // by roles_.x
+  std::uint64_t stepsAtThisCount_ = 0; // steps since the graphs were dropped
 };
 
 template <class Real, class Device>
@@ -245,30 +250,33 @@ void DeviceStepper<Real, Device>::evaluateAtRest()
     exec, buffers_, constants_, static_cast<std::uint32_t>(n_), roles_, &sortedKeys_);
 }
 
+// A captured step keeps the buffers, constants and count of now, as a CUDA graph keeps its
+// kernels' arguments, so anything that changes them drops the graphs. The first step after that
+// is queued stage by stage; the second captures the step (one assignment of x and v at a time: an
+// odd number of solver iterations swaps them every step and then uses both). A capture costs
+// more than queueing a few steps, so a scene whose outflows remove particles at every step never
+// pays for one.
 template <class Real, class Device>
 void DeviceStepper<Real, Device>::captureGraphs()
 {
   releaseGraphs();
-  if (!options_.graphs || n_ == 0)
-  {
-    return;
-  }
-  // Both assignments of x and v, so that an odd number of solver iterations, which swaps them
-  // every step, replays without capturing again. The graph keeps the buffers and constants of
-  // now, as a CUDA graph keeps its kernels' arguments.
-  for (int x = 0; x < 2; ++x)
-  {
-    Roles roles;
-    roles.x = x;
-    roles.v = 1 - x;
-    Graph* g = &graphs_[x];
-    const StepBuffers<Real> buffers = buffers_;
-    const StepConstants<Real> constants = constants_;
-    const auto n = static_cast<std::uint32_t>(n_);
-    device_->capture(g->graph, [=](auto& exec) {
-      g->next = enqueueStep(exec, buffers, constants, n, roles, &g->sortedKeys);
-    });
-  }
+  stepsAtThisCount_ = 0;
+}
+
+template <class Real, class Device>
+void DeviceStepper<Real, Device>::captureGraph(int x)
+{
+  Roles roles;
+  roles.x = x;
+  roles.v = 1 - x;
+  Graph* g = &graphs_[x];
+  const StepBuffers<Real> buffers = buffers_;
+  const StepConstants<Real> constants = constants_;
+  const auto n = static_cast<std::uint32_t>(n_);
+  device_->capture(g->graph, [=](auto& exec) {
+    g->next = enqueueStep(exec, buffers, constants, n, roles, &g->sortedKeys);
+  });
+  g->captured = true;
 }
 
 template <class Real, class Device>
@@ -290,9 +298,13 @@ void DeviceStepper<Real, Device>::step()
     return;
   }
   device_->activate();
-  if (options_.graphs)
+  if (options_.graphs && (graphs_[roles_.x].captured || stepsAtThisCount_ > 0))
   {
     Graph& g = graphs_[roles_.x];
+    if (!g.captured)
+    {
+      captureGraph(roles_.x);
+    }
     device_->launch(g.graph);
     roles_ = g.next;
     sortedKeys_ = g.sortedKeys;
@@ -304,6 +316,7 @@ void DeviceStepper<Real, Device>::step()
       exec, buffers_, constants_, static_cast<std::uint32_t>(n_), roles_, &sortedKeys_);
   }
   ++steps_;
+  ++stepsAtThisCount_;
   stepped_ = true;
   if (options_.faultAtStep != 0 && steps_ == options_.faultAtStep)
   {

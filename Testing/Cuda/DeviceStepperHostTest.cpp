@@ -219,21 +219,38 @@ TEST(DeviceStepperOnHost, TheStepIsCapturedAgainOnlyWhenItsArgumentsChange)
   const Parameters p = fixedParameters({ "dam_break", 4, true, 0.02, false }, scene);
   test::HostDevicePolicy* policy = nullptr;
   auto device = hostStepper<float>(p, fillScene(scene, p), cuda::Options{}, false, &policy);
-  const long atStart = policy->captures();
-  EXPECT_EQ(atStart, 2); // both assignments of x and v
+  EXPECT_EQ(policy->captures(), 0);
+  device->step(); // the first step after a change is queued stage by stage
+  EXPECT_EQ(policy->captures(), 0);
   for (int s = 0; s < 10; ++s)
   {
     device->step();
   }
+  // Four projections keep x and v where they are: one assignment, captured once.
+  const long stepped = policy->captures();
+  EXPECT_EQ(stepped, 1);
   device->setTimeStep(p.timeStep / 2); // the step size is read on the device: no new capture
   device->step();
-  EXPECT_EQ(policy->captures(), atStart);
+  EXPECT_EQ(policy->captures(), stepped);
   ParticleBatch more;
   more.position = { Vec3d{ 0.8, 0.5, 0.1 } };
   more.velocity = { Vec3d{ 0, 0, 0 } };
   more.id = { 1000000 };
-  device->append(more); // another particle count: captured again
-  EXPECT_EQ(policy->captures(), atStart + 2);
+  device->append(more); // another particle count: captured again at the second step
+  device->step();
+  EXPECT_EQ(policy->captures(), stepped);
+  device->step();
+  EXPECT_EQ(policy->captures(), stepped + 1);
+  // Three projections swap x and v every step: both assignments, each captured once.
+  Parameters odd = p;
+  odd.solverIterations = 3;
+  test::HostDevicePolicy* oddPolicy = nullptr;
+  auto swapping = hostStepper<float>(odd, fillScene(scene, odd), cuda::Options{}, false, &oddPolicy);
+  for (int s = 0; s < 7; ++s)
+  {
+    swapping->step();
+  }
+  EXPECT_EQ(oddPolicy->captures(), 2);
 }
 
 TEST(DeviceStepperOnHost, EmittersGrowTheArraysLikeTheSerialBackend)
