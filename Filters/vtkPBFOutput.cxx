@@ -393,6 +393,10 @@ vtkSmartPointer<vtkFieldData> vtkPBFOutput::FrameFieldData(
   AddInteger(fieldData, "SubstepsPerFrame", substeps);
   AddInteger(fieldData, "Frame", frame);
   AddInteger(fieldData, "StepCount", static_cast<vtkIdType>(simulation.stepCount()));
+  // Every id given so far, and those gone through the outflows: the particles now are the
+  // difference, and an id is never given twice.
+  AddInteger(fieldData, "ReleasedParticles", static_cast<vtkIdType>(simulation.idCount()));
+  AddInteger(fieldData, "RemovedParticles", static_cast<vtkIdType>(simulation.removedCount()));
   AddValue(fieldData, "Time", simulation.time());
   AddText(fieldData, "Backend", simulation.stepper().description());
   AddText(fieldData, "Precision", pbf::toString(simulation.stepper().precision()));

@@ -16,7 +16,7 @@ FIELD_ARRAYS = ["SmoothingLength", "RestDensity", "ParticleMass", "ParticleSpaci
                 "SmoothingRatio", "SolverIterations", "RelaxationEpsilon", "SCorrK", "SCorrN",
                 "SCorrDeltaQ", "XSPHViscosity", "VorticityEpsilon", "Unilateral", "MirrorWalls", "Gravity",
                 "Domain", "TimeStep", "FrameInterval", "SubstepsPerFrame", "Frame", "StepCount",
-                "Time", "Backend", "Precision", "Scene"]
+                "ReleasedParticles", "RemovedParticles", "Time", "Backend", "Precision", "Scene"]
 
 
 def pairwise_distances(points):
