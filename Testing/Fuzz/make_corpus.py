@@ -37,7 +37,7 @@ def write(name, content):
 
 shutil.rmtree(corpus, ignore_errors=True)
 os.makedirs(corpus)
-for name in ("dam_break", "double_dam_break", "blob", "stream"):
+for name in ("dam_break", "double_dam_break", "blob", "stream", "channel"):
     write(name + ".json", scene(name))
 write("dam_break_coarse", scene("dam_break") + tail(particleSpacing=0.2))
 write("stream_coarse_double", scene("stream") + tail(particleSpacing=0.1, flags=1))
@@ -60,6 +60,14 @@ write("dam_break_obstacles_coarse", json.dumps({
     "fluid": [{"type": "box", "min": [0, 0, 0], "max": [0.4, 0.6, 0.6]}],
     "obstacles": [{"type": "sphere", "center": [0.9, 0.12, 0.3], "radius": 0.12},
                   {"type": "box", "min": [0.3, -0.5, -0.5], "max": [0.5, 0.2, 0.2]}]}).encode()
+      + tail(particleSpacing=0.1))
+# Open boundaries: the channel stepped (its inflow by rate, the +x face an outflow), and a dam
+# break whose box outflow eats the column's top and a face's slab its far end.
+write("channel_coarse", scene("channel") + tail(particleSpacing=0.05))
+write("dam_break_outflows_coarse", json.dumps({
+    "domain": {"min": [0, 0, 0], "max": [1.6, 0.8, 0.6]},
+    "fluid": [{"type": "box", "min": [0, 0, 0], "max": [0.4, 0.6, 0.6]}],
+    "outflows": [{"min": [0, 0.4, 0], "max": [0.4, 0.8, 0.6]}, {"face": "+x", "depth": 0.3}]}).encode()
       + tail(particleSpacing=0.1))
 write("not_json", b"domain: [0, 1]\n")
 write("number_beyond_double", b'{"domain": {"min": [0,0,0], "max": [1e400,1,1]}, "fluid": []}')
