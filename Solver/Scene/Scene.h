@@ -39,10 +39,10 @@ struct Emitter
   Vec3d direction{ 1, 0, 0 }; // normalised on load
   double radius = 0;
   double speed = 0; // [m/s]; 0 while `rate` is still to be resolved
-  double rate = 0;  // [m^3/s]; 0: the file gave the speed
   double start = 0;
   double stop = 0;
   int liquid = 0;
+  double rate = 0;  // [m^3/s]; 0: the file gave the speed
 };
 
 // Where particles leave the simulation (Physics/Outflow.h): a face of the domain, as the slab
