@@ -11,7 +11,8 @@ fluid and outputs its own particles. Checked against the same source with Decomp
 - particles come from every rank, ids are unique and complete, ParticlesPerRank adds up;
 - frames asked out of order are bit-identical, and so is the filter seeded by points;
 - with a Sphere on the Obstacles port, 10 steps agree to 1e-9 and no particle enters it;
-- the Surface output of the decomposed run is closed across the slab borders.
+- the Surface output of the decomposed run is closed across the slab borders;
+- the channel's outflow removes particles on every rank, its stream the single-rank run's.
 
 Run with: mpiexec -n N pvbatch pbf_mpi.py --plugin PATH --ranks N [--500-steps]"""
 import os
@@ -174,6 +175,40 @@ if long_run:
               % (ranks, name, mine, reference, 100 * abs(mine / reference - 1)))
         expect(abs(mine - reference) <= 0.01 * abs(reference),
                "500 steps: %s differs by more than 1%%" % name)
+
+# The channel (an inflow by rate, the +x face an outflow) to 4 s, where particles have been
+# leaving for over a second: every rank removes its own, the counts are every rank's, and the
+# stream is the single-rank run's (its count within 2 %; the particles differ by then, rounding
+# grown over 1,000 steps of a free stream). Frame 6 and then frame 8 again are bit for bit.
+def channel(decompose):
+    return PositionBasedFluids(Preset="channel", ParticleSpacing=SPACING,  # noqa: F821
+                               Precision="Double", FrameInterval=0.5, NumberOfFrames=8,
+                               CheckpointInterval=2, DecomposeAcrossRanks=decompose)
+
+
+def removed(proxy, at):
+    proxy.UpdatePipeline(at)
+    return int(T.field_value(proxy.GetClientSideObject().GetOutputDataObject(0), "RemovedParticles"))
+
+
+streams = [channel(flag) for flag in (1, 0)]
+ends = []
+for proxy in streams:
+    owners = ProcessIdScalars(Input=proxy)
+    owners.UpdatePipeline(4.0)
+    ends.append(T.particles_of(servermanager.Fetch(owners)))
+gone = [removed(proxy, 4.0) for proxy in streams]
+print("%d ranks, channel at 4 s: %d particles, %d removed; one rank %d, %d removed"
+      % (ranks, ends[0]["n"], gone[0], ends[1]["n"], gone[1]))
+expect(gone[0] > 0 and gone[1] > 0, "channel: nothing left through the outflow by 4 s")
+expect(numpy.array_equal(ends[0]["id"], numpy.unique(ends[0]["id"])), "channel: an id twice")
+expect(abs(ends[0]["n"] - ends[1]["n"]) <= 0.02 * ends[1]["n"],
+       "channel: %d particles on %d ranks, %d on one" % (ends[0]["n"], ranks, ends[1]["n"]))
+owners = ProcessIdScalars(Input=streams[0])
+owners.UpdatePipeline(3.0)
+owners.UpdatePipeline(4.0)
+T.expect_identical(T.particles_of(servermanager.Fetch(owners)), ends[0],
+                   "channel frame 8 asked again after frame 6")
 
 # The filter: points seed the fluid on every rank, each keeps its slab.
 seed = PointSource(Center=[0.8, 0.35, 0.3], Radius=0.12, NumberOfPoints=200)
