@@ -42,6 +42,9 @@ struct DistanceGridView
   bool moving;
   Real rotation[9]; // rows
   Vec3<Real> translation, pivot, pivotVelocity, angularVelocity;
+  // cos(theta) of each liquid's contact angle with this solid (SurfaceTension.h's adhesion);
+  // 0: neutral.
+  Real contactCos[kMaxLiquids];
 
   // The trilinear field at q and its gradient, clamped to the grid (a particle beyond the grid is
   // farther than h from the solid, whose grid is padded by h).

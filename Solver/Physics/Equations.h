@@ -256,6 +256,62 @@ PBF_HD PBF_INLINE void forEachNearSolid(
   }
 }
 
+// The solid nearest to a particle within h, as surface tension sees it: a mirror at the solid's
+// tangent plane there, as the boundary's sums take it (Boundary.h). Its images continue the
+// colour and the surface into the solid as the walls' images do (SurfaceTension.h), so a solid is
+// no surface, and its contact angle acts at the contact line. solid < 0: none within h.
+template <class Real>
+struct SolidMirror
+{
+  int solid;     // its index among the obstacles
+  Vec3<Real> n;  // its outward unit normal
+  Real offset;   // the plane: dot(n, x) = offset
+  Real distance; // of the particle from it, in [0, h)
+
+  // q reflected in the plane; an image is never closer to a particle on the fluid's side than q.
+  PBF_HD PBF_INLINE Vec3<Real> image(const Vec3<Real>& q) const
+  {
+    return q - n * (Real(2) * (dot(n, q) - offset));
+  }
+  // A direction seen in the mirror.
+  PBF_HD PBF_INLINE Vec3<Real> reflect(const Vec3<Real>& v) const
+  {
+    return v - n * (Real(2) * dot(n, v));
+  }
+};
+
+template <class Real>
+PBF_HD PBF_INLINE SolidMirror<Real> noSolid()
+{
+  return SolidMirror<Real>{ -1, Vec3<Real>{ Real(0), Real(0), Real(0) }, Real(0), Real(0) };
+}
+
+template <class Real, class Neighbors>
+PBF_HD PBF_INLINE SolidMirror<Real> nearestSolid(
+  const Vec3<Real>& q, const FluidView<Real, Neighbors>& f)
+{
+  SolidMirror<Real> m{ -1, Vec3<Real>{ Real(0), Real(0), Real(0) }, Real(0), f.c.kernels.h };
+  for (int o = 0; o < f.obstacleCount; ++o)
+  {
+    Vec3<Real> gradient;
+    Real d;
+    if (!f.obstacles[o].within(q, &d, &gradient))
+    {
+      continue;
+    }
+    const Real g = length(gradient);
+    d = d < Real(0) ? Real(0) : d; // inside: on its surface, where the collision puts it
+    if (d < m.distance && g > Real(0))
+    {
+      m.solid = o;
+      m.n = gradient * (Real(1) / g);
+      m.distance = d;
+      m.offset = dot(m.n, q) - d;
+    }
+  }
+  return m;
+}
+
 // A solid's share of delta p_i (eq. 14, before m / rho_0), for the solid at outward normal n with
 // the table's sums b there: it carries lambda_i, as a mirror image does, and s_corr's push.
 // positionCorrection adds it; the particle pushes the solid back with it (solidLoads).
@@ -690,6 +746,12 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
     mirrors = nearWalls(pi, f.c);
   }
   const bool images = hasReflections(mirrors);
+  // The nearest solid's images continue the colour as the walls' do (SolidMirror).
+  SolidMirror<Real> solid = noSolid<Real>();
+  if (colour && f.obstacleCount > 0)
+  {
+    solid = nearestSolid(pi, f);
+  }
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
     const Vec3<Real> pj = f.p[j];
     const Vec3<Real> r = pi - pj;
@@ -713,6 +775,15 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
       forEachReflectionWithin(mirrors, pi, pj, f.c.kernels.h2, [&](const Vec3<Real>& ri, Real ri2) {
         gradC += colourGradientTerm(ri, f.c.kernels.h2 - ri2, scale);
       });
+    }
+    if (colour && solid.solid >= 0 && r2 < f.c.kernels.h2)
+    {
+      const Vec3<Real> ri = pi - solid.image(pj);
+      const Real ri2 = dot(ri, ri);
+      if (ri2 < f.c.kernels.h2)
+      {
+        gradC += colourGradientTerm(ri, f.c.kernels.h2 - ri2, f.c.colourScale * volumeOf(j, f));
+      }
     }
     if (Friction && friction != Real(0) && images && r2 < f.c.kernels.h2)
     {
@@ -749,6 +820,24 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   {
     f.colour[i] = gradC;
   }
+}
+
+// How far p is from the nearest mirror wall; h where none is nearer (or the walls mirror nothing).
+template <class Real>
+PBF_HD PBF_INLINE Real nearestWallDistance(const Vec3<Real>& p, const Coefficients<Real>& c)
+{
+  if (!c.mirrorWalls)
+  {
+    return c.kernels.h;
+  }
+  Real nearest = c.kernels.h;
+  nearest = p.x - c.boxMin.x < nearest ? p.x - c.boxMin.x : nearest;
+  nearest = p.y - c.boxMin.y < nearest ? p.y - c.boxMin.y : nearest;
+  nearest = p.z - c.boxMin.z < nearest ? p.z - c.boxMin.z : nearest;
+  nearest = c.boxMax.x - p.x < nearest ? c.boxMax.x - p.x : nearest;
+  nearest = c.boxMax.y - p.y < nearest ? c.boxMax.y - p.y : nearest;
+  nearest = c.boxMax.z - p.z < nearest ? c.boxMax.z - p.z : nearest;
+  return nearest;
 }
 
 // Adhesion at the walls (SurfaceTension.h's youngForce) for a surface particle at p with smoothed
@@ -809,6 +898,7 @@ PBF_HD PBF_INLINE void smoothColour(std::uint32_t i, const FluidView<Real, Neigh
   // keeps its normal along the wall.
   const WallMirrors<Real> mirrors = nearWalls(pi, f.c);
   const bool images = hasReflections(mirrors);
+  const SolidMirror<Real> solid = f.obstacleCount > 0 ? nearestSolid(pi, f) : noSolid<Real>();
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
     const Vec3<Real> pj = f.p[j];
     const Vec3<Real> r = pi - pj;
@@ -820,6 +910,17 @@ PBF_HD PBF_INLINE void smoothColour(std::uint32_t i, const FluidView<Real, Neigh
       const Vec3<Real> gj = f.colour[j];
       sum += gj * w;
       weight += w;
+      if (solid.solid >= 0)
+      {
+        const Vec3<Real> ri = pi - solid.image(pj);
+        const Real ri2 = dot(ri, ri);
+        if (ri2 < f.c.kernels.h2)
+        {
+          const Real wi = volume * f.c.kernels.poly6Within(ri2);
+          sum += solid.reflect(gj) * wi;
+          weight += wi;
+        }
+      }
       if (images)
       {
         forEachReflection(mirrors, pj, [&](const Vec3<Real>& image, int ix, int iy, int iz) {
@@ -879,9 +980,14 @@ PBF_HD PBF_INLINE void vorticityConfinement(
   // The walls' images of the surface neighbours take part with their normals reflected
   // (smoothColour says why).
   WallMirrors<Real> mirrors{ { 1, 1, 1 }, { { Real(0), Real(0) }, { Real(0), Real(0) }, { Real(0), Real(0) } } };
+  SolidMirror<Real> solid = noSolid<Real>();
   if (tension)
   {
     mirrors = nearWalls(pi, f.c);
+    if (f.obstacleCount > 0)
+    {
+      solid = nearestSolid(pi, f);
+    }
   }
   const bool images = hasReflections(mirrors);
   Vec3<Real> eta{ Real(0), Real(0), Real(0) };
@@ -921,6 +1027,16 @@ PBF_HD PBF_INLINE void vorticityConfinement(
                 }
               });
             }
+            if (solid.solid >= 0)
+            {
+              const Vec3<Real> ri = pi - solid.image(f.p[j]);
+              const Real ri2 = dot(ri, ri);
+              if (ri2 < f.c.kernels.h2)
+              {
+                divergence.add(solid.reflect(unit), ri, f.c.kernels.spikyGradientWithin(ri, ri2),
+                  volume);
+              }
+            }
           }
         }
       }
@@ -937,7 +1053,18 @@ PBF_HD PBF_INLINE void vorticityConfinement(
     // f = -sigma (div n) grad c, as a velocity change dt f / rho_l.
     const int l = f.liquid ? f.liquid[i] : 0;
     v -= gradC * (divergence.divergence(f.c.kernels.h) * weight * f.time->tension[l]);
-    if (f.c.wallAdhesion)
+    // Adhesion at the nearest boundary within h: a solid nearer than every wall takes the line
+    // with its own angle for this liquid, else a wall with the liquid's.
+    if (solid.solid >= 0 && solid.distance < nearestWallDistance(pi, f.c))
+    {
+      const Real cosTheta = f.obstacles[solid.solid].contactCos[l];
+      if (cosTheta != Real(0))
+      {
+        v += youngForce(f.normal[i], solid.n, gradC, cosTheta, solid.distance, f.c.kernels.h) *
+          (weight * f.time->tension[l]);
+      }
+    }
+    else if (f.c.wallAdhesion)
     {
       v += wallYoungForce(pi, f.normal[i], gradC, f.c, f.time->wallCos[l]) *
         (weight * f.time->tension[l]);

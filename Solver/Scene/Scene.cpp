@@ -194,21 +194,21 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
     SolidRegion solid;
     if (type == "box")
     {
-      requireKeys(item, path, { "type", "name", "min", "max", "motion", "density" }, { "min", "max" });
+      requireKeys(item, path, { "type", "name", "min", "max", "motion", "density", "contactAngle" }, { "min", "max" });
       solid.kind = SolidRegion::Kind::Box;
       solid.box = { vector3(item, path, "min"), vector3(item, path, "max") };
       requireOrdered(solid.box.min, solid.box.max, path, item["max"]);
     }
     else if (type == "sphere")
     {
-      requireKeys(item, path, { "type", "name", "center", "radius", "motion", "density" }, { "center", "radius" });
+      requireKeys(item, path, { "type", "name", "center", "radius", "motion", "density", "contactAngle" }, { "center", "radius" });
       solid.kind = SolidRegion::Kind::Sphere;
       solid.center = vector3(item, path, "center");
       solid.radius = positive(item, path, "radius");
     }
     else if (type == "mesh")
     {
-      requireKeys(item, path, { "type", "name", "file", "thickness", "motion", "density" }, { "file" });
+      requireKeys(item, path, { "type", "name", "file", "thickness", "motion", "density", "contactAngle" }, { "file" });
       if (!item["file"].is_string() || item["file"].get<std::string>().empty())
       {
         reject(path + ".file", item["file"], "must be the path of an STL, OBJ, PLY or VTP file");
@@ -237,6 +237,16 @@ std::vector<SolidRegion> parseObstacles(const json& obstacles)
     if (item.contains("motion"))
     {
       solid.motion = parseMotion(item["motion"], path + ".motion");
+    }
+    if (item.contains("contactAngle"))
+    {
+      // Every liquid's, unless a liquid's "contactAngles" names this solid.
+      const double theta = number(item, path, "contactAngle");
+      if (!(theta >= 0.0 && theta <= 180.0))
+      {
+        reject(path + ".contactAngle", item["contactAngle"], "must lie in [0, 180] [degrees]");
+      }
+      solid.contactAngle.fill(theta);
     }
     if (item.contains("density"))
     {
@@ -550,8 +560,9 @@ void parseOutflows(const json& outflows, Scene& scene)
   }
 }
 
-// Every solid a liquid's "contactAngles" names is one of the scene's "obstacles".
-void requireContactSolids(const json& root, const Scene& scene)
+// Every solid a liquid's "contactAngles" names is one of the scene's "obstacles", and takes that
+// angle for that liquid.
+void requireContactSolids(const json& root, Scene& scene)
 {
   std::string known;
   for (const SolidRegion& solid : scene.solids)
@@ -576,19 +587,23 @@ void requireContactSolids(const json& root, const Scene& scene)
       {
         continue;
       }
-      const bool found = std::any_of(scene.solids.begin(), scene.solids.end(),
-        [&](const SolidRegion& solid) { return solid.name == name; });
-      const std::string path = ".liquids[" + std::to_string(l) + "].contactAngles." + name;
+      bool found = false;
+      for (SolidRegion& solid : scene.solids)
+      {
+        if (solid.name == name)
+        {
+          // parseContactAngles checked the range.
+          solid.contactAngle[l] = it.value().get<double>();
+          found = true;
+        }
+      }
       if (!found)
       {
+        const std::string path = ".liquids[" + std::to_string(l) + "].contactAngles." + name;
         reject(path, it.value(),
           "no solid of the scene's \"obstacles\" has this name (named solids: " +
             (known.empty() ? std::string("none") : known) + "; \"walls\" names the domain's walls)");
       }
-      // The solids' distance fields do not carry a contact angle yet: their surfaces are neutral.
-      reject(path, it.value(),
-        "a contact angle with a solid is not simulated yet (the solids are neutral, 90 degrees); "
-        "only \"walls\", the domain's walls, takes one");
     }
   }
 }

@@ -10,6 +10,7 @@
 #include "SolidMotion.h"
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <string>
@@ -40,6 +41,12 @@ struct DistanceGrid
   double cell = 0;         // node spacing [m]
   int nx = 0, ny = 0, nz = 0;
   std::vector<float> phi; // node values [m], x fastest, then y, then z
+  // Each liquid's contact angle with the solid [degrees] (SolidRegion::contactAngle); 90: neutral.
+  std::array<double, kMaxLiquids> contactAngle = [] {
+    std::array<double, kMaxLiquids> neutral;
+    neutral.fill(90.0);
+    return neutral;
+  }();
 
   float& node(int i, int j, int k) { return phi[index(i, j, k)]; }
   float node(int i, int j, int k) const { return phi[index(i, j, k)]; }
@@ -68,6 +75,13 @@ struct DistanceGrid
     v.ny = ny;
     v.nz = nz;
     v.phi = nodes;
+    for (int l = 0; l < kMaxLiquids; ++l)
+    {
+      // Exactly 0 at 90 degrees (cos of the rounded pi / 2 is 6e-17): a neutral solid adds nothing.
+      const double theta = contactAngle[static_cast<std::size_t>(l)];
+      v.contactCos[l] =
+        theta == 90.0 ? Real(0) : static_cast<Real>(std::cos(theta * (3.14159265358979323846 / 180.0)));
+    }
     return placed(v, SolidPose{});
   }
 };

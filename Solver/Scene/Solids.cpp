@@ -173,6 +173,7 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
       // The box's field is exact everywhere; the grid covers the reachable part of it only.
       fields.push_back(boxDistanceOn(s.box, gridOver(reach, cell, h, "obstacles")));
     }
+    fields.back().contactAngle = s.contactAngle;
   }
   return fields;
 }

@@ -8,6 +8,7 @@
 #include "SolidMotion.h"
 #include "Particles.h"
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,14 @@ struct SolidRegion
   // > 0: a body the fluid moves (Scene/RigidBody.h), of this uniform density [kg/m^3], from rest
   // where it is given; 0: it stays or follows `motion`.
   double density = 0;
+  // The angle each liquid's surface makes with it [degrees] (SurfaceTension.h's adhesion); 90, the
+  // default, is neutral. The obstacle's "contactAngle" sets every liquid's, a liquid's
+  // "contactAngles" by the solid's name its own.
+  std::array<double, kMaxLiquids> contactAngle = [] {
+    std::array<double, kMaxLiquids> neutral;
+    neutral.fill(90.0);
+    return neutral;
+  }();
 };
 
 // The field of each solid: nodes s/2 apart (coarser only beyond 2^24 nodes) over the part of the

@@ -26,11 +26,21 @@ Cap capOf(double theta, double rho)
 }
 } // namespace
 
-Scene sessileScene(double radius)
+Scene sessileScene(double radius, double solidAngle)
 {
   Scene scene;
   scene.name = "sessile_drop";
   scene.domain = { { 0, 0, 0 }, { 4 * radius, 2 * radius, 4 * radius } };
+  if (solidAngle > 0)
+  {
+    // The floor a solid: a slab under y = 0 wider than the domain, whose own floor lies in it.
+    scene.domain.min.y = -radius / 2;
+    SolidRegion slab;
+    slab.name = "slab";
+    slab.box = { { -radius, -radius, -radius }, { 5 * radius, 0, 5 * radius } };
+    slab.contactAngle.fill(solidAngle);
+    scene.solids.push_back(slab);
+  }
   // The region the lattice is cut from (sessileFluid keeps the hemisphere's sites).
   scene.boxes.push_back({ { 0, 0, 0 }, { 4 * radius, 2 * radius, 4 * radius }, {}, 0 });
   return scene;
@@ -63,9 +73,15 @@ double capContactAngle(double volume, double centroid)
 }
 
 SessileRun runSessileDrop(const Parameters& parameters, Backend backend, Precision precision,
-  double radius, double until, double average, double sample)
+  double radius, double until, double average, double sample, bool onSolid)
 {
   Parameters p = parameters;
+  // On a solid the walls are neutral (the drop is 2 R from them) and the slab takes the angle.
+  const double solidAngle = onSolid ? p.contactAngle : 0.0;
+  if (onSolid)
+  {
+    p.contactAngle = 90;
+  }
   p.gravity = { 0, 0, 0 };
   // Without gravity the scene's speed is the capillary one, sqrt(sigma / (rho R)), which scales
   // XSPH's viscosity (a drop released far from its angle otherwise rings for long, or jumps off).
@@ -73,7 +89,7 @@ SessileRun runSessileDrop(const Parameters& parameters, Backend backend, Precisi
   {
     p.sceneSpeedHint = std::sqrt(p.surfaceTension / (p.restDensity * radius));
   }
-  const Scene scene = sessileScene(radius);
+  const Scene scene = sessileScene(radius, solidAngle);
   Simulation simulation(scene, p, backend, precision, sessileFluid(scene, p, radius));
   SessileRun run;
   const double s = p.particleSpacing;

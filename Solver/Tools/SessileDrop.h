@@ -14,8 +14,9 @@ namespace pbf::validation
 {
 
 // The domain, 4 R wide and 2 R high, the drop's centre on the floor at (2 R, 0, 2 R); no
-// gravity.
-Scene sessileScene(double radius);
+// gravity. solidAngle > 0: the floor is a solid slab under y = 0 with that contact angle
+// [degrees] (the domain reaches R / 2 below it), the check of adhesion at obstacles.
+Scene sessileScene(double radius, double solidAngle = 0);
 // The lattice's sites inside the hemisphere of `radius` on the floor.
 ParticleBatch sessileFluid(const Scene& scene, const Parameters& parameters, double radius);
 
@@ -34,7 +35,8 @@ struct SessileRun
   double height = 0;    // the top particle's height plus half a spacing at the end [m]
   double steps = 0;
 };
+// onSolid: on sessileScene's solid slab, at parameters.contactAngle (the walls neutral).
 SessileRun runSessileDrop(const Parameters& parameters, Backend backend, Precision precision,
-  double radius, double until, double average, double sample);
+  double radius, double until, double average, double sample, bool onSolid = false);
 
 } // namespace pbf::validation

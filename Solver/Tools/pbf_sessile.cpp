@@ -22,6 +22,7 @@ int main(int argc, char** argv)
     { "until", "simulated time [s] (default 4)" },
     { "average", "the last seconds the angle is averaged over (default 1)" },
     { "sample", "sampling interval [s] (default 0.05)" },
+    { "on-solid", "1: the drop rests on a solid slab (an obstacle) with the angle, not the wall" },
   };
   try
   {
@@ -36,6 +37,7 @@ int main(int argc, char** argv)
     const double until = toolReal(options, "until", 4.0);
     const double average = toolReal(options, "average", 1.0);
     const double sample = toolReal(options, "sample", 0.05);
+    const bool onSolid = toolInteger(options, "on-solid", 0, 0) != 0;
     std::printf("spacing,particles,sigma_N_m,set_deg,measured_deg,spread_deg,height_m,steps,seconds\n");
     for (double s : spacings)
     {
@@ -46,7 +48,7 @@ int main(int argc, char** argv)
         p.contactAngle = theta;
         const auto start = std::chrono::steady_clock::now();
         const SessileRun run =
-          runSessileDrop(p, options.backend, options.precision, radius, until, average, sample);
+          runSessileDrop(p, options.backend, options.precision, radius, until, average, sample, onSolid);
         const double seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         std::printf("%.4g,%zu,%.4g,%.1f,%.1f,%.1f,%.4f,%.0f,%.1f\n", s, run.particles,

@@ -370,10 +370,14 @@ namespace
 // With `moving`, the sphere rolls into the column and the box turns, their poses set before each
 // step as Simulation sets them.
 template <class Real>
-std::size_t expectSolidsAsSerial(
-  double wallFriction, bool moving = false, double hyper = 0, double sigma = 0)
+std::size_t expectSolidsAsSerial(double wallFriction, bool moving = false, double hyper = 0,
+  double sigma = 0, double solidAngle = 90)
 {
   Scene scene = test::damBreakWithSolids();
+  for (SolidRegion& solid : scene.solids)
+  {
+    solid.contactAngle.fill(solidAngle);
+  }
   if (moving)
   {
     scene.solids[0].motion.keyframes = { { 0.0, { 0, 0, 0 }, Rotation{} },
@@ -634,6 +638,9 @@ TEST(StepSchedule, SurfaceTensionReproducesTheSerialBackendBitForBit)
   compareTwoLiquids<double>(false, false, 4, 0, 40, 0.03);
   // With the walls' friction the vorticity pass walks the images for both.
   expectSolidsAsSerial<double>(0.7, true, 0, 0.5);
+  // The solids' images and their contact angles (adhesion at obstacles), still and moving.
+  expectSolidsAsSerial<double>(0.0, true, 0, 0.5, 60);
+  expectSolidsAsSerial<float>(0.0, false, 0, 2.0, 120);
 }
 
 // Through Simulation: the nozzle's oil grows the device arrays (their liquids kept through the

@@ -149,11 +149,33 @@ TEST(SurfaceTension, BadContactAnglesAreNamed)
   EXPECT_NE(e.find(".liquids[0].contactAngles.cupp = 60"), std::string::npos) << e;
   EXPECT_NE(e.find("no solid"), std::string::npos) << e;
   EXPECT_NE(e.find("named solids: cup"), std::string::npos) << e;
-  e = sceneError(R"([ { "name": "water", "restDensity": 1000, "contactAngles": { "cup": 60 } } ])", cup);
-  EXPECT_NE(e.find(".liquids[0].contactAngles.cup = 60"), std::string::npos) << e;
-  EXPECT_NE(e.find("not simulated yet"), std::string::npos) << e;
   e = sceneError(R"([ { "name": "water", "restDensity": 1000, "contactAngles": 60 } ])");
   EXPECT_NE(e.find(".liquids[0].contactAngles = 60"), std::string::npos) << e;
+  // A solid's angle: the obstacle's for every liquid, a liquid's by the solid's name for that one.
+  const std::string two = R"([ { "name": "water", "restDensity": 1000, "contactAngles": { "cup": 60 } },
+    { "name": "oil", "restDensity": 800 } ])";
+  const std::string cupAt120 =
+    R"(, "obstacles": [ { "type": "sphere", "name": "cup", "center": [0.6, 0.6, 0.6], "radius": 0.1,
+    "contactAngle": 120 } ])";
+  EXPECT_EQ(sceneError(two, cupAt120), "");
+  const Scene scene = parseScene(R"({ "domain": { "min": [0, 0, 0], "max": [1, 1, 1] }, "liquids": )" +
+    two + R"(, "fluid": [ { "type": "box", "min": [0, 0, 0], "max": [0.2, 0.2, 0.2] } ])" +
+    cupAt120 + "}");
+  EXPECT_EQ(scene.solids.at(0).contactAngle[0], 60.0);
+  EXPECT_EQ(scene.solids.at(0).contactAngle[1], 120.0);
+  EXPECT_EQ(scene.solids.at(0).contactAngle[2], 120.0);
+  // And through the field into the stages: cos 60 for water, cos 120 for oil, exactly 0 at 90.
+  DistanceGrid grid;
+  grid.contactAngle = scene.solids[0].contactAngle;
+  grid.contactAngle[2] = 90.0;
+  grid.cell = 1;
+  const DistanceGridView<double> view = grid.view<double>(nullptr);
+  EXPECT_NEAR(view.contactCos[0], 0.5, 1e-15);
+  EXPECT_NEAR(view.contactCos[1], -0.5, 1e-15);
+  EXPECT_EQ(view.contactCos[2], 0.0);
+  e = sceneError(R"([ { "name": "water", "restDensity": 1000 } ])",
+    R"(, "obstacles": [ { "type": "box", "min": [0.5, 0, 0], "max": [0.6, 1, 1], "contactAngle": -1 } ])");
+  EXPECT_NE(e.find(".obstacles[0].contactAngle = -1: must lie in [0, 180]"), std::string::npos) << e;
 }
 
 // A drop of 10 spacings at rest: in its first step each particle's velocity is dt times its
