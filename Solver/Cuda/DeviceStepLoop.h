@@ -175,10 +175,16 @@ public:
         exec_, typename decltype(pass)::Stage{}, b_, k_, n_, f, k_.iterations, false, pass);
     };
     const bool friction = k_.c.wallFriction != Real(0);
-    if (f.colour)
+    // The solids' images are compiled in only where the scene has solids.
+    if (f.colour && f.obstacleCount > 0)
+    {
+      detail::withPass<detail::SolidColourVorticityPass>(friction, run);
+      detail::smoothColourPass<true>(exec_, n_, f);
+    }
+    else if (f.colour)
     {
       detail::withPass<detail::ColourVorticityPass>(friction, run);
-      detail::smoothColourPass(exec_, n_, f);
+      detail::smoothColourPass<false>(exec_, n_, f);
     }
     else
     {
@@ -193,7 +199,11 @@ public:
     auto run = [&](auto pass) {
       detail::confinementPass(exec_, n_, detail::AllParticles{}, f, velocity, pass);
     };
-    if (f.colour)
+    if (f.colour && f.obstacleCount > 0)
+    {
+      detail::withPass<detail::SolidTensionConfinementPass>(k_.c.xsphHyper, run);
+    }
+    else if (f.colour)
     {
       detail::withPass<detail::TensionConfinementPass>(k_.c.xsphHyper, run);
     }

@@ -424,8 +424,9 @@ struct DensityPass
 };
 
 // With Friction false the walls' friction is compiled out (vorticityAndXsph says why); with
-// Colour false the colour gradient (surface tension), for the same reason.
-template <bool Friction, bool Colour>
+// Colour false the colour gradient (surface tension), for the same reason; with Solids false the
+// solids' images of the colour (a scene without solids).
+template <bool Friction, bool Colour, bool Solids = false>
 struct VorticityPass
 {
   using Stage = VorticityStage<Friction, Colour>;
@@ -433,25 +434,30 @@ struct VorticityPass
   template <class Real, class Neighbors>
   PBF_HD PBF_INLINE void operator()(std::uint32_t i, const FluidView<Real, Neighbors>& f) const
   {
-    vorticityAndXsph<Real, Neighbors, Friction, Colour>(i, f);
+    vorticityAndXsph<Real, Neighbors, Friction, Colour, Solids>(i, f);
   }
 };
 template <bool Friction>
 using PlainVorticityPass = VorticityPass<Friction, false>;
 template <bool Friction>
 using ColourVorticityPass = VorticityPass<Friction, true>;
+template <bool Friction>
+using SolidColourVorticityPass = VorticityPass<Friction, true, true>;
 
 // The colour gradients averaged into the normals (Equations.h's smoothColour), after the
-// vorticity pass wrote them and before the confinement reads them.
-template <class Real, class Exec>
+// vorticity pass wrote them and before the confinement reads them; Solids as above.
+template <bool Solids, class Real, class Exec>
 void smoothColourPass(Exec& exec, std::uint32_t n, const FluidView<Real, MaskedNeighbors<Real>>& f)
 {
-  exec.forEach(SmoothColourStage{}, n, [=] PBF_HD(std::uint32_t i) { smoothColour(i, f); });
+  exec.forEach(SmoothColourStage{}, n, [=] PBF_HD(std::uint32_t i) {
+    smoothColour<Real, MaskedNeighbors<Real>, Solids>(i, f);
+  });
 }
 
 // The confinement pass (XSPH, its bi-Laplacian, eq. 16, surface tension) into velocity[i]; with
-// SmoothTwice false the bi-Laplacian is compiled out, with Tension false surface tension.
-template <bool SmoothTwice, bool Tension>
+// SmoothTwice false the bi-Laplacian is compiled out, with Tension false surface tension, with
+// Solids false the solids' images and adhesion.
+template <bool SmoothTwice, bool Tension, bool Solids = false>
 struct ConfinementPass
 {
 };
@@ -459,14 +465,16 @@ template <bool SmoothTwice>
 using PlainConfinementPass = ConfinementPass<SmoothTwice, false>;
 template <bool SmoothTwice>
 using TensionConfinementPass = ConfinementPass<SmoothTwice, true>;
+template <bool SmoothTwice>
+using SolidTensionConfinementPass = ConfinementPass<SmoothTwice, true, true>;
 
-template <class Real, class Exec, class Particles, bool SmoothTwice, bool Tension>
+template <class Real, class Exec, class Particles, bool SmoothTwice, bool Tension, bool Solids>
 void confinementPass(Exec& exec, std::uint32_t n, Particles particles,
   const FluidView<Real, MaskedNeighbors<Real>>& f, Vec3<Real>* velocity,
-  ConfinementPass<SmoothTwice, Tension>)
+  ConfinementPass<SmoothTwice, Tension, Solids>)
 {
   exec.forEach(ConfinementStage<Tension>{}, n, [=] PBF_HD(std::uint32_t k) {
-    vorticityConfinement<Real, MaskedNeighbors<Real>, SmoothTwice, Tension>(
+    vorticityConfinement<Real, MaskedNeighbors<Real>, SmoothTwice, Tension, Solids>(
       particles(k), f, velocity);
   });
 }

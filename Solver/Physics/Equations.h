@@ -730,7 +730,9 @@ PBF_HD PBF_INLINE Vec3<Real> wallFrictionImage(
 // one neighbour walk, so the GPU stages its neighbour rows once. Friction = false compiles them
 // out: the GPU launches that pass when the friction is 0, as the images' code made the kernel
 // slower even where they were not visited (3 % a step in double at 1M particles on the H200).
-template <class Real, class Neighbors, bool Friction = true, bool Colour = true>
+// Solids = false compiles the solids' images of the colour out (the GPU launches that pass when
+// the scene has no solid: their registers cost the colour's pass 3 % a step).
+template <class Real, class Neighbors, bool Friction = true, bool Colour = true, bool Solids = true>
 PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
   const Vec3<Real> pi = f.p[i];
@@ -748,7 +750,7 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   const bool images = hasReflections(mirrors);
   // The nearest solid's images continue the colour as the walls' do (SolidMirror).
   SolidMirror<Real> solid = noSolid<Real>();
-  if (colour && f.obstacleCount > 0)
+  if (Solids && colour && f.obstacleCount > 0)
   {
     solid = nearestSolid(pi, f);
   }
@@ -776,7 +778,7 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
         gradC += colourGradientTerm(ri, f.c.kernels.h2 - ri2, scale);
       });
     }
-    if (colour && solid.solid >= 0 && r2 < f.c.kernels.h2)
+    if (Solids && colour && solid.solid >= 0 && r2 < f.c.kernels.h2)
     {
       const Vec3<Real> ri = pi - solid.image(pj);
       const Real ri2 = dot(ri, ri);
@@ -887,7 +889,8 @@ PBF_HD PBF_INLINE Vec3<Real> reflected(const Vec3<Real>& v, int ix, int iy, int 
 // grad c averaged over particle i's neighbours (Shepard's weights V_j W_ij) into f.normal[i]:
 // the directions the curvature is taken from, smoothed over twice the kernel's support, so that
 // a surface rough on the particles' scale does not read as curved (SurfaceTension.h).
-template <class Real, class Neighbors>
+// Solids as in vorticityAndXsph.
+template <class Real, class Neighbors, bool Solids = true>
 PBF_HD PBF_INLINE void smoothColour(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
   const Vec3<Real> pi = f.p[i];
@@ -898,7 +901,8 @@ PBF_HD PBF_INLINE void smoothColour(std::uint32_t i, const FluidView<Real, Neigh
   // keeps its normal along the wall.
   const WallMirrors<Real> mirrors = nearWalls(pi, f.c);
   const bool images = hasReflections(mirrors);
-  const SolidMirror<Real> solid = f.obstacleCount > 0 ? nearestSolid(pi, f) : noSolid<Real>();
+  const SolidMirror<Real> solid =
+    Solids && f.obstacleCount > 0 ? nearestSolid(pi, f) : noSolid<Real>();
   forEachNeighbor(f.grid, i, [&](std::uint32_t j) {
     const Vec3<Real> pj = f.p[j];
     const Vec3<Real> r = pi - pj;
@@ -910,7 +914,7 @@ PBF_HD PBF_INLINE void smoothColour(std::uint32_t i, const FluidView<Real, Neigh
       const Vec3<Real> gj = f.colour[j];
       sum += gj * w;
       weight += w;
-      if (solid.solid >= 0)
+      if (Solids && solid.solid >= 0)
       {
         const Vec3<Real> ri = pi - solid.image(pj);
         const Real ri2 = dot(ri, ri);
@@ -949,8 +953,10 @@ PBF_HD PBF_INLINE void smoothColour(std::uint32_t i, const FluidView<Real, Neigh
 // bi-Laplacian out: the GPU launches that pass when alpha_4 is 0 (its registers made the double
 // precision pass spill). Then surface tension (SurfaceTension.h): dt times its acceleration,
 // -sigma (div n) grad c_i / rho, with div n from the surface neighbours' smoothed normals in the
-// same walk; Tension = false compiles it out, as SmoothTwice does.
-template <class Real, class Neighbors, bool SmoothTwice = true, bool Tension = true>
+// same walk; Tension = false compiles it out, as SmoothTwice does, and Solids = false the solids'
+// images and adhesion (vorticityAndXsph says why).
+template <class Real, class Neighbors, bool SmoothTwice = true, bool Tension = true,
+  bool Solids = true>
 PBF_HD PBF_INLINE void vorticityConfinement(
   std::uint32_t i, const FluidView<Real, Neighbors>& f, Vec3<Real>* velocityOut)
 {
@@ -984,7 +990,7 @@ PBF_HD PBF_INLINE void vorticityConfinement(
   if (tension)
   {
     mirrors = nearWalls(pi, f.c);
-    if (f.obstacleCount > 0)
+    if (Solids && f.obstacleCount > 0)
     {
       solid = nearestSolid(pi, f);
     }
@@ -1027,7 +1033,7 @@ PBF_HD PBF_INLINE void vorticityConfinement(
                 }
               });
             }
-            if (solid.solid >= 0)
+            if (Solids && solid.solid >= 0)
             {
               const Vec3<Real> ri = pi - solid.image(f.p[j]);
               const Real ri2 = dot(ri, ri);
@@ -1055,7 +1061,7 @@ PBF_HD PBF_INLINE void vorticityConfinement(
     v -= gradC * (divergence.divergence(f.c.kernels.h) * weight * f.time->tension[l]);
     // Adhesion at the nearest boundary within h: a solid nearer than every wall takes the line
     // with its own angle for this liquid, else a wall with the liquid's.
-    if (solid.solid >= 0 && solid.distance < nearestWallDistance(pi, f.c))
+    if (Solids && solid.solid >= 0 && solid.distance < nearestWallDistance(pi, f.c))
     {
       const Real cosTheta = f.obstacles[solid.solid].contactCos[l];
       if (cosTheta != Real(0))
