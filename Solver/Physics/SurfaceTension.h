@@ -35,7 +35,11 @@
 // unit length towards 90 degrees. A wall's adhesion adds sigma cos(theta) along the wall, away
 // from the liquid (youngForce): the line rests where the two balance, at theta' = theta. It is a
 // force per unit length of the line, spread over the surface particles within h of the wall, so
-// theta means the same at any spacing and step.
+// theta means the same at any spacing and step. A solid obstacle acts the same way: the nearest
+// one within h is a mirror at its tangent plane (Equations.h's SolidMirror), whose images join the
+// walls' in the colour, the smoothed normals and the curvature, and whose angle for the
+// particle's liquid (DistanceGridView::contactCos) takes the line where it is nearer than every
+// wall.
 #pragma once
 
 #include "HostDevice.h"
