@@ -22,7 +22,8 @@ TEST(SessileDrop, TheContactAngleFollowsTheAdhesion)
   Parameters p;
   p.particleSpacing = 0.005;
   p.surfaceTension = 1.0;
-  const std::vector<double> set = { 80, 90, 105, 120 };
+  // 105 (106.0) is in Validation.md's table; CI runs the ends and the neutral angle.
+  const std::vector<double> set = { 80, 90, 120 };
   std::vector<double> measured;
   for (double theta : set)
   {
