@@ -2,6 +2,7 @@
 // test reports SKIPPED, which CTest counts as skipped, not passed.
 #include "Backends.h"
 #include "Cuda/CudaBackend.h"
+#include "DecomposedRuns.h"
 #include "RequireGpu.h"
 #include "Scene.h"
 #include "Simulation.h"
@@ -752,8 +753,7 @@ TEST(CudaStepper, OutflowsRemoveWhatTheSerialBackendRemovesAndRepeatThemselves)
   const Scene scene = presetScene("dam_break");
   const Parameters p = withSceneDomain(smallParameters(0.04), scene);
   const ParticleBatch initial = fillScene(scene, p);
-  const std::vector<Box> zones = { Box{ { 0.1, 0.25, -0.1 }, { 0.3, 0.35, 0.7 } },
-    Box{ { 0.3, -0.1, -0.1 }, { 0.5, 0.1, 0.7 } } };
+  const std::vector<Box> zones = test::outflowTestZones();
   auto serial = makeStepper(Backend::Serial, Precision::Double, p, initial);
   auto gpu = makeStepper(Backend::CUDA, Precision::Double, p, initial);
   std::size_t removed = 0;

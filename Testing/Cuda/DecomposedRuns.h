@@ -108,4 +108,44 @@ inline Snapshot<double> serialState(const PresetFluid& setup, int steps, Precisi
   return state;
 }
 
+// The outflow tests' zones in the dam break at 4 cm: a box through the column and a strip of
+// the floor, which remove particles at once and then as the fluid runs into them.
+inline std::vector<Box> outflowTestZones()
+{
+  return { Box{ { 0.1, 0.25, -0.1 }, { 0.3, 0.35, 0.7 } },
+    Box{ { 0.3, -0.1, -0.1 }, { 0.5, 0.1, 0.7 } } };
+}
+
+// `steps` steps, the zones' particles removed before each step after the first (as Simulation
+// removes them after each step), on the serial backend (into `removed`, the state returned) or on
+// `ranks` ranks (each rank's own count of all into `counted`).
+inline Snapshot<double> serialWithOutflows(
+  const PresetFluid& setup, const std::vector<Box>& zones, int steps, std::size_t& removed)
+{
+  auto serial = makeStepper(Backend::Serial, Precision::Double, setup.parameters, setup.fluid);
+  removed = 0;
+  for (int s = 0; s < steps; ++s)
+  {
+    removed += s > 0 ? serial->removeOutflow(zones) : 0;
+    serial->step();
+  }
+  Snapshot<double> state;
+  serial->read(state);
+  return state;
+}
+
+inline DecomposedOutcome decomposedWithOutflows(int ranks, const PresetFluid& setup,
+  const std::vector<Box>& zones, int steps, const DecomposedFactory& make,
+  std::vector<std::size_t>& counted)
+{
+  counted.assign(static_cast<std::size_t>(ranks), 0);
+  return runDecomposed(ranks, setup, steps, make, false, [&](Stepper& stepper, int s) {
+    if (s > 0)
+    {
+      const auto& d = dynamic_cast<const distributed::DecomposedStepper&>(stepper);
+      counted[static_cast<std::size_t>(d.rank())] += stepper.removeOutflow(zones);
+    }
+  });
+}
+
 } // namespace pbf::test

@@ -501,30 +501,16 @@ TEST(DeviceSubdomainOnHost, MovingSolidsMatchTheSerialBackendOnBothDecomposedSte
 TEST(DeviceSubdomainOnHost, OutflowsRemoveOnEveryRankAsTheSerialBackendDoes)
 {
   const PresetFluid setup = presetFluid("dam_break", 0.04);
-  const std::vector<Box> zones = { Box{ { 0.1, 0.25, -0.1 }, { 0.3, 0.35, 0.7 } },
-    Box{ { 0.3, -0.1, -0.1 }, { 0.5, 0.1, 0.7 } } };
+  const std::vector<Box> zones = outflowTestZones();
   const int steps = 12;
-  auto serial = makeStepper(Backend::Serial, Precision::Double, setup.parameters, setup.fluid);
   std::size_t removed = 0;
-  for (int s = 0; s < steps; ++s)
-  {
-    removed += s > 0 ? serial->removeOutflow(zones) : 0;
-    serial->step();
-  }
-  Snapshot<double> reference;
-  serial->read(reference);
+  const Snapshot<double> reference = serialWithOutflows(setup, zones, steps, removed);
   ASSERT_GT(removed, 50u);
   for (int ranks : { 1, 2, 3 })
   {
-    std::vector<std::size_t> counted(static_cast<std::size_t>(ranks), 0);
-    const DecomposedOutcome run = runDecomposed(ranks, setup, steps, onHost<double>(), false,
-      [&](Stepper& stepper, int s) {
-        if (s > 0)
-        {
-          const auto* d = dynamic_cast<distributed::DecomposedStepper*>(&stepper);
-          counted[static_cast<std::size_t>(d->rank())] += stepper.removeOutflow(zones);
-        }
-      });
+    std::vector<std::size_t> counted;
+    const DecomposedOutcome run =
+      decomposedWithOutflows(ranks, setup, zones, steps, onHost<double>(), counted);
     for (std::size_t count : counted)
     {
       EXPECT_EQ(count, removed) << ranks << " ranks: every rank returns the count of all";

@@ -32,18 +32,6 @@ Snapshot<Real> stateOf(const Simulation& s)
   return out;
 }
 
-template <class Real>
-bool sameBits(const Snapshot<Real>& x, const Snapshot<Real>& y)
-{
-  const std::size_t n = x.id.size();
-  return x.id == y.id && y.position.size() == n &&
-    std::memcmp(x.position.data(), y.position.data(), n * sizeof(x.position[0])) == 0 &&
-    std::memcmp(x.velocity.data(), y.velocity.data(), n * sizeof(x.velocity[0])) == 0 &&
-    std::memcmp(x.density.data(), y.density.data(), n * sizeof(x.density[0])) == 0 &&
-    std::memcmp(x.lambda.data(), y.lambda.data(), n * sizeof(x.lambda[0])) == 0 &&
-    std::memcmp(x.pressure.data(), y.pressure.data(), n * sizeof(x.pressure[0])) == 0;
-}
-
 std::string errorOf(const std::string& json, const Parameters& p = coarse())
 {
   try
@@ -117,7 +105,7 @@ TEST(Outflow, OpenMPIsBitIdenticalToSerial)
   openmp.advanceTo(3.0);
   EXPECT_GT(serial.removedCount(), 0u);
   EXPECT_EQ(serial.removedCount(), openmp.removedCount());
-  EXPECT_TRUE(sameBits(stateOf<float>(serial), stateOf<float>(openmp)));
+  test::expectBitIdentical(stateOf<float>(serial), stateOf<float>(openmp));
 }
 
 TEST(Outflow, ACheckpointResumesBitForBitWithTheRemovedCount)
@@ -133,7 +121,7 @@ TEST(Outflow, ACheckpointResumesBitForBitWithTheRemovedCount)
   resumed.advanceTo(3.5);
   EXPECT_GT(straight.removedCount(), at3.removed); // particles left after the checkpoint too
   EXPECT_EQ(straight.removedCount(), resumed.removedCount());
-  EXPECT_TRUE(sameBits(stateOf<float>(straight), stateOf<float>(resumed)));
+  test::expectBitIdentical(stateOf<float>(straight), stateOf<float>(resumed));
 }
 
 TEST(Outflow, OneRankIsBitIdenticalToSerialAndTwoRanksRemoveAlike)
@@ -167,7 +155,7 @@ TEST(Outflow, OneRankIsBitIdenticalToSerialAndTwoRanksRemoveAlike)
     if (ranks == 1)
     {
       EXPECT_EQ(removed[0], serial.removedCount());
-      EXPECT_TRUE(sameBits(parts[0], reference));
+      test::expectBitIdentical(parts[0], reference);
       continue;
     }
     // Two ranks sum neighbours in another order, so after 3 s of a free stream the particles
