@@ -34,42 +34,6 @@ bool cudaAvailable(std::string* why)
 #endif
 }
 
-namespace
-{
-
-// Surface tension runs on every backend but CUDA ranks: the decomposed GPU stepper does not
-// refresh its ghosts' colour gradients, which the curvature is read from (SurfaceTension.h).
-void refuseSurfaceTensionOnCudaRanks(const Parameters& parameters)
-{
-  const double sigma = parameters.largestSurfaceTension();
-  if (sigma > 0)
-  {
-    throw InvalidInput("surfaceTension = " + std::to_string(sigma) +
-      ": CUDA ranks do not simulate surface tension yet; run the scene on one GPU, or on Serial "
-      "or OpenMP ranks (Auto does)");
-  }
-}
-
-// Several liquids run on every backend but CUDA ranks: the decomposed GPU stepper does not carry a
-// particle's liquid yet.
-void refuseLiquidsOnCudaRanks(const Parameters& parameters)
-{
-  if (parameters.liquids.empty())
-  {
-    return;
-  }
-  std::string names;
-  for (const Liquid& liquid : parameters.liquids)
-  {
-    names += (names.empty() ? "" : ", ") + liquid.name;
-  }
-  throw InvalidInput("liquids = " + std::to_string(parameters.liquids.size()) + " (" + names +
-    "): CUDA ranks run scenes without \"liquids\" for now; run the scene on one GPU, or on "
-    "Serial or OpenMP ranks (Auto does)");
-}
-
-} // namespace
-
 std::unique_ptr<Stepper> makeStepper(Backend backend, Precision precision,
   const Parameters& parameters, const ParticleBatch& initial)
 {
@@ -113,8 +77,6 @@ std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backen
     // waiting for it in the first exchange: then every rank throws.
     std::string why;
     chooseBackend(BackendRequest::CUDA, cudaAvailable(&why), why, &communicator);
-    refuseLiquidsOnCudaRanks(parameters);
-    refuseSurfaceTensionOnCudaRanks(parameters);
 #ifdef PBF_WITH_CUDA
     return cuda::makeCudaSubdomainStepper(communicator, precision, parameters, everything,
       localRank(communicator) % cuda::cudaDeviceCount());
@@ -134,16 +96,7 @@ std::unique_ptr<Stepper> makeSubdomainStepperAuto(Communicator& communicator, Pr
   const Parameters& parameters, const ParticleBatch& everything, Backend cpu)
 {
   std::string why;
-  const bool cuda = cudaAvailable(&why) && parameters.liquids.empty() &&
-    !(parameters.largestSurfaceTension() > 0);
-  if (!parameters.liquids.empty())
-  {
-    why = "the scene names liquids, which CUDA ranks do not run yet";
-  }
-  else if (parameters.largestSurfaceTension() > 0)
-  {
-    why = "the scene has surface tension, which CUDA ranks do not run yet";
-  }
+  const bool cuda = cudaAvailable(&why);
   const BackendChoice choice = chooseBackend(BackendRequest::Auto, cuda, why, &communicator);
   const Backend backend = choice.backend == Backend::CUDA ? Backend::CUDA : cpu;
   return makeSubdomainStepper(communicator, backend, precision, parameters, everything);

@@ -350,6 +350,11 @@ __global__ void __launch_bounds__(kReduceThreads) compressionFinalKernel(
     if (liquids > 1)
     {
       mean = fmax(mean, counts[0] > 0.0 ? shared[0] / counts[0] : 0.0);
+      if (threadIdx.x == 0)
+      {
+        state->liquidSum[l] = shared[0];
+        state->liquidCount[l] = counts[0];
+      }
     }
     else
     {

@@ -181,7 +181,7 @@ typename DeviceSubdomainStepper<Real, Device>::Roles4 DeviceSubdomainStepper<Rea
       }
     }
     subdomain::packMigrants(
-      exec, leaving, ownedList_, vec_[r.x], vec_[r.p], vec_[r.v], id_, packed);
+      exec, leaving, ownedList_, vec_[r.x], vec_[r.p], vec_[r.v], id_, liquid_, packed);
     device_->download(staging, packed, std::size_t(leaving) * sizeof(Record));
   }
   // The exchange needs the leavers' bytes (and the counts) only: the holes are filled while
@@ -196,6 +196,10 @@ typename DeviceSubdomainStepper<Real, Device>::Roles4 DeviceSubdomainStepper<Rea
     subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, vec_[r.p]);
     subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, vec_[r.v]);
     subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, id_);
+    if (liquid_)
+    {
+      subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, liquid_);
+    }
   }
   device_->waitEvent();
   checkOwnerCounts(owners.data());
@@ -220,7 +224,8 @@ typename DeviceSubdomainStepper<Real, Device>::Roles4 DeviceSubdomainStepper<Rea
     vec_[r.x],
     vec_[r.p],
     vec_[r.v],
-    id_);
+    id_,
+    liquid_);
   n_ = stay + arriving;
   exchange_.migrated += arriving;
   exchange_.migrationMilliseconds += since(start);

@@ -43,25 +43,23 @@ void DeviceSubdomainStepper<Real, Device>::uploadMessages(unsigned char* to,
 
 template <class Real, class Device>
 template <class T>
-void DeviceSubdomainStepper<Real, Device>::sendRefresh(T* a, T* b)
+void DeviceSubdomainStepper<Real, Device>::sendRefresh(subdomain::RefreshFields<T> fields)
 {
-  const std::size_t record = sizeof(T) * (b ? 2 : 1);
+  const std::size_t record = fields.record();
   const std::size_t sendBytes = (sendLeft_ + sendRight_) * record;
   unsigned char* pack = packBuffer(sendBytes);
   unsigned char* staging = hostBuffer(hostPack_, sendBytes);
   auto edge = device_->borderExecutor(); // behind the border launch it packs
-  subdomain::packFields(edge, sendList_, sendLeft_, sendRight_, a, b, pack);
+  subdomain::packFields(edge, sendList_, sendLeft_, sendRight_, fields, pack);
   // Off the compute queue: the interior pass queued next does not wait for this copy.
   device_->downloadAside(staging, pack, sendBytes);
 }
 
 template <class Real, class Device>
 template <class T>
-void DeviceSubdomainStepper<Real, Device>::receiveRefresh(T* a, T* b)
+void DeviceSubdomainStepper<Real, Device>::receiveRefresh(subdomain::RefreshFields<T> fields)
 {
-  const int me = communicator_.rank();
-  const int last = communicator_.size() - 1;
-  const std::size_t record = sizeof(T) * (b ? 2 : 1);
+  const std::size_t record = fields.record();
   const std::size_t sendBytes = (sendLeft_ + sendRight_) * record;
   const auto waitStart = Clock::now();
   device_->waitEvent();
@@ -92,7 +90,7 @@ void DeviceSubdomainStepper<Real, Device>::receiveRefresh(T* a, T* b)
     exchangeCopied(record, sendBytes, recv);
   }
   auto exec = device_->executor();
-  subdomain::scatterFields(exec, ghostList_, ghostLeft_, ghostRight_, recv, a, b);
+  subdomain::scatterFields(exec, ghostList_, ghostLeft_, ghostRight_, recv, fields);
   exchange_.ghostMilliseconds += since(start);
 }
 

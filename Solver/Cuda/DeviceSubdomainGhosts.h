@@ -18,8 +18,9 @@ void DeviceSubdomainStepper<Real, Device>::checkGhostCounts(const std::uint32_t*
 }
 
 template <class Real, class Device>
+template <class Seed>
 typename DeviceSubdomainStepper<Real, Device>::Roles4
-DeviceSubdomainStepper<Real, Device>::receiveGhosts(Roles4 r)
+DeviceSubdomainStepper<Real, Device>::receiveGhostsAs(Roles4 r)
 {
   const auto start = Clock::now();
   const int me = communicator_.rank();
@@ -46,10 +47,9 @@ DeviceSubdomainStepper<Real, Device>::receiveGhosts(Roles4 r)
   {
     throw std::logic_error("decomposed CUDA step: more ghosts to send than particles");
   }
-  using Seed = subdomain::GhostSeed<Real>;
   auto* packed = reinterpret_cast<Seed*>(packBuffer((sendLeft_ + sendRight_) * sizeof(Seed)));
-  subdomain::packSeeds(exec, sendLeft_, sendList_, vec_[r.p], packed);
-  subdomain::packSeeds(exec, sendRight_, ghostList_, vec_[r.p], packed + sendLeft_);
+  subdomain::packSeeds<Real>(exec, sendLeft_, sendList_, vec_[r.p], liquid_, packed);
+  subdomain::packSeeds<Real>(exec, sendRight_, ghostList_, vec_[r.p], liquid_, packed + sendLeft_);
   const std::size_t sendBytes = (sendLeft_ + sendRight_) * sizeof(Seed);
   unsigned char* staging = hostBuffer(hostPack_, sendBytes);
   if (sendBytes > 0)
@@ -80,12 +80,12 @@ DeviceSubdomainStepper<Real, Device>::receiveGhosts(Roles4 r)
   }
   else
   {
-    exchangeSeedsCopied(staging);
+    exchangeSeedsCopied(staging, sizeof(Seed));
     uploadMessages(recv, messages_);
   }
   exec = device_->executor();
-  subdomain::unpackSeeds(
-    exec, n, ghosts, reinterpret_cast<const Seed*>(recv), vec_[r.x], vec_[r.p], vec_[r.v], id_);
+  subdomain::unpackSeeds<Real>(exec, n, ghosts, reinterpret_cast<const Seed*>(recv), vec_[r.x],
+    vec_[r.p], vec_[r.v], id_, liquid_);
   total_ = std::size_t(n) + ghosts;
   exchange_.ghosts = ghosts;
   exchange_.ghostMilliseconds += since(start);
@@ -93,41 +93,41 @@ DeviceSubdomainStepper<Real, Device>::receiveGhosts(Roles4 r)
 }
 
 template <class Real, class Device>
-void DeviceSubdomainStepper<Real, Device>::exchangeSeedsCopied(const unsigned char* staging)
+void DeviceSubdomainStepper<Real, Device>::exchangeSeedsCopied(
+  const unsigned char* staging, std::size_t seed)
 {
-  using Seed = subdomain::GhostSeed<Real>;
   const int me = communicator_.rank();
   const int last = communicator_.size() - 1;
-  const std::size_t sendBytes = (sendLeft_ + sendRight_) * sizeof(Seed);
+  const std::size_t sendBytes = (sendLeft_ + sendRight_) * seed;
   for (auto& b : out_)
   {
     b.clear();
   }
   if (me > 0)
   {
-    out_[static_cast<std::size_t>(me - 1)].assign(staging, staging + sendLeft_ * sizeof(Seed));
+    out_[static_cast<std::size_t>(me - 1)].assign(staging, staging + sendLeft_ * seed);
   }
   if (me < last)
   {
     out_[static_cast<std::size_t>(me + 1)].assign(
-      staging + sendLeft_ * sizeof(Seed), staging + sendBytes);
+      staging + sendLeft_ * seed, staging + sendBytes);
   }
   // Both sides know the lengths: with the neighbours only, no collective over all ranks.
   std::fill(inSizes_.begin(), inSizes_.end(), std::size_t(0));
   if (me > 0)
   {
-    inSizes_[static_cast<std::size_t>(me - 1)] = ghostLeft_ * sizeof(Seed);
+    inSizes_[static_cast<std::size_t>(me - 1)] = ghostLeft_ * seed;
   }
   if (me < last)
   {
-    inSizes_[static_cast<std::size_t>(me + 1)] = ghostRight_ * sizeof(Seed);
+    inSizes_[static_cast<std::size_t>(me + 1)] = ghostRight_ * seed;
   }
   communicator_.exchangeKnownSizes(out_, in_, inSizes_);
   for (std::size_t from = 0; from < in_.size(); ++from)
   {
     const bool left = static_cast<int>(from) == me - 1;
     const bool right = static_cast<int>(from) == me + 1;
-    const std::size_t expected = (left ? ghostLeft_ : right ? ghostRight_ : 0u) * sizeof(Seed);
+    const std::size_t expected = (left ? ghostLeft_ : right ? ghostRight_ : 0u) * seed;
     if (in_[from].size() != expected)
     {
       throw std::logic_error("ghosts from rank " + std::to_string(from) + ": " +
@@ -137,11 +137,11 @@ void DeviceSubdomainStepper<Real, Device>::exchangeSeedsCopied(const unsigned ch
   messages_.clear();
   if (me > 0)
   {
-    messages_.emplace_back(me - 1, ghostLeft_ * sizeof(Seed));
+    messages_.emplace_back(me - 1, ghostLeft_ * seed);
   }
   if (me < last)
   {
-    messages_.emplace_back(me + 1, ghostRight_ * sizeof(Seed));
+    messages_.emplace_back(me + 1, ghostRight_ * seed);
   }
 }
 

@@ -47,6 +47,7 @@ DeviceSubdomainStepper<Real, Device>::hostState() const
   s.lambda.resize(n_);
   s.pressure.resize(n_);
   s.id.resize(n_);
+  s.liquid.resize(liquid_ ? n_ : 0);
   if (n_ > 0)
   {
     device_->download(s.x.data(), vec_[xBuffer_], n_ * sizeof(Vec3<Real>));
@@ -55,6 +56,10 @@ DeviceSubdomainStepper<Real, Device>::hostState() const
     device_->download(s.lambda.data(), lambda_, n_ * sizeof(Real));
     device_->download(s.pressure.data(), pressure_, n_ * sizeof(Real));
     device_->download(s.id.data(), id_, n_ * sizeof(std::int64_t));
+    if (liquid_)
+    {
+      device_->download(s.liquid.data(), liquid_, n_);
+    }
   }
   device_->synchronize();
   return s;
@@ -82,6 +87,10 @@ void DeviceSubdomainStepper<Real, Device>::loadState(const Snapshot<In>& state)
     device_->upload(lambda_, s.lambda.data(), n * sizeof(Real));
     device_->upload(pressure_, s.pressure.data(), n * sizeof(Real));
     device_->upload(id_, s.id.data(), n * sizeof(std::int64_t));
+    if (liquid_)
+    {
+      device_->upload(liquid_, s.liquid.data(), n);
+    }
   }
   device_->synchronize();
   n_ = n;
@@ -119,6 +128,10 @@ std::size_t DeviceSubdomainStepper<Real, Device>::removeOutflow(const std::vecto
     subdomain::gather<Real>(exec, kept, ownedList_, lambda_, lambdaAlt_);
     subdomain::gather<Real>(exec, kept, ownedList_, pressure_, pressureAlt_);
     subdomain::gather<Real>(exec, kept, ownedList_, id_, idAlt_);
+    if (liquid_)
+    {
+      subdomain::gather<Real>(exec, kept, ownedList_, liquid_, liquidAlt_);
+    }
     store_->swapAlternates();
     adoptStore();
     xBuffer_ = toX;
@@ -162,6 +175,8 @@ void DeviceSubdomainStepper<Real, Device>::reserve(std::size_t needed, std::size
     arrays.masks = constants_.schedule.enabled != 0;
     arrays.alternates = true;
     arrays.lists = 5;
+    arrays.liquids = static_cast<int>(parameters_.liquids.size());
+    arrays.colour = constants_.c.surfaceTension;
     store_ = std::make_unique<DeviceParticleStore<Real, Device>>(
       *device_, arrays, std::size_t(constants_.cellCount) + 1, constants_.keyBits);
   }
@@ -185,6 +200,10 @@ void DeviceSubdomainStepper<Real, Device>::adoptStore()
   pressureAlt_ = p.pressureAlt;
   id_ = p.id;
   idAlt_ = p.idAlt;
+  liquid_ = p.liquid;
+  liquidAlt_ = p.liquidAlt;
+  colour_ = p.colour;
+  normal_ = p.normal;
   keys_[0] = p.keys[0];
   keys_[1] = p.keys[1];
   masks_ = p.masks;

@@ -7,10 +7,6 @@
 namespace pbf::cuda
 {
 
-// The density pass of a sub-domain: CUDA ranks carry no liquids (Backends.cpp refuses a scene
-// that names them), so their weight is compiled out.
-constexpr detail::DensityPass<false> kDensityPass{};
-
 // The Loop of StepLoop.h for one rank's GPU sub-domain: each pass over the owned particles runs
 // as two launches, the border particles (the columns a neighbour mirrors) on the border stream
 // and then the interior ones, the border's fields on their way to the neighbours while the
@@ -68,15 +64,18 @@ public:
     }
   }
 
+  // The liquids' weights compiled in only for a scene that names liquids.
   void densityAndLambda(const Projection& p)
   {
     const FluidView<Real, MaskedNeighbors<Real>> f = view(p.iteration);
-    twoSided<Real>(
-      [&](auto& exec, const StepBuffers<Real>& b, std::uint32_t n, detail::ListedParticles on) {
-        detail::firstPassOnPositions(
-          exec, DensityStage<Real>{}, b, k_, n, f, p.iteration, false, kDensityPass, on);
-      },
-      s_.density_, s_.lambda_);
+    detail::withPass<detail::DensityPass>(b_.liquid != nullptr, [&](auto pass) {
+      twoSided<Real>(
+        [&](auto& exec, const StepBuffers<Real>& b, std::uint32_t n, detail::ListedParticles on) {
+          detail::firstPassOnPositions(
+            exec, DensityStage<Real>{}, b, k_, n, f, p.iteration, false, pass, on);
+        },
+        s_.density_, s_.lambda_);
+    });
   }
 
   void measureCompression(const Projection&, bool mayStop)
@@ -155,20 +154,38 @@ public:
   }
 
   // Omega into x's buffer and XSPH's sum into the other position buffer; the ghosts' omega, and
-  // their XSPH sums where the bi-Laplacian reads them.
+  // their XSPH sums where the bi-Laplacian reads them. With surface tension the same pass sums
+  // the colour gradients, refreshed with omega, and a pass of their own smooths them into the
+  // normals, refreshed too: the confinement reads both of its neighbours (SurfaceTension.h).
+  // The solids' images are compiled in only where the scene has solids, as on one GPU.
   void vorticityAndXsph()
   {
     const StepConstants<Real> after = afterConstants();
     const FluidView<Real, MaskedNeighbors<Real>> f = afterView();
     Vec3<Real>* const ghostSmoothing = s_.parameters_.xsphHyperViscosity > 0 ? f.smoothing : nullptr;
-    detail::withPass<detail::PlainVorticityPass>(k_.c.wallFriction != Real(0), [&](auto pass) {
+    auto run = [&](auto pass) {
       twoSided<Vec3<Real>>(
         [&](auto& exec, const StepBuffers<Real>& b, std::uint32_t n, detail::ListedParticles on) {
           detail::firstPassOnPositions(exec, typename decltype(pass)::Stage{}, b, after, n, f,
             performed_, false, pass, on);
         },
-        x_, ghostSmoothing);
-    });
+        x_, ghostSmoothing, f.colour);
+    };
+    const bool friction = k_.c.wallFriction != Real(0);
+    if (f.colour && f.obstacleCount > 0)
+    {
+      detail::withPass<detail::SolidColourVorticityPass>(friction, run);
+      smoothColour<true>(f);
+    }
+    else if (f.colour)
+    {
+      detail::withPass<detail::ColourVorticityPass>(friction, run);
+      smoothColour<false>(f);
+    }
+    else
+    {
+      detail::withPass<detail::PlainVorticityPass>(friction, run);
+    }
   }
 
   // The velocities in place (omega = x, XSPH's sum = f.scratch: the neighbours read both).
@@ -213,16 +230,29 @@ private:
   // the fields a (and b) of the send lists on their way out, the same pass over the interior
   // beside them, then the neighbours' fields into the ghost slots before the next pass.
   template <class T, class Pass>
-  void twoSided(Pass&& pass, T* a, T* b)
+  void twoSided(Pass&& pass, T* a, T* b, T* c = nullptr)
   {
+    const auto fields = subdomain::RefreshFields<T>::of(a, b, c);
     auto exec = device_.executor();
     auto edge = device_.borderExecutor();
     device_.forkBorder();
     pass(edge, edgeBuffers_, s_.border_, detail::ListedParticles{ s_.borderList_ });
-    s_.template sendRefresh<T>(a, b);
+    s_.template sendRefresh<T>(fields);
     pass(exec, b_, n_ - s_.border_, detail::ListedParticles{ s_.interiorList_ });
     device_.joinBorder();
-    s_.template receiveRefresh<T>(a, b);
+    s_.template receiveRefresh<T>(fields);
+  }
+
+  // The colour gradients (the ghosts' refreshed) smoothed into the normals, border first, and
+  // the ghosts' normals refreshed.
+  template <bool Solids>
+  void smoothColour(const FluidView<Real, MaskedNeighbors<Real>>& f)
+  {
+    twoSided<Vec3<Real>>(
+      [&](auto& exec, const StepBuffers<Real>&, std::uint32_t n, detail::ListedParticles on) {
+        detail::smoothColourPass<Solids>(exec, n, f, on);
+      },
+      f.normal, nullptr);
   }
 
   FluidView<Real, MaskedNeighbors<Real>> view(int iteration) const
@@ -258,27 +288,48 @@ private:
   bool stopped_ = false;
 };
 
+// With several liquids each rank gives each liquid's sum and count (AdaptiveState's), and the
+// mean is the most compressed liquid's over all ranks, as SubdomainStepper's.
 template <class Real, class Device>
 Compression DeviceSubdomainStepper<Real, Device>::compression(std::uint32_t n)
 {
   auto exec = device_->executor();
   subdomain::gather<Real>(exec, n, ownedList_, density_, densityAlt_);
+  const bool byLiquid = liquid_ && parameters_.liquidCount() > 1;
+  if (byLiquid)
+  {
+    subdomain::gather<Real>(exec, n, ownedList_, liquid_, liquidAlt_);
+  }
   // A negative tolerance: the state only reports, the loop here decides.
   exec.fillZero(adaptive_, sizeof(AdaptiveState));
-  exec.reduceCompression(densityAlt_, nullptr, n, adaptive_, blockSums_, constants_, -1.0);
+  exec.reduceCompression(
+    densityAlt_, byLiquid ? liquidAlt_ : nullptr, n, adaptive_, blockSums_, constants_, -1.0);
   AdaptiveState state{};
   device_->download(&state, adaptive_, sizeof state);
   device_->synchronize();
-  double total = 0.0, count = 0.0;
-  Compression c;
-  for (const std::vector<double>& r : distributed::allGather(
-         communicator_, { state.densityError * double(n), double(n), state.maxDensityError }))
+  const std::size_t liquids = byLiquid ? static_cast<std::size_t>(parameters_.liquidCount()) : 1;
+  // Sums, then counts, per liquid; then the largest.
+  std::vector<double> mine(2 * liquids + 1);
+  for (std::size_t l = 0; l < liquids; ++l)
   {
-    total += r[0];
-    count += r[1];
-    c.max = std::max(c.max, r[2]);
+    mine[l] = byLiquid ? state.liquidSum[l] : state.densityError * double(n);
+    mine[liquids + l] = byLiquid ? state.liquidCount[l] : double(n);
   }
-  c.mean = count > 0 ? total / count : 0.0;
+  mine[2 * liquids] = state.maxDensityError;
+  std::vector<double> total(2 * liquids, 0.0);
+  Compression c;
+  for (const std::vector<double>& r : distributed::allGather(communicator_, mine))
+  {
+    for (std::size_t k = 0; k < 2 * liquids; ++k)
+    {
+      total[k] += r[k];
+    }
+    c.max = std::max(c.max, r[2 * liquids]);
+  }
+  for (std::size_t l = 0; l < liquids; ++l)
+  {
+    c.mean = std::max(c.mean, total[liquids + l] > 0 ? total[l] / total[liquids + l] : 0.0);
+  }
   return c;
 }
 
@@ -312,6 +363,10 @@ void DeviceSubdomainStepper<Real, Device>::keepOwned(const Vec3<Real>* x,
   subdomain::gather<Real>(exec, n, ownedList_, lambda_, lambdaAlt_);
   subdomain::gather<Real>(exec, n, ownedList_, pressure_, pressureAlt_);
   subdomain::gather<Real>(exec, n, ownedList_, id_, idAlt_);
+  if (liquid_)
+  {
+    subdomain::gather<Real>(exec, n, ownedList_, liquid_, liquidAlt_);
+  }
   store_->swapAlternates();
   adoptStore();
   xBuffer_ = toX;
@@ -332,16 +387,10 @@ void DeviceSubdomainStepper<Real, Device>::evaluateAtRest()
   const StepBuffers<Real> b = buffers();
   FluidView<Real, MaskedNeighbors<Real>> f = detail::solverView(b, constants_, keys);
   f.p = vec_[r.p];
-  detail::firstPassOnPositions(exec,
-    DensityStage<Real>{},
-    b,
-    constants_,
-    count(n_),
-    f,
-    0,
-    false,
-    kDensityPass,
-    detail::ListedParticles{ ownedList_ });
+  detail::withPass<detail::DensityPass>(liquid_ != nullptr, [&](auto pass) {
+    detail::firstPassOnPositions(exec, DensityStage<Real>{}, b, constants_, count(n_), f, 0, false,
+      pass, detail::ListedParticles{ ownedList_ });
+  });
   // No step has corrected these positions: no pressure yet.
   exec.fillZero(pressure_, static_cast<std::size_t>(n_) * sizeof(Real));
   keepOwned(vec_[r.x], vec_[r.v], r.p, r.free);

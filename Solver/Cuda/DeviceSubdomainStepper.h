@@ -42,8 +42,10 @@
 //      they, and the ghosts' seeds, go through byte vectors). Density pass, refresh
 //      density+lambda (one round); the fused correction, refresh positions (and velocities after
 //      the last one);
-//      vorticity+XSPH, refresh omega; confinement; then the owned particles are gathered back,
-//      in cell order.
+//      vorticity+XSPH, refresh omega (with surface tension the colour gradients too, then the
+//      smoothed normals, refresh the normals); confinement; then the owned particles are
+//      gathered back, in cell order. A scene of several liquids carries each particle's liquid
+//      with its migrant record and its ghost's seed (it changes only by migration).
 //      Ghosts are not computed (nothing reads their own results; interior particles never read
 //      ghosts, so the scatter cannot race the interior pass).
 //
@@ -347,6 +349,7 @@ private:
     device_->activate();
     std::vector<Vec3<Real>> x, v;
     std::vector<std::int64_t> id;
+    std::vector<std::uint8_t> liquid;
     const GridGeometry<Real>& g = constants_.geometry;
     for (std::size_t i = 0; i < batch.position.size(); ++i)
     {
@@ -356,6 +359,8 @@ private:
         x.push_back(q);
         v.push_back(Vec3<Real>::from(batch.velocity[i]));
         id.push_back(batch.id[i]);
+        // A batch without liquids is of liquid 0 (checkBatch).
+        liquid.push_back(batch.liquid.empty() ? std::uint8_t(0) : batch.liquid[i]);
       }
     }
     const std::size_t n = n_ + x.size();
@@ -365,6 +370,10 @@ private:
       device_->upload(vec_[xBuffer_] + n_, x.data(), x.size() * sizeof(Vec3<Real>));
       device_->upload(vec_[vBuffer_] + n_, v.data(), v.size() * sizeof(Vec3<Real>));
       device_->upload(id_ + n_, id.data(), id.size() * sizeof(std::int64_t));
+      if (liquid_)
+      {
+        device_->upload(liquid_ + n_, liquid.data(), liquid.size());
+      }
       device_->synchronize(); // the host vectors die here
     }
     n_ = n;
@@ -383,7 +392,7 @@ private:
     std::vector<Vec3<Real>> x, v;
     std::vector<Real> density, lambda, pressure;
     std::vector<std::int64_t> id;
-    std::vector<std::uint8_t> liquid; // empty: the GPU steppers run scenes of one liquid
+    std::vector<std::uint8_t> liquid; // empty in a scene without liquids
     ConstHostParticles<Real> view() const
     {
       return { x, v, density, lambda, pressure, id, liquid };
@@ -425,6 +434,9 @@ private:
     b.lambda = lambda_;
     b.pressure = pressure_;
     b.id = id_;
+    b.liquid = liquid_;
+    b.colour = colour_;
+    b.normal = normal_;
     b.keys[0] = keys_[0];
     b.keys[1] = keys_[1];
     b.masks = constants_.schedule.enabled ? masks_ : nullptr;
@@ -535,13 +547,20 @@ private:
   // (owners[to + 1] of them), the arrivals into in_ (their counts known from the cut).
   void exchangeMigrants(const unsigned char* staging, const std::uint32_t* owners);
 
-  // 3. The border particles (by vec[r.p]) to the neighbours; theirs appended as ghosts.
-  Roles4 receiveGhosts(Roles4 r);
+  // 3. The border particles (by vec[r.p]) to the neighbours; theirs appended as ghosts, with
+  // their liquids in a scene of several (Seed: GhostSeed or LiquidSeed).
+  Roles4 receiveGhosts(Roles4 r)
+  {
+    return liquid_ ? receiveGhostsAs<subdomain::LiquidSeed<Real>>(r)
+                   : receiveGhostsAs<subdomain::GhostSeed<Real>>(r);
+  }
+  template <class Seed>
+  Roles4 receiveGhostsAs(Roles4 r);
 
   // receiveGhosts' exchange through the Communicator's byte vectors (a Communicator that does
-  // not exchange in place, or the A/B switches): the seeds copied out of the page-locked staging
-  // and the neighbours' listed in messages_ for uploadMessages.
-  void exchangeSeedsCopied(const unsigned char* staging);
+  // not exchange in place, or the A/B switches): the seeds (`seed` bytes each) copied out of the
+  // page-locked staging and the neighbours' listed in messages_ for uploadMessages.
+  void exchangeSeedsCopied(const unsigned char* staging, std::size_t seed);
 
   // 4. The cell sort of owned + ghosts, and the lists. Returns the sorted keys; afterwards
   // vec[r.x] = x, vec[r.p] = x*, vec[r.v] = v (cell order), r updated.
@@ -551,17 +570,17 @@ private:
   // device that follows sortByCell's copy of them).
   void checkLists();
 
-  // One ghost refresh in two halves around the interior pass. sendRefresh: fields a (and b) of
-  // the send lists packed and on their way to page-locked memory, marked by an event.
+  // One ghost refresh in two halves around the interior pass. sendRefresh: the fields of the
+  // send lists packed and on their way to page-locked memory, marked by an event.
   template <class T>
-  void sendRefresh(T* a, T* b);
+  void sendRefresh(subdomain::RefreshFields<T> fields);
 
   // receiveRefresh: waits for the packed fields only (the interior pass queued behind them keeps
   // the device busy), exchanges them with the neighbours and queues their upload and scatter
   // into the ghost slots. The time from the packed fields' arrival to the queued scatter is the
   // ghost time: waiting for the neighbours' border particles included.
   template <class T>
-  void receiveRefresh(T* a, T* b);
+  void receiveRefresh(subdomain::RefreshFields<T> fields);
 
   // The neighbours' messages from the page-locked hostPack_ (this rank's left message, then its
   // right one) straight into page-locked `receive` (the left neighbour's, then the right one's),
@@ -622,6 +641,10 @@ private:
   unsigned long long* healthBits_ = nullptr; // health(): three maxima as double bits
   double* blockSums_ = nullptr;
   std::int64_t *id_ = nullptr, *idAlt_ = nullptr;
+  // Each particle's liquid (null without liquids); the colour gradients and their smoothed
+  // normals (null without surface tension).
+  std::uint8_t *liquid_ = nullptr, *liquidAlt_ = nullptr;
+  Vec3<Real> *colour_ = nullptr, *normal_ = nullptr;
   CellKey* keys_[2] = {};
   std::uint32_t* masks_ = nullptr;
   std::uint32_t *sendList_ = nullptr, *ghostList_ = nullptr, *ownedList_ = nullptr;

@@ -105,6 +105,10 @@ struct AdaptiveState
   int iterations;
   double densityError;    // the mean compression
   double maxDensityError; // the largest, which must also be within k.maxTolerance when > 0
+  // With several liquids: each liquid's sum of compressions and its count (the ranks of a
+  // decomposed run add them before taking each liquid's mean).
+  double liquidSum[kMaxLiquids];
+  double liquidCount[kMaxLiquids];
 };
 
 struct SortedPairs
@@ -445,12 +449,14 @@ template <bool Friction>
 using SolidColourVorticityPass = VorticityPass<Friction, true, true>;
 
 // The colour gradients averaged into the normals (Equations.h's smoothColour), after the
-// vorticity pass wrote them and before the confinement reads them; Solids as above.
-template <bool Solids, class Real, class Exec>
-void smoothColourPass(Exec& exec, std::uint32_t n, const FluidView<Real, MaskedNeighbors<Real>>& f)
+// vorticity pass wrote them and before the confinement reads them; Solids as above. Over all n
+// particles, or those of a list (a decomposed step's border, then its interior).
+template <bool Solids, class Real, class Exec, class Visit = AllParticles>
+void smoothColourPass(Exec& exec, std::uint32_t n, const FluidView<Real, MaskedNeighbors<Real>>& f,
+  Visit visit = Visit{})
 {
-  exec.forEach(SmoothColourStage{}, n, [=] PBF_HD(std::uint32_t i) {
-    smoothColour<Real, MaskedNeighbors<Real>, Solids>(i, f);
+  exec.forEach(SmoothColourStage{}, n, [=] PBF_HD(std::uint32_t k) {
+    smoothColour<Real, MaskedNeighbors<Real>, Solids>(visit(k), f);
   });
 }
 

@@ -17,6 +17,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 
 namespace pbf
 {
@@ -100,11 +101,13 @@ PBF_HD PBF_INLINE int columnOfKey(CellKey key, int nx)
   return static_cast<int>(key % static_cast<CellKey>(nx));
 }
 
-// What a particle that changes rank takes along: everything the step still needs of it.
+// What a particle that changes rank takes along: everything the step still needs of it. The
+// liquid sits in the padding before the id: in single precision the record stays 48 bytes.
 template <class Real>
 struct Migrant
 {
   Vec3<Real> x, p, v;
+  std::uint8_t liquid; // 0 in a scene without liquids
   std::int64_t id;
 };
 
@@ -116,6 +119,31 @@ template <class Real>
 struct GhostSeed
 {
   Vec3<Real> p;
+
+  PBF_HD static GhostSeed of(std::uint32_t i, const Vec3<Real>* q, const std::uint8_t*)
+  {
+    return { q[i] };
+  }
+  PBF_HD void liquidInto(std::uint32_t, std::uint8_t*) const {}
+};
+
+// A ghost's seed in a scene of several liquids: its liquid too, which the density pass weighs its
+// neighbours by and the colour reads. It is set for the whole step, so it travels once, here,
+// and not with every refresh (16 bytes in single precision).
+template <class Real>
+struct LiquidSeed
+{
+  Vec3<Real> p;
+  std::uint32_t liquid;
+
+  PBF_HD static LiquidSeed of(std::uint32_t i, const Vec3<Real>* q, const std::uint8_t* liquids)
+  {
+    return { q[i], liquids[i] };
+  }
+  PBF_HD void liquidInto(std::uint32_t i, std::uint8_t* liquids) const
+  {
+    liquids[i] = static_cast<std::uint8_t>(liquid);
+  }
 };
 
 // The id a ghost slot carries; never read (only owned particles are output or matched by id).
@@ -272,19 +300,22 @@ void gather(Exec& exec, std::uint32_t n, const std::uint32_t* perm, const T* fro
   exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { to[i] = from[perm[i]]; });
 }
 
+// liquid: null in a scene without liquids (the records carry 0).
 template <class Real, class Exec>
 void packMigrants(Exec& exec, std::uint32_t count, const std::uint32_t* list, const Vec3<Real>* x,
-  const Vec3<Real>* p, const Vec3<Real>* v, const std::int64_t* id, Migrant<Real>* out)
+  const Vec3<Real>* p, const Vec3<Real>* v, const std::int64_t* id, const std::uint8_t* liquid,
+  Migrant<Real>* out)
 {
   exec.forEach(GatherStage{}, count, [=] PBF_HD(std::uint32_t k) {
     const std::uint32_t i = list[k];
-    out[k] = Migrant<Real>{ x[i], p[i], v[i], id[i] };
+    out[k] = Migrant<Real>{ x[i], p[i], v[i], liquid ? liquid[i] : std::uint8_t(0), id[i] };
   });
 }
 
 template <class Real, class Exec>
 void unpackMigrants(Exec& exec, std::uint32_t first, std::uint32_t count,
-  const Migrant<Real>* in, Vec3<Real>* x, Vec3<Real>* p, Vec3<Real>* v, std::int64_t* id)
+  const Migrant<Real>* in, Vec3<Real>* x, Vec3<Real>* p, Vec3<Real>* v, std::int64_t* id,
+  std::uint8_t* liquid)
 {
   exec.forEach(GatherStage{}, count, [=] PBF_HD(std::uint32_t k) {
     const std::uint32_t i = first + k;
@@ -293,6 +324,10 @@ void unpackMigrants(Exec& exec, std::uint32_t first, std::uint32_t count,
     p[i] = m.p;
     v[i] = m.v;
     id[i] = m.id;
+    if (liquid)
+    {
+      liquid[i] = m.liquid;
+    }
   });
 }
 
@@ -314,27 +349,29 @@ void selectColumns(Exec& exec, int nx, std::uint32_t n, const CellKey* keys, int
   exec.selectIf(n, KeyInColumns<Real>{ keys, nx, begin, end }, out, count);
 }
 
-template <class Real, class Exec>
+// Seed is GhostSeed<Real> or LiquidSeed<Real> (then `liquid` is the particles' liquids).
+template <class Real, class Seed, class Exec>
 void packSeeds(Exec& exec, std::uint32_t count, const std::uint32_t* list, const Vec3<Real>* p,
-  GhostSeed<Real>* out)
+  const std::uint8_t* liquid, Seed* out)
 {
   exec.forEach(GatherStage{}, count, [=] PBF_HD(std::uint32_t k) {
-    out[k] = GhostSeed<Real>{ p[list[k]] };
+    out[k] = Seed::of(list[k], p, liquid);
   });
 }
 
 // Ghosts enter with x = p (only the owner updates their velocity) and v = 0 until refreshed.
-template <class Real, class Exec>
-void unpackSeeds(Exec& exec, std::uint32_t first, std::uint32_t count, const GhostSeed<Real>* in,
-  Vec3<Real>* x, Vec3<Real>* p, Vec3<Real>* v, std::int64_t* id)
+template <class Real, class Seed, class Exec>
+void unpackSeeds(Exec& exec, std::uint32_t first, std::uint32_t count, const Seed* in,
+  Vec3<Real>* x, Vec3<Real>* p, Vec3<Real>* v, std::int64_t* id, std::uint8_t* liquid)
 {
   exec.forEach(GatherStage{}, count, [=] PBF_HD(std::uint32_t k) {
     const std::uint32_t i = first + k;
-    const GhostSeed<Real> s = in[k];
+    const Seed s = in[k];
     x[i] = s.p;
     p[i] = s.p;
     v[i] = Vec3<Real>{ Real(0), Real(0), Real(0) };
     id[i] = kGhostId;
+    s.liquidInto(i, liquid);
   });
 }
 
@@ -350,16 +387,28 @@ void cellKeys(Exec& exec, const GridGeometry<Real>& g, std::uint32_t n, const Ve
 }
 
 // XSPH and eq. 16 on the velocities in place (each particle reads only its own), as
-// StepSchedule's last stage, for the particles of a list.
+// DeviceStepLoop's last stage, for the particles of a list; surface tension and the solids'
+// images in it compiled in as there (the ghosts' colour gradients and normals are refreshed
+// before it).
 template <class Real, class Exec>
 void confine(Exec& exec, std::uint32_t n, const std::uint32_t* list,
   const FluidView<Real, MaskedNeighbors<Real>>& f)
 {
-  // Surface tension is compiled out: CUDA ranks refuse it for now (Backends.cpp), as they keep no
-  // ghosts' colour gradients.
-  detail::withPass<detail::PlainConfinementPass>(f.c.xsphHyper, [&](auto pass) {
+  auto run = [&](auto pass) {
     detail::confinementPass(exec, n, detail::ListedParticles{ list }, f, f.v, pass);
-  });
+  };
+  if (f.colour && f.obstacleCount > 0)
+  {
+    detail::withPass<detail::SolidTensionConfinementPass>(f.c.xsphHyper, run);
+  }
+  else if (f.colour)
+  {
+    detail::withPass<detail::TensionConfinementPass>(f.c.xsphHyper, run);
+  }
+  else
+  {
+    detail::withPass<detail::PlainConfinementPass>(f.c.xsphHyper, run);
+  }
 }
 
 // Algorithm 1, line 21, for the particles of a list: v_i = (x*_i - x_i) / dt (adaptive mode, when
@@ -372,44 +421,63 @@ void updateVelocities(Exec& exec, std::uint32_t n, const std::uint32_t* list,
     CorrectionStage{}, n, [=] PBF_HD(std::uint32_t k) { updateVelocity(list[k], f); });
 }
 
-// A ghost refresh's message layout, for one or two fields a (and b) of type T: to the left
-// neighbour [a of its nLeft][b of its nLeft], then to the right one [a][b] of nRight. The
+// The fields of one ghost refresh: up to three of type T, the first `count` of `at` used.
+template <class T>
+struct RefreshFields
+{
+  T* at[3];
+  int count;
+
+  // The non-null ones of a, b, c, in that order.
+  static RefreshFields of(T* a, T* b = nullptr, T* c = nullptr)
+  {
+    RefreshFields f{ { nullptr, nullptr, nullptr }, 0 };
+    for (T* p : { a, b, c })
+    {
+      if (p)
+      {
+        f.at[f.count++] = p;
+      }
+    }
+    return f;
+  }
+  std::size_t record() const { return sizeof(T) * static_cast<std::size_t>(count); }
+};
+
+// A ghost refresh's message layout, for the fields of type T: to the left neighbour
+// [field 0 of its nLeft][field 1 of its nLeft]..., then to the right one the same of nRight. The
 // receiver's ghosts from a side are in the order the sender lists them (DeviceSubdomainStepper.h
 // says why), so the same layout scatters them.
 template <class T, class Exec>
 void packFields(Exec& exec, const std::uint32_t* list, std::uint32_t nLeft, std::uint32_t nRight,
-  const T* a, const T* b, unsigned char* out)
+  RefreshFields<T> fields, unsigned char* out)
 {
-  const int fields = b ? 2 : 1;
   exec.forEach(GatherStage{}, nLeft + nRight, [=] PBF_HD(std::uint32_t k) {
     const bool left = k < nLeft;
     const std::uint32_t count = left ? nLeft : nRight;
     const std::uint32_t j = left ? k : k - nLeft;
-    T* region = reinterpret_cast<T*>(out) + (left ? 0u : nLeft * fields);
+    T* region = reinterpret_cast<T*>(out) + (left ? 0u : nLeft * fields.count);
     const std::uint32_t i = list[k];
-    region[j] = a[i];
-    if (b)
+    for (int f = 0; f < fields.count; ++f)
     {
-      region[count + j] = b[i];
+      region[f * count + j] = fields.at[f][i];
     }
   });
 }
 
 template <class T, class Exec>
 void scatterFields(Exec& exec, const std::uint32_t* list, std::uint32_t nLeft,
-  std::uint32_t nRight, const unsigned char* in, T* a, T* b)
+  std::uint32_t nRight, const unsigned char* in, RefreshFields<T> fields)
 {
-  const int fields = b ? 2 : 1;
   exec.forEach(GatherStage{}, nLeft + nRight, [=] PBF_HD(std::uint32_t k) {
     const bool left = k < nLeft;
     const std::uint32_t count = left ? nLeft : nRight;
     const std::uint32_t j = left ? k : k - nLeft;
-    const T* region = reinterpret_cast<const T*>(in) + (left ? 0u : nLeft * fields);
+    const T* region = reinterpret_cast<const T*>(in) + (left ? 0u : nLeft * fields.count);
     const std::uint32_t i = list[k];
-    a[i] = region[j];
-    if (b)
+    for (int f = 0; f < fields.count; ++f)
     {
-      b[i] = region[count + j];
+      fields.at[f][i] = region[f * count + j];
     }
   });
 }

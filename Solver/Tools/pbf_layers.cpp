@@ -5,10 +5,12 @@
 // With --rayleigh-taylor 1 the heavier liquid (--upper) starts over the lighter (--lower) in a
 // thin slab (--thickness) with the interface perturbed by --amplitude cos(k x): the mode's
 // amplitude every --sample seconds and the growth rate fitted to it, against the inviscid
-// sqrt(A k g) and the rate with the model's XSPH viscosity. Documentation/Validation.md has the
-// figures.
+// sqrt(A k g) and the rate with the model's XSPH viscosity. The layers at rest run on --ranks
+// decomposed ranks (as threads) too. Documentation/Validation.md has the figures.
 #include "Layers.h"
 
+#include "Distributed/RankReductions.h"
+#include "Distributed/ThreadCluster.h"
 #include "ToolOptions.h"
 
 #include <chrono>
@@ -18,6 +20,56 @@
 
 using namespace pbf;
 using namespace pbf::validation;
+
+namespace
+{
+
+// The ranks' particles as one state: what measureLayers reads of them.
+Snapshot<double> joined(const std::vector<Snapshot<double>>& parts)
+{
+  Snapshot<double> all;
+  for (const Snapshot<double>& part : parts)
+  {
+    all.id.insert(all.id.end(), part.id.begin(), part.id.end());
+    all.position.insert(all.position.end(), part.position.begin(), part.position.end());
+    all.density.insert(all.density.end(), part.density.begin(), part.density.end());
+    all.liquid.insert(all.liquid.end(), part.liquid.begin(), part.liquid.end());
+  }
+  return all;
+}
+
+// The layers every `sample` seconds to `until`, printed by rank 0: each rank reads its own
+// particles into parts[rank] (one rank: the whole state).
+void sampleLayers(Simulation& simulation, distributed::Communicator* communicator, double s,
+  double until, double sample, std::vector<Snapshot<double>>& parts)
+{
+  const auto start = std::chrono::steady_clock::now();
+  const int rank = communicator ? communicator->rank() : 0;
+  const int samples = static_cast<int>(std::lround(until / sample));
+  for (int k = 0; k <= samples; ++k)
+  {
+    simulation.advanceTo(k * sample);
+    simulation.stepper().read(parts[static_cast<std::size_t>(rank)]);
+    if (communicator)
+    {
+      distributed::allGather(*communicator, { 0.0 }); // every part read
+    }
+    if (rank != 0)
+    {
+      continue;
+    }
+    const Snapshot<double> state = joined(parts);
+    const LayerMeasure m = measureLayers(state, simulation.parameters());
+    const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::printf("%.4g,%.3f,%zu,%.4f,%.3f,%.3f,%.4f,%.4f,%.3f,%.3f,%d,%.1f\n", s, k * sample,
+      state.id.size(), m.interface, m.interfaceRms / s, 100 * m.wrongSide, m.meanHeight[0],
+      m.meanHeight[1], 100 * m.compression[0], 100 * m.compression[1], m.columns, seconds);
+    std::fflush(stdout);
+  }
+}
+
+} // namespace
 
 int main(int argc, char** argv)
 {
@@ -31,6 +83,7 @@ int main(int argc, char** argv)
     { "rayleigh-taylor", "1: heavy over light, perturbed (default 0)" },
     { "amplitude", "Rayleigh-Taylor: the interface's perturbation [m] (default 0.01)" },
     { "thickness", "Rayleigh-Taylor: the slab's thickness [m] (default 4 spacings)" },
+    { "ranks", "the layers on decomposed ranks, as threads (default 1: none)" },
   };
   try
   {
@@ -74,27 +127,23 @@ int main(int argc, char** argv)
     }
     std::printf("spacing,t,particles,interface_m,rms/s,wrong%%,height_lower_m,height_upper_m,"
                 "compression_lower%%,compression_upper%%,columns,seconds\n");
+    const int ranks = static_cast<int>(toolInteger(options, "ranks", 1, 1));
     for (double s : spacings)
     {
       Parameters p = options.parameters;
       p.particleSpacing = s;
-      const auto start = std::chrono::steady_clock::now();
-      Simulation simulation(layeredScene(lower, upper, depth), p, options.backend,
-        options.precision);
-      const int samples = static_cast<int>(std::lround(until / sample));
-      for (int k = 0; k <= samples; ++k)
+      const Scene scene = layeredScene(lower, upper, depth);
+      std::vector<Snapshot<double>> parts(static_cast<std::size_t>(ranks));
+      if (ranks <= 1)
       {
-        simulation.advanceTo(k * sample);
-        Snapshot<double> state;
-        simulation.stepper().read(state);
-        const LayerMeasure m = measureLayers(state, simulation.parameters());
-        const double seconds =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        std::printf("%.4g,%.3f,%zu,%.4f,%.3f,%.3f,%.4f,%.4f,%.3f,%.3f,%d,%.1f\n", s, k * sample,
-          state.id.size(), m.interface, m.interfaceRms / s, 100 * m.wrongSide, m.meanHeight[0],
-          m.meanHeight[1], 100 * m.compression[0], 100 * m.compression[1], m.columns, seconds);
-        std::fflush(stdout);
+        Simulation simulation(scene, p, options.backend, options.precision);
+        sampleLayers(simulation, nullptr, s, until, sample, parts);
+        continue;
       }
+      distributed::runThreadCluster(ranks, [&](distributed::Communicator& communicator) {
+        Simulation simulation(scene, p, options.backend, options.precision, &communicator);
+        sampleLayers(simulation, &communicator, s, until, sample, parts);
+      });
     }
   }
   catch (const std::exception& error)

@@ -142,6 +142,8 @@ public:
       const double mean = liquids > 1 ? (count[l] > 0 ? total[l] / count[l] : 0.0)
                                       : (n > 0 ? total[0] / double(n) : 0.0);
       state->densityError = std::max(state->densityError, mean);
+      state->liquidSum[l] = total[l];
+      state->liquidCount[l] = count[l];
     }
     state->maxDensityError = top;
     if (state->densityError <= tolerance && (k.maxTolerance <= 0 || top <= k.maxTolerance))

@@ -63,17 +63,6 @@ std::string withLayers(const std::string& from, const std::string& to)
   return at == std::string::npos ? json : json.replace(at, from.size(), to);
 }
 
-// Each particle's liquid by id.
-std::map<std::int64_t, int> liquidsById(const Snapshot<double>& s)
-{
-  std::map<std::int64_t, int> out;
-  for (std::size_t i = 0; i < s.id.size(); ++i)
-  {
-    out[s.id[i]] = s.liquid.at(i);
-  }
-  return out;
-}
-
 } // namespace
 
 TEST(Liquids, TheSceneNamesItsLiquidsAndEachRegionItsLiquid)
@@ -230,7 +219,7 @@ TEST(Liquids, EveryCpuBackendKeepsEachParticlesLiquid)
   };
   const Snapshot<double> serial = run(Backend::Serial);
   test::expectBitIdentical(serial, run(Backend::OpenMP));
-  const std::map<std::int64_t, int> expected = liquidsById(serial);
+  const std::map<std::int64_t, int> expected = test::liquidsById(serial);
   for (std::size_t i = 0; i < fluid.id.size(); ++i)
   {
     ASSERT_EQ(expected.at(fluid.id[i]), fluid.liquid[i]) << "particle " << fluid.id[i];
@@ -247,7 +236,7 @@ TEST(Liquids, EveryCpuBackendKeepsEachParticlesLiquid)
       stepper.read(parts[static_cast<std::size_t>(communicator.rank())]);
     });
     const Snapshot<double> all = test::joined(parts);
-    EXPECT_EQ(liquidsById(all), expected) << ranks << " ranks";
+    EXPECT_EQ(test::liquidsById(all), expected) << ranks << " ranks";
     EXPECT_LE(test::maxRelativePositionError(all, serial), ranks == 1 ? 0.0 : 1e-9)
       << ranks << " ranks";
   }

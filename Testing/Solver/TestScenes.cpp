@@ -11,7 +11,11 @@ namespace pbf::test
 
 PresetFluid presetFluid(const std::string& name, double spacing)
 {
-  const Scene scene = presetScene(name);
+  return sceneFluid(presetScene(name), spacing);
+}
+
+PresetFluid sceneFluid(const Scene& scene, double spacing)
+{
   PresetFluid s;
   s.parameters.particleSpacing = spacing;
   // The decomposition tests compare steppers step for step: the paper's fixed count of
@@ -76,6 +80,16 @@ std::map<std::int64_t, std::size_t> indexById(const Snapshot<double>& snapshot)
     index[snapshot.id[i]] = i;
   }
   return index;
+}
+
+std::map<std::int64_t, int> liquidsById(const Snapshot<double>& snapshot)
+{
+  std::map<std::int64_t, int> out;
+  for (std::size_t i = 0; i < snapshot.id.size(); ++i)
+  {
+    out[snapshot.id[i]] = snapshot.liquid.at(i);
+  }
+  return out;
 }
 
 double maxRelativePositionError(const Snapshot<double>& a, const Snapshot<double>& b)
@@ -153,6 +167,20 @@ Scene twoLiquids()
     "emitters": [ { "center": [0.6, 0.45, 0.12], "direction": [0, -1, 0], "radius": 0.05,
       "speed": 1.0, "start": 0.1, "stop": 0.3, "liquid": "oil" } ]
   })");
+}
+
+Scene sideBySideLiquids()
+{
+  return parseScene(R"({
+    "domain": { "min": [0, 0, 0], "max": [0.8, 0.6, 0.24] },
+    "liquids": [
+      { "name": "water", "restDensity": 1000 },
+      { "name": "oil", "restDensity": 800, "xsphViscosity": 0.05 }
+    ],
+    "fluid": [
+      { "type": "box", "min": [0, 0, 0], "max": [0.2, 0.4, 0.24], "liquid": "water" },
+      { "type": "box", "min": [0.2, 0, 0], "max": [0.4, 0.4, 0.24], "liquid": "oil" }
+    ] })");
 }
 
 Scene damBreakWithSolids()

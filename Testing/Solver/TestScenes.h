@@ -22,6 +22,8 @@ struct PresetFluid
   ParticleBatch fluid;
 };
 PresetFluid presetFluid(const std::string& name, double spacing);
+// The same for any scene (its emitters aside: they add particles through Simulation).
+PresetFluid sceneFluid(const Scene& scene, double spacing);
 
 // The divergence tests' settings: s = 0.05 m with fixed steps (the default 1/240 s), the paper's
 // 4 projections and light XSPH, which the blow-ups need (automatic steps and adaptive projections
@@ -48,6 +50,9 @@ double maxRelativePositionError(const Snapshot<double>& a, const Snapshot<double
 // a particle's own pressure may be 0). Infinity for a NaN or a particle missing from b.
 double maxRelativePressureError(const Snapshot<double>& a, const Snapshot<double>& b);
 
+// Each particle's liquid by its id.
+std::map<std::int64_t, int> liquidsById(const Snapshot<double>& snapshot);
+
 // The ranks' states one after the other, as one state (a decomposed run's particles).
 Snapshot<double> joined(const std::vector<Snapshot<double>>& parts);
 
@@ -67,6 +72,11 @@ void expectBitIdentical(const Snapshot<Real>& a, const Snapshot<Real>& b)
 // Two liquids that move: a water column (1000 kg/m^3) breaking onto a pool of oil (800, its own
 // XSPH alpha of 0.05), and a nozzle that adds oil from 0.1 s to 0.3 s.
 Scene twoLiquids();
+
+// Water (1000 kg/m^3) and oil (800, its own XSPH alpha of 0.05) side by side along x, both
+// released at once: the water runs under the oil across the interface, which a decomposition
+// along x cuts through.
+Scene sideBySideLiquids();
 
 // The dam break with a box solid cutting into the column (its fluid removed, the rest touching
 // it from the first step) and a sphere in the surge's way.
