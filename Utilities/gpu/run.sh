@@ -217,6 +217,9 @@ done
 sanitize memcheck "$build/Testing/Cuda/pbf_cuda_tests" --gtest_filter='CudaStepper.Outflows*'
 sanitize memcheck "$build/Testing/Cuda/pbf_cuda_subdomain_tests" \
   --gtest_filter='CudaSubdomain.Outflows*'
+# Liquids, surface tension and adhesion on ranks: seeds, migrants and three-field refreshes.
+sanitize memcheck "$build/Testing/Cuda/pbf_cuda_subdomain_tests" \
+  --gtest_filter='CudaSubdomain.LiquidsSurfaceTension*'
 # Every shipped scene at small size under memcheck, racecheck and initcheck.
 for scene in dam_break double_dam_break blob stream channel; do
   for tool in memcheck racecheck initcheck; do
