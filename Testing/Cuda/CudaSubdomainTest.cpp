@@ -290,13 +290,15 @@ TEST(CudaSubdomain, LiquidsSurfaceTensionAndAdhesionMatchTheSerialBackendOnOneTw
 {
   PBF_REQUIRE_GPU();
   // Water and oil side by side, surface tension 1 N/m, walls wetting at 60 degrees and a sphere at
-  // 120 in the surge: the liquids travel with the migrants and the ghosts' seeds, the colour
-  // gradients and normals with the refreshes, on the device's kernels and copies. Within 1e-9
-  // of the serial backend (DecomposedRuns.h says why), as the plain dam break.
+  // 120 a centimetre from the oil's face: the liquids travel with the migrants and the ghosts'
+  // seeds, the colour gradients and normals with the refreshes, on the device's kernels and
+  // copies. Within 1e-9 of the serial backend (DecomposedRuns.h says why), as the plain dam
+  // break. (A sphere placed inside the fluid throws its particles out from the first step, which
+  // grows the GPU's rounding to 5e-5 on every rank count, one rank included.)
   PresetFluid setup = sceneFluid(sideBySideLiquids(), 0.04);
   setup.parameters.surfaceTension = 1.0;
   setup.parameters.contactAngle = 60.0;
-  DistanceGrid sphere = sphereDistance({ 0.32, 0.06, 0.12 }, 0.05, 0.02, 0.04);
+  DistanceGrid sphere = sphereDistance({ 0.46, 0.06, 0.12 }, 0.05, 0.02, 0.04);
   sphere.contactAngle.fill(120.0);
   expectRanksMatchSerial(setup, 10, onGpu(Precision::Double), &sphere, false);
   expectRanksMatchSerial(setup, 10, onGpu(Precision::Double), nullptr, false);
