@@ -4,6 +4,7 @@
 #include "CpuStepper.h"
 #include "Distributed/SubdomainStepper.h"
 #include "LocalRank.h"
+#include "ParticleChecks.h"
 
 #include <stdexcept>
 
@@ -68,7 +69,7 @@ namespace distributed
 {
 
 std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backend backend,
-  Precision precision, const Parameters& parameters, const ParticleBatch& everything)
+  Precision precision, const Parameters& parameters, const FluidSource& fluid)
 {
   if (backend == Backend::CUDA)
   {
@@ -78,7 +79,7 @@ std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backen
     std::string why;
     chooseBackend(BackendRequest::CUDA, cudaAvailable(&why), why, &communicator);
 #ifdef PBF_WITH_CUDA
-    return cuda::makeCudaSubdomainStepper(communicator, precision, parameters, everything,
+    return cuda::makeCudaSubdomainStepper(communicator, precision, parameters, fluid,
       localRank(communicator) % cuda::cudaDeviceCount());
 #else
     throw std::logic_error("chooseBackend let CUDA through in a build without it");
@@ -87,19 +88,34 @@ std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backen
   const bool parallel = backend == Backend::OpenMP;
   if (precision == Precision::Single)
   {
-    return std::make_unique<SubdomainStepper<float>>(communicator, parallel, parameters, everything);
+    return std::make_unique<SubdomainStepper<float>>(communicator, parallel, parameters, fluid);
   }
-  return std::make_unique<SubdomainStepper<double>>(communicator, parallel, parameters, everything);
+  return std::make_unique<SubdomainStepper<double>>(communicator, parallel, parameters, fluid);
 }
 
 std::unique_ptr<Stepper> makeSubdomainStepperAuto(Communicator& communicator, Precision precision,
-  const Parameters& parameters, const ParticleBatch& everything, Backend cpu)
+  const Parameters& parameters, const FluidSource& fluid, Backend cpu)
 {
   std::string why;
   const bool cuda = cudaAvailable(&why);
   const BackendChoice choice = chooseBackend(BackendRequest::Auto, cuda, why, &communicator);
   const Backend backend = choice.backend == Backend::CUDA ? Backend::CUDA : cpu;
-  return makeSubdomainStepper(communicator, backend, precision, parameters, everything);
+  return makeSubdomainStepper(communicator, backend, precision, parameters, fluid);
+}
+
+std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backend backend,
+  Precision precision, const Parameters& parameters, const ParticleBatch& everything)
+{
+  checkBatch(parameters, everything);
+  return makeSubdomainStepper(
+    communicator, backend, precision, parameters, BatchSource(everything));
+}
+
+std::unique_ptr<Stepper> makeSubdomainStepperAuto(Communicator& communicator, Precision precision,
+  const Parameters& parameters, const ParticleBatch& everything, Backend cpu)
+{
+  checkBatch(parameters, everything);
+  return makeSubdomainStepperAuto(communicator, precision, parameters, BatchSource(everything), cpu);
 }
 
 } // namespace distributed

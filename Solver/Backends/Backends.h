@@ -6,6 +6,7 @@
 #pragma once
 
 #include "Communicator.h"
+#include "FluidSource.h"
 #include "Stepper.h"
 
 #include <memory>
@@ -29,6 +30,10 @@ namespace distributed
 // with Backend::CUDA the CUDA sub-domain stepper (Cuda/DeviceSubdomainStepper.h) on the device
 // numbered by this rank's local rank (LocalRank.h) modulo the devices it sees. Collective.
 // Throws std::runtime_error for CUDA unless every rank has a GPU (chooseBackend decides).
+// Every rank counts `fluid` per grid column and keeps its own slab (FluidSource.h), or is handed
+// the whole batch `everything`.
+std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backend backend,
+  Precision precision, const Parameters& parameters, const FluidSource& fluid);
 std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backend backend,
   Precision precision, const Parameters& parameters, const ParticleBatch& everything);
 
@@ -36,6 +41,8 @@ std::unique_ptr<Stepper> makeSubdomainStepper(Communicator& communicator, Backen
 // otherwise the CPU backend `cpu` on every rank. The CPU and CUDA sub-domain steppers exchange different messages
 // (the CUDA one merges rounds), so the ranks of one run must all use the same kind: a rank
 // without a GPU takes the whole run to the CPU. Collective.
+std::unique_ptr<Stepper> makeSubdomainStepperAuto(Communicator& communicator, Precision precision,
+  const Parameters& parameters, const FluidSource& fluid, Backend cpu = Backend::OpenMP);
 std::unique_ptr<Stepper> makeSubdomainStepperAuto(Communicator& communicator, Precision precision,
   const Parameters& parameters, const ParticleBatch& everything, Backend cpu = Backend::OpenMP);
 

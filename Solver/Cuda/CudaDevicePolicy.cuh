@@ -327,11 +327,11 @@ std::unique_ptr<CudaStepperInterface> makeCudaStepperOf(
 template <class Real>
 std::unique_ptr<distributed::DecomposedStepper> makeCudaSubdomainStepperOf(
   distributed::Communicator& communicator, const Parameters& parameters,
-  const ParticleBatch& everything, int device, const Options& options)
+  const FluidSource& fluid, int device, const Options& options)
 {
   validateOptions(options);
   return std::make_unique<DeviceSubdomainStepper<Real, CudaDevicePolicy<Real>>>(communicator,
-    parameters, everything, std::make_unique<CudaDevicePolicy<Real>>(device, options.block),
+    parameters, fluid, std::make_unique<CudaDevicePolicy<Real>>(device, options.block),
     options.skin,
     options.search == NeighborSearch::RowMasks);
 }

@@ -10,5 +10,5 @@ template class DeviceStepper<double, CudaDevicePolicy<double>>;
 template std::unique_ptr<CudaStepperInterface> makeCudaStepperOf<double>(
   const Parameters&, const ParticleBatch&, const Options&);
 template std::unique_ptr<distributed::DecomposedStepper> makeCudaSubdomainStepperOf<double>(
-  distributed::Communicator&, const Parameters&, const ParticleBatch&, int, const Options&);
+  distributed::Communicator&, const Parameters&, const FluidSource&, int, const Options&);
 } // namespace pbf::cuda

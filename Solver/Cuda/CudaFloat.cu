@@ -10,5 +10,5 @@ template class DeviceStepper<float, CudaDevicePolicy<float>>;
 template std::unique_ptr<CudaStepperInterface> makeCudaStepperOf<float>(
   const Parameters&, const ParticleBatch&, const Options&);
 template std::unique_ptr<distributed::DecomposedStepper> makeCudaSubdomainStepperOf<float>(
-  distributed::Communicator&, const Parameters&, const ParticleBatch&, int, const Options&);
+  distributed::Communicator&, const Parameters&, const FluidSource&, int, const Options&);
 } // namespace pbf::cuda

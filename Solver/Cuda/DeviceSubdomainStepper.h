@@ -64,6 +64,7 @@
 #include "Distributed/SubdomainStepper.h"
 #include "DeviceHealth.h"
 #include "DeviceParticleStore.h"
+#include "FluidSource.h"
 #include "HostParticles.h"
 #include "Outflow.h"
 #include "ParticleChecks.h"
@@ -107,15 +108,25 @@ template <class Real, class Device>
 class DeviceSubdomainStepper final : public distributed::DecomposedStepper
 {
 public:
+  // Every rank is handed the whole batch (checked alike on every rank).
   DeviceSubdomainStepper(distributed::Communicator& communicator, const Parameters& parameters,
     const ParticleBatch& everything, std::unique_ptr<Device> device, double skin = 0.02,
+    bool masks = true)
+    : DeviceSubdomainStepper(communicator, parameters,
+        BatchSource(checkedBatch(parameters, everything)), std::move(device), skin, masks)
+  {
+  }
+
+  // Every rank counts the fluid's particles per grid column and keeps its own slab's
+  // (FluidSource.h): no rank holds the whole fluid.
+  DeviceSubdomainStepper(distributed::Communicator& communicator, const Parameters& parameters,
+    const FluidSource& fluid, std::unique_ptr<Device> device, double skin = 0.02,
     bool masks = true)
   try : communicator_(communicator)
     , parameters_(parameters)
     , device_(std::move(device))
   {
     parameters_.validate();
-    checkBatch(parameters_, everything);
     constants_ = makeStepConstants<Real>(parameters_, skin, masks);
     lattice_ = calibrateLattice(parameters_);
     inPlace_ = communicator_.exchangesInPlace();
@@ -139,18 +150,21 @@ public:
     device_->activate();
     allocateFixed();
     setTimeStep(parameters_.timeStep);
-    // Every rank holds the whole initial fluid: the balanced cut follows from it on every rank
-    // alike, so each keeps its share at once and nothing migrates (a cut from uniform slabs
-    // would first gather most of a dam break on one rank and then move it: gigabytes at 64M).
-    std::vector<std::uint64_t> perColumn(static_cast<std::size_t>(constants_.geometry.nx), 0);
-    for (const Vec3d& q : everything.position)
-    {
-      ++perColumn[static_cast<std::size_t>(
-        subdomain::columnOf(constants_.geometry, Vec3<Real>::from(q)))];
-    }
+    // Every rank counts the whole initial fluid per column: the balanced cut follows from the
+    // counts on every rank alike, so each keeps its share at once and nothing migrates (a cut
+    // from uniform slabs would first gather most of a dam break on one rank and then move it:
+    // gigabytes at 64M).
+    const GridGeometry<Real> g = constants_.geometry;
+    std::vector<std::uint64_t> perColumn(static_cast<std::size_t>(g.nx), 0);
+    fluid.forEachPosition([&](const Vec3d& q) {
+      ++perColumn[static_cast<std::size_t>(subdomain::columnOf(g, Vec3<Real>::from(q)))];
+    });
     slabs_ = distributed::Slabs::balanced(perColumn, communicator_.size());
     uploadSlabs();
-    append(everything);
+    const int me = communicator_.rank();
+    append(fluid.where([&](const Vec3d& q) {
+      return slabs_.owner(subdomain::columnOf(g, Vec3<Real>::from(q))) == me;
+    }));
   }
   catch (...)
   {
@@ -192,6 +206,12 @@ public:
     {
       device_->releaseHost(setupCounts_);
     }
+  }
+
+  static const ParticleBatch& checkedBatch(const Parameters& parameters, const ParticleBatch& batch)
+  {
+    checkBatch(parameters, batch);
+    return batch;
   }
 
   DeviceSubdomainStepper(const DeviceSubdomainStepper&) = delete;
@@ -342,7 +362,8 @@ private:
     dt_ = dt;
   }
 
-  // Every rank passes the whole batch; each keeps the particles of its slab.
+  // Every rank passes the whole batch (or its own slab's part of it); each keeps the particles of
+  // its slab.
   void appendAlone(const ParticleBatch& batch)
   {
     checkBatch(parameters_, batch);

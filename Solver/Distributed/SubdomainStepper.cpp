@@ -55,16 +55,37 @@ Vec3<Real> takeVec(const Bytes& b, std::size_t& offset)
 template <class Real>
 SubdomainStepper<Real>::SubdomainStepper(Communicator& communicator, bool parallel,
   const Parameters& parameters, const ParticleBatch& everything)
+  : SubdomainStepper(communicator, parallel, parameters,
+      BatchSource((checkBatch(parameters, everything), everything)))
+{
+}
+
+// The balanced cut from every rank's count of the whole fluid per column (the same on every
+// rank), and this rank's slab of it: no rank holds the whole fluid, and nothing migrates before
+// the first step.
+template <class Real>
+SubdomainStepper<Real>::SubdomainStepper(Communicator& communicator, bool parallel,
+  const Parameters& parameters, const FluidSource& fluid)
   : HostStepper<DecomposedStepper, Real>(parallel, parameters)
   , communicator_(communicator)
 {
-  checkBatch(fluid_.parameters, everything);
   const auto ranks = static_cast<std::size_t>(communicator_.size());
   sendIndex_.resize(ranks);
   ghostIndex_.resize(ranks);
-  slabs_ = Slabs::balanced(std::vector<std::uint64_t>(static_cast<std::size_t>(fluid_.geometry.nx), 1),
-    communicator_.size());
-  append(everything);
+  std::vector<std::uint64_t> perColumn(static_cast<std::size_t>(fluid_.geometry.nx), 0);
+  fluid.forEachPosition([&](const Vec3d& q) {
+    ++perColumn[static_cast<std::size_t>(column(Vec3<Real>::from(q)))];
+  });
+  slabs_ = Slabs::balanced(perColumn, communicator_.size());
+  const int me = communicator_.rank();
+  // A part that fails its check fails every rank alike, before the collectives of append.
+  ParticleBatch mine;
+  together(communicator_, [&] {
+    mine = fluid.where(
+      [&](const Vec3d& q) { return slabs_.owner(column(Vec3<Real>::from(q))) == me; });
+    checkBatch(fluid_.parameters, mine);
+  });
+  append(mine);
 }
 
 template <class Real>

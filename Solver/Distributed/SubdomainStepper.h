@@ -19,6 +19,7 @@
 #pragma once
 
 #include "Communicator.h"
+#include "FluidSource.h"
 #include "HostStepLoop.h"
 #include "HostStepper.h"
 #include "Slabs.h"
@@ -67,9 +68,12 @@ template <class Real>
 class SubdomainStepper final : public HostStepper<DecomposedStepper, Real>
 {
 public:
-  // Every rank passes the whole initial fluid and keeps the particles of its slab.
+  // Every rank is handed the whole batch and keeps the particles of its slab.
   SubdomainStepper(Communicator& communicator, bool parallel, const Parameters& parameters,
     const ParticleBatch& everything);
+  // Every rank counts the fluid per column and keeps its own slab (FluidSource.h).
+  SubdomainStepper(Communicator& communicator, bool parallel, const Parameters& parameters,
+    const FluidSource& fluid);
 
   void step() override;
   // Every rank passes the whole batch (Simulation emits the same on every rank).

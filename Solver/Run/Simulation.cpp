@@ -5,6 +5,7 @@
 
 #include "Backends.h"
 #include "ParticleChecks.h"
+#include "SceneFluid.h"
 
 #include "Distributed/SubdomainStepper.h"
 
@@ -12,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -46,28 +48,54 @@ double extentAlong(const Box& box, const Vec3d& u)
 
 Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
   Precision precision, distributed::Communicator* communicator)
-  : Simulation(scene, parameters, backend, precision,
-      fillScene(scene, withSceneDomain(parameters, scene)), communicator)
+  : Simulation(scene, parameters, backend, precision, nullptr, communicator)
 {
 }
 
 Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
   Precision precision, const ParticleBatch& given, distributed::Communicator* communicator)
+  : Simulation(scene, parameters, backend, precision, &given, communicator)
+{
+}
+
+// The fluid is the given particles, or the scene's regions: whole on one process, and on each
+// rank of a decomposed run only that rank's slab (SceneFluid), so that no rank holds the whole
+// fluid. Both leave out what the solids hold at t = 0 (seeded inside, it would be thrown out at
+// once) and number the rest 0..N-1.
+Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
+  Precision precision, const ParticleBatch* given, distributed::Communicator* communicator)
   : scene_(scene)
   , parameters_(withSceneDomain(parameters, scene))
   , layersEmitted_(scene.emitters.size(), 0)
 {
   parameters_.validate();
-  // The solids where they are at t = 0, and the fluid not inside them (seeded inside, it would
-  // be thrown out at once).
   const std::vector<DistanceGrid> solids = solidFields(scene_.solids, parameters_);
   motions_ = pbf::solidMotions(scene_.solids);
   solidReach_ = solidReaches(scene_.solids, motions_);
   makeBodies();
   const std::vector<SolidPose> poses = solidPoses(0.0);
-  const ParticleBatch initial =
-    solids.empty() ? given : outsideSolids(given, solids, poses, seededInsideSolids_);
-  if (initial.position.empty() && scene_.emitters.empty())
+  const bool inParts = !given && communicator;
+  ParticleBatch whole;
+  if (given)
+  {
+    whole = solids.empty() ? *given : outsideSolids(*given, solids, poses, seededInsideSolids_);
+  }
+  else if (!inParts)
+  {
+    whole = outsideSolids(
+      fillScene(scene_, parameters_), solids, poses, seededInsideSolids_);
+  }
+  std::optional<SceneFluid> parts;
+  if (inParts)
+  {
+    checkSceneSize(scene_, parameters_);
+    parts.emplace(scene_, parameters_, solids, poses);
+    seededInsideSolids_ = parts->insideSolids();
+  }
+  const BatchSource held(whole);
+  const FluidSource& initial = parts ? static_cast<const FluidSource&>(*parts) : held;
+  const std::size_t count = parts ? parts->size() : whole.position.size();
+  if (count == 0 && scene_.emitters.empty())
   {
     if (!scene_.boxes.empty() || !scene_.spheres.empty())
     {
@@ -82,14 +110,33 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   {
     e.speed = emitterSpeed(e, parameters_);
   }
-  checkEmitters(initial.position.size());
+  checkEmitters(count);
   outflowZones_ = pbf::outflowZones(scene_, parameters_);
-  checkOutflows(initial);
-  checkPacking(parameters_, initial, "the domain of scene \"" + scene_.name + "\"");
+  checkOutflows(initial, count);
+  const std::string where = "the domain of scene \"" + scene_.name + "\"";
+  if (inParts)
+  {
+    checkOffWalls(parameters_, initial, where);
+  }
+  else
+  {
+    checkPacking(parameters_, whole, where);
+  }
   // The scene's speed scale, from the initial velocities and the emitters: the floor of the
   // automatic step and the scale of XSPH's viscosity (Parameters::sceneSpeedHint).
   double v0 = 0.0;
-  for (const Vec3d& v : initial.velocity)
+  if (inParts)
+  {
+    for (const FluidBox& box : scene_.boxes)
+    {
+      v0 = std::max(v0, length(box.velocity));
+    }
+    for (const FluidSphere& sphere : scene_.spheres)
+    {
+      v0 = std::max(v0, length(sphere.velocity));
+    }
+  }
+  for (const Vec3d& v : whole.velocity)
   {
     v0 = std::max(v0, length(v)); // a NaN velocity is rejected by the stepper below
   }
@@ -106,7 +153,7 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   }
   stepper_ = communicator
     ? distributed::makeSubdomainStepper(*communicator, backend, precision, parameters_, initial)
-    : makeStepper(backend, precision, parameters_, initial);
+    : makeStepper(backend, precision, parameters_, whole);
   if (!solids.empty())
   {
     stepper_->setObstacles(solids, poses);
@@ -117,7 +164,7 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
     solidCentres_.push_back(solidCentre(solid));
   }
   checkBodiesStartApart();
-  nextId_ = static_cast<std::int64_t>(initial.position.size());
+  nextId_ = static_cast<std::int64_t>(count);
 
   // The divergence limits, from the initial state and the scene.
   const bool automatic = parameters_.timeStepping == TimeStepping::Automatic;
@@ -240,7 +287,7 @@ void Simulation::checkEmitters(std::size_t initialParticles) const
   }
 }
 
-void Simulation::checkOutflows(const ParticleBatch& initial) const
+void Simulation::checkOutflows(const FluidSource& initial, std::size_t count) const
 {
   const OutflowZones<double> all = OutflowZones<double>::make(outflowZones_);
   for (std::size_t e = 0; e < scene_.emitters.size(); ++e)
@@ -254,16 +301,13 @@ void Simulation::checkOutflows(const ParticleBatch& initial) const
       }
     }
   }
-  if (outflowZones_.empty() || initial.position.empty() || !scene_.emitters.empty())
+  if (outflowZones_.empty() || count == 0 || !scene_.emitters.empty())
   {
     return;
   }
   std::size_t inside = 0;
-  for (const Vec3d& x : initial.position)
-  {
-    inside += all.contains(x) ? 1 : 0;
-  }
-  if (inside < initial.position.size())
+  initial.forEachPosition([&](const Vec3d& x) { inside += all.contains(x) ? 1 : 0; });
+  if (inside < count)
   {
     return;
   }
@@ -272,8 +316,9 @@ void Simulation::checkOutflows(const ParticleBatch& initial) const
   for (std::size_t k = 0; k < outflowZones_.size(); ++k)
   {
     const OutflowZones<double> one = OutflowZones<double>::make({ outflowZones_[k] });
-    if (std::all_of(initial.position.begin(), initial.position.end(),
-          [&](const Vec3d& x) { return one.contains(x); }))
+    bool holdsAll = true;
+    initial.forEachPosition([&](const Vec3d& x) { holdsAll = holdsAll && one.contains(x); });
+    if (holdsAll)
     {
       which = "." + outflowName(scene_, k);
       break;

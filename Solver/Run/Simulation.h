@@ -6,6 +6,7 @@
 #include "MassProperties.h"
 #include "Parameters.h"
 #include "BodyContact.h"
+#include "FluidSource.h"
 #include "RigidBody.h"
 #include "Scene.h"
 #include "SignedDistance.h"
@@ -239,7 +240,10 @@ private:
   void checkEmitters(std::size_t initialParticles) const;
   // InvalidInput naming an outflow that holds the whole fluid, or an emitter whose layers would
   // be released inside one.
-  void checkOutflows(const ParticleBatch& initial) const;
+  void checkOutflows(const FluidSource& initial, std::size_t count) const;
+  // given: the initial particles, or null for the scene's regions.
+  Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
+    Precision precision, const ParticleBatch* given, distributed::Communicator* communicator);
   // Throws InvalidInput when the scene's speed, gravity or XSPH force an automatic step below
   // the smallest one (the constructor's check).
   void checkAutomaticStep(double sceneSpeed, double v0) const;

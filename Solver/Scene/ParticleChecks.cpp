@@ -81,6 +81,35 @@ void checkLiquids(const Parameters& parameters, const std::vector<std::uint8_t>&
   }
 }
 
+namespace
+{
+
+// Within a quarter spacing of a wall that mirrors the fluid.
+bool onAMirrorWall(const Parameters& parameters, const Vec3d& x)
+{
+  const Box& d = parameters.domain;
+  const double wall = std::min({ x.x - d.min.x, d.max.x - x.x, x.y - d.min.y, d.max.y - x.y,
+    x.z - d.min.z, d.max.z - x.z });
+  return parameters.mirrorWalls && std::abs(wall) < 0.25 * parameters.particleSpacing;
+}
+
+[[noreturn]] void refuseOnWalls(const Parameters& parameters, std::size_t onWalls,
+  std::int64_t firstId, const Vec3d& first, const std::string& where)
+{
+  const Box& d = parameters.domain;
+  std::ostringstream text;
+  text.precision(4);
+  text << "initial particles: " << onWalls << (onWalls == 1 ? " point lies" : " points lie")
+       << " within a quarter of particleSpacing = " << parameters.particleSpacing
+       << " m of a wall of the domain " << pointText(d.min) << " - " << pointText(d.max) << " ("
+       << where << "), point " << firstId << " = " << pointText(first)
+       << " first: a wall mirrors the fluid, so a point on it counts twice. Move the points half "
+          "a spacing inside, enlarge the domain (a scene file), or turn mirrorWalls off";
+  throw InvalidInput(text.str());
+}
+
+} // namespace
+
 void checkPacking(const Parameters& parameters, const ParticleBatch& batch, const std::string& where)
 {
   const double s = parameters.particleSpacing;
@@ -101,9 +130,7 @@ void checkPacking(const Parameters& parameters, const ParticleBatch& batch, cons
       return static_cast<std::uint64_t>(std::min(std::max(c, 0.0), 2097151.0));
     };
     ++perCell[cell(x.x, d.min.x) | cell(x.y, d.min.y) << 21 | cell(x.z, d.min.z) << 42];
-    const double wall = std::min({ x.x - d.min.x, d.max.x - x.x, x.y - d.min.y, d.max.y - x.y,
-      x.z - d.min.z, d.max.z - x.z });
-    if (parameters.mirrorWalls && std::abs(wall) < 0.25 * s)
+    if (onAMirrorWall(parameters, x))
     {
       firstOnWall = onWalls++ == 0 ? i : firstOnWall;
     }
@@ -125,15 +152,26 @@ void checkPacking(const Parameters& parameters, const ParticleBatch& batch, cons
   }
   if (onWalls > 0)
   {
-    std::ostringstream text;
-    text.precision(4);
-    text << "initial particles: " << onWalls << (onWalls == 1 ? " point lies" : " points lie")
-         << " within a quarter of particleSpacing = " << s << " m of a wall of the domain "
-         << pointText(d.min) << " - " << pointText(d.max) << " (" << where << "), point "
-         << batch.id[firstOnWall] << " = " << pointText(batch.position[firstOnWall])
-         << " first: a wall mirrors the fluid, so a point on it counts twice. Move the points half "
-            "a spacing inside, enlarge the domain (a scene file), or turn mirrorWalls off";
-    throw InvalidInput(text.str());
+    refuseOnWalls(
+      parameters, onWalls, batch.id[firstOnWall], batch.position[firstOnWall], where);
+  }
+}
+
+void checkOffWalls(const Parameters& parameters, const FluidSource& fluid, const std::string& where)
+{
+  std::size_t onWalls = 0, at = 0, firstOnWall = 0;
+  Vec3d first{};
+  fluid.forEachPosition([&](const Vec3d& x) {
+    if (isFinite(x) && onAMirrorWall(parameters, x) && onWalls++ == 0)
+    {
+      firstOnWall = at;
+      first = x;
+    }
+    ++at;
+  });
+  if (onWalls > 0)
+  {
+    refuseOnWalls(parameters, onWalls, static_cast<std::int64_t>(firstOnWall), first, where);
   }
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "Parameters.h"
+#include "FluidSource.h"
 #include "Particles.h"
 
 #include <string>
@@ -26,6 +27,10 @@ void checkLiquids(const Parameters& parameters, const std::vector<std::uint8_t>&
 // with mirror walls, lying on a wall (the wall's image doubles them). Throws InvalidInput with the
 // numbers and what to set; `where` names the scene whose domain it is.
 void checkPacking(const Parameters& parameters, const ParticleBatch& batch, const std::string& where);
+
+// checkPacking's walls alone, over a fluid that no one holds whole (a decomposed run's scene: its
+// lattice is one particle per spacing^3 by construction), point k the k-th of its positions.
+void checkOffWalls(const Parameters& parameters, const FluidSource& fluid, const std::string& where);
 
 // The mean number of particles per occupied cell of side particleSpacing above which
 // checkPacking refuses them: a lattice at the spacing has 1, random points at the fluid's density

@@ -675,56 +675,6 @@ Scene parse(const json& root)
 
 // Lattice sites min + s (i + 1/2) inside [min, max]: the fluid stays s/2 from the region's faces.
 // The region's liquid goes with each site where the scene names liquids (`liquids`).
-void fillBox(const FluidBox& box, double s, bool liquids, ParticleBatch& out)
-{
-  const auto count = [s](double lo, double hi) {
-    return static_cast<long>(std::floor((hi - lo) / s + 1e-9));
-  };
-  const long nx = count(box.min.x, box.max.x);
-  const long ny = count(box.min.y, box.max.y);
-  const long nz = count(box.min.z, box.max.z);
-  for (long k = 0; k < nz; ++k)
-  {
-    for (long j = 0; j < ny; ++j)
-    {
-      for (long i = 0; i < nx; ++i)
-      {
-        out.position.push_back(
-          { box.min.x + s * (i + 0.5), box.min.y + s * (j + 0.5), box.min.z + s * (k + 0.5) });
-        out.velocity.push_back(box.velocity);
-        if (liquids)
-        {
-          out.liquid.push_back(static_cast<std::uint8_t>(box.liquid));
-        }
-      }
-    }
-  }
-}
-
-void fillSphere(const FluidSphere& sphere, double s, bool liquids, ParticleBatch& out)
-{
-  const long n = static_cast<long>(std::floor(sphere.radius / s));
-  for (long k = -n; k <= n; ++k)
-  {
-    for (long j = -n; j <= n; ++j)
-    {
-      for (long i = -n; i <= n; ++i)
-      {
-        const Vec3d offset{ s * i, s * j, s * k };
-        if (dot(offset, offset) <= sphere.radius * sphere.radius)
-        {
-          out.position.push_back(sphere.center + offset);
-          out.velocity.push_back(sphere.velocity);
-          if (liquids)
-          {
-            out.liquid.push_back(static_cast<std::uint8_t>(sphere.liquid));
-          }
-        }
-      }
-    }
-  }
-}
-
 } // namespace
 
 Scene parseScene(const std::string& text)
@@ -900,9 +850,54 @@ std::string outflowName(const Scene& scene, std::size_t k)
     (outflow.face < 0 ? std::string("box") : "face " + std::string(kFaceNames[outflow.face])) + ")";
 }
 
-ParticleBatch fillScene(const Scene& scene, const Parameters& parameters)
+void forEachSceneSite(const Scene& scene, double s,
+  const std::function<void(const Vec3d&, const Vec3d&, std::uint8_t)>& site)
 {
-  parameters.validate(); // the spacing sizes every loop below
+  const auto count = [s](double lo, double hi) {
+    return static_cast<long>(std::floor((hi - lo) / s + 1e-9));
+  };
+  for (const FluidBox& box : scene.boxes)
+  {
+    const long nx = count(box.min.x, box.max.x);
+    const long ny = count(box.min.y, box.max.y);
+    const long nz = count(box.min.z, box.max.z);
+    const auto liquid = static_cast<std::uint8_t>(box.liquid);
+    for (long k = 0; k < nz; ++k)
+    {
+      for (long j = 0; j < ny; ++j)
+      {
+        for (long i = 0; i < nx; ++i)
+        {
+          site({ box.min.x + s * (i + 0.5), box.min.y + s * (j + 0.5), box.min.z + s * (k + 0.5) },
+            box.velocity, liquid);
+        }
+      }
+    }
+  }
+  for (const FluidSphere& sphere : scene.spheres)
+  {
+    const long n = static_cast<long>(std::floor(sphere.radius / s));
+    const auto liquid = static_cast<std::uint8_t>(sphere.liquid);
+    for (long k = -n; k <= n; ++k)
+    {
+      for (long j = -n; j <= n; ++j)
+      {
+        for (long i = -n; i <= n; ++i)
+        {
+          const Vec3d offset{ s * i, s * j, s * k };
+          if (dot(offset, offset) <= sphere.radius * sphere.radius)
+          {
+            site(sphere.center + offset, sphere.velocity, liquid);
+          }
+        }
+      }
+    }
+  }
+}
+
+void checkSceneSize(const Scene& scene, const Parameters& parameters)
+{
+  parameters.validate(); // the spacing sizes every loop of a fill
   const double estimate = estimateParticleCount(scene, parameters);
   if (!(estimate <= static_cast<double>(kMaxParticles)))
   {
@@ -910,20 +905,23 @@ ParticleBatch fillScene(const Scene& scene, const Parameters& parameters)
       ": scene \"" + scene.name + "\" would hold about " + std::to_string(estimate) +
       " particles, more than the " + std::to_string(kMaxParticles) + " supported");
   }
+}
+
+ParticleBatch fillScene(const Scene& scene, const Parameters& parameters)
+{
+  checkSceneSize(scene, parameters);
   ParticleBatch batch;
-  for (const FluidBox& box : scene.boxes)
-  {
-    fillBox(box, parameters.particleSpacing, !scene.liquids.empty(), batch);
-  }
-  for (const FluidSphere& sphere : scene.spheres)
-  {
-    fillSphere(sphere, parameters.particleSpacing, !scene.liquids.empty(), batch);
-  }
-  batch.id.resize(batch.position.size());
-  for (std::size_t i = 0; i < batch.id.size(); ++i)
-  {
-    batch.id[i] = static_cast<std::int64_t>(i);
-  }
+  const bool liquids = !scene.liquids.empty();
+  forEachSceneSite(scene, parameters.particleSpacing,
+    [&](const Vec3d& x, const Vec3d& v, std::uint8_t liquid) {
+      batch.id.push_back(static_cast<std::int64_t>(batch.position.size()));
+      batch.position.push_back(x);
+      batch.velocity.push_back(v);
+      if (liquids)
+      {
+        batch.liquid.push_back(liquid);
+      }
+    });
   return batch;
 }
 

@@ -8,6 +8,7 @@
 #include "Particles.h"
 #include "Vec3.h"
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -83,6 +84,14 @@ constexpr std::size_t kMaxParticles = std::size_t(1) << 31;
 // An upper estimate of the particles the scene makes at the parameters' spacing, emitters included,
 // computed without making them.
 double estimateParticleCount(const Scene& scene, const Parameters& parameters);
+
+// site(x, v, liquid) for every lattice site of the scene's boxes, then of its spheres, at spacing
+// s, in fillScene's order. A scene without liquids gives liquid 0.
+void forEachSceneSite(const Scene& scene, double s,
+  const std::function<void(const Vec3d&, const Vec3d&, std::uint8_t)>& site);
+
+// Throws InvalidInput when the spacing would make more than kMaxParticles of the scene.
+void checkSceneSize(const Scene& scene, const Parameters& parameters);
 
 // The initial particles of a scene at the parameters' spacing, ids 0..N-1. Throws InvalidInput
 // before allocating when the spacing would make more than kMaxParticles.

@@ -178,6 +178,19 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
   return fields;
 }
 
+bool insideSolids(
+  const Vec3d& x, const std::vector<DistanceGrid>& fields, const std::vector<SolidPose>& poses)
+{
+  for (std::size_t k = 0; k < fields.size(); ++k)
+  {
+    if (fields[k].at(poses.empty() ? x : poses[k].toLocal(x)) < 0.0)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
 ParticleBatch outsideSolids(const ParticleBatch& batch, const std::vector<DistanceGrid>& fields,
   const std::vector<SolidPose>& poses, std::size_t& removed)
 {
@@ -186,13 +199,7 @@ ParticleBatch outsideSolids(const ParticleBatch& batch, const std::vector<Distan
   removed = 0;
   for (std::size_t i = 0; i < batch.position.size(); ++i)
   {
-    bool inside = false;
-    for (std::size_t k = 0; k < fields.size(); ++k)
-    {
-      const Vec3d x = batch.position[i];
-      inside = inside || fields[k].at(poses.empty() ? x : poses[k].toLocal(x)) < 0.0;
-    }
-    if (inside)
+    if (insideSolids(batch.position[i], fields, poses))
     {
       ++removed;
       continue;

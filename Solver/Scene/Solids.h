@@ -53,6 +53,10 @@ struct SolidRegion
 // InvalidInput naming the solid when it lies wholly outside the domain or its mesh is bad.
 std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, const Parameters& p);
 
+// Whether x is inside a solid (its field < 0) with the solids at `poses` (none: as sampled).
+bool insideSolids(
+  const Vec3d& x, const std::vector<DistanceGrid>& fields, const std::vector<SolidPose>& poses);
+
 // The particles whose centres are outside every solid (the field >= 0) with the solids at
 // `poses` (none: as sampled), in order, their ids renumbered 0..N-1; `removed` receives how many
 // were inside.

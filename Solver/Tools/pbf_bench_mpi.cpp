@@ -19,9 +19,11 @@
 #include "Distributed/SubdomainStepper.h"
 #include "ScaledScenes.h"
 #include "Scene.h"
+#include "SceneFluid.h"
 #include "ToolOptions.h"
 
 #include <mpi.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
@@ -84,10 +86,12 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
     : static_cast<double>(toolInteger(options, "particles", 200000, 1));
   const Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
   const Parameters parameters = withSceneDomain(options.parameters, scene);
-  const ParticleBatch everything = fillScene(scene, parameters);
+  checkSceneSize(scene, parameters);
+  // Each rank generates only its slab of the scene (SceneFluid.h); the setup time includes it.
   const auto setupStart = std::chrono::steady_clock::now();
+  const SceneFluid fluid(scene, parameters);
   const std::unique_ptr<Stepper> owner = distributed::makeSubdomainStepper(
-    communicator, options.backend, options.precision, parameters, everything);
+    communicator, options.backend, options.precision, parameters, fluid);
   auto& stepper = dynamic_cast<distributed::DecomposedStepper&>(*owner);
   stepper.synchronize();
   const double setupSeconds = largestOverRanks(
@@ -127,6 +131,12 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
   const std::vector<double> refreshWaitPerRank =
     gatherToRankZero(percentile(refreshWaitMs, 0.5), ranks);
   const std::vector<double> beforePerRank = gatherToRankZero(percentile(beforeMs, 0.5), ranks);
+  // The host memory each rank's process has held at its peak (setup included) [MB].
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  const std::vector<double> peakHostPerRank =
+    gatherToRankZero(static_cast<double>(usage.ru_maxrss) / 1024.0, ranks);
+  const std::size_t particleCount = fluid.size();
   if (communicator.rank() != 0)
   {
     return 0;
@@ -140,11 +150,12 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
     "the passes [%s]\n",
     listed(ownPerRank).c_str(), listed(deviceWaitPerRank).c_str(),
     listed(refreshWaitPerRank).c_str(), listed(beforePerRank).c_str());
+  std::fprintf(stderr, "peak host memory per rank [MB]: [%s]\n", listed(peakHostPerRank).c_str());
   std::printf("| ranks | backend | precision | particles | ms/step median (p10-p90) | steps/s | "
               "ghost ms | migration ms | particles per rank (min-max) | ghosts (max) | finite |\n");
   std::printf("| %d | %s | %s | %zu | %.2f (%.2f-%.2f) | %.1f | %.2f | %.2f | %llu-%llu | %.0f | "
               "%s |\n",
-    ranks, toString(options.backend), toString(options.precision), everything.position.size(),
+    ranks, toString(options.backend), toString(options.precision), particleCount,
     median, percentile(ms, 0.1), percentile(ms, 0.9), 1000.0 / median, percentile(ghostMs, 0.5),
     percentile(migrationMs, 0.5), static_cast<unsigned long long>(*fewest),
     static_cast<unsigned long long>(*most), ghosts, statistics.finite ? "yes" : "NO");
@@ -154,7 +165,7 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
     std::ofstream out(options.extra.at("json"));
     out << "{ \"ranks\": " << ranks << ", \"backend\": \"" << toString(options.backend)
         << "\", \"precision\": \"" << toString(options.precision)
-        << "\", \"particles\": " << everything.position.size() << ", \"steps\": " << steps
+        << "\", \"particles\": " << particleCount << ", \"steps\": " << steps
         << ", \"median_ms\": " << median << ", \"p10_ms\": " << percentile(ms, 0.1)
         << ", \"p90_ms\": " << percentile(ms, 0.9)
         << ", \"ghost_ms\": " << percentile(ghostMs, 0.5)
@@ -163,6 +174,7 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
         << "], \"device_wait_ms_per_rank\": [" << listed(deviceWaitPerRank)
         << "], \"refresh_wait_ms_per_rank\": [" << listed(refreshWaitPerRank)
         << "], \"before_passes_ms_per_rank\": [" << listed(beforePerRank)
+        << "], \"peak_host_mb_per_rank\": [" << listed(peakHostPerRank)
         << "], \"particles_per_rank\": [";
     for (std::size_t r = 0; r < perRank.size(); ++r)
     {
