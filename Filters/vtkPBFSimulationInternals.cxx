@@ -253,8 +253,9 @@ std::unique_ptr<pbf::Simulation> vtkPBFSimulationInternals::Build(const vtkPBFSe
       solid.name = called;
     }
   }
-  // Decomposed, every rank builds the whole fluid (from the whole input, which
-  // RequestUpdateExtent asks for on every rank) and keeps its slab.
+  // Decomposed, every rank generates only its slab of the scene's fluid (pbf::SceneFluid); an
+  // input's points come whole to every rank (RequestUpdateExtent asks for the whole input), and
+  // each keeps its slab of them.
   pbf::distributed::Communicator* ranks = key.ranks > 1 ? this->Ranks.get() : nullptr;
   if (ranks && ranks->failed())
   {
