@@ -161,10 +161,7 @@ public:
     });
     slabs_ = distributed::Slabs::balanced(perColumn, communicator_.size());
     uploadSlabs();
-    const int me = communicator_.rank();
-    append(fluid.where([&](const Vec3d& q) {
-      return slabs_.owner(subdomain::columnOf(g, Vec3<Real>::from(q))) == me;
-    }));
+    distributed::together(communicator_, [&] { appendOwned(ownedOf(fluid)); });
   }
   catch (...)
   {
@@ -362,41 +359,58 @@ private:
     dt_ = dt;
   }
 
-  // Every rank passes the whole batch (or its own slab's part of it); each keeps the particles of
-  // its slab.
+  // Every rank passes the whole batch; each keeps the particles of its slab.
   void appendAlone(const ParticleBatch& batch)
   {
     checkBatch(parameters_, batch);
-    device_->activate();
+    appendOwned(ownedOf(BatchSource(batch)));
+  }
+
+  // The particles of this rank's slab, in the stepper's precision, each checked (checkParticle).
+  struct Owned
+  {
     std::vector<Vec3<Real>> x, v;
     std::vector<std::int64_t> id;
-    std::vector<std::uint8_t> liquid;
-    const GridGeometry<Real>& g = constants_.geometry;
-    for (std::size_t i = 0; i < batch.position.size(); ++i)
-    {
-      const Vec3<Real> q = Vec3<Real>::from(batch.position[i]);
-      if (slabs_.owner(subdomain::columnOf(g, q)) == communicator_.rank())
-      {
-        x.push_back(q);
-        v.push_back(Vec3<Real>::from(batch.velocity[i]));
-        id.push_back(batch.id[i]);
-        // A batch without liquids is of liquid 0 (checkBatch).
-        liquid.push_back(batch.liquid.empty() ? std::uint8_t(0) : batch.liquid[i]);
-      }
-    }
-    const std::size_t n = n_ + x.size();
+    std::vector<std::uint8_t> liquid; // 0 for a fluid without liquids
+  };
+  Owned ownedOf(const FluidSource& fluid) const
+  {
+    Owned o;
+    const GridGeometry<Real> g = constants_.geometry;
+    const int me = communicator_.rank();
+    fluid.forEachWhere(
+      [&](const Vec3d& q) {
+        return slabs_.owner(subdomain::columnOf(g, Vec3<Real>::from(q))) == me;
+      },
+      [&](const Vec3d& x, const Vec3d& v, std::int64_t id, std::uint8_t liquid) {
+        checkParticle(parameters_, id, x, v);
+        checkLiquid(parameters_, id, liquid);
+        o.x.push_back(Vec3<Real>::from(x));
+        o.v.push_back(Vec3<Real>::from(v));
+        o.id.push_back(id);
+        o.liquid.push_back(liquid);
+      });
+    return o;
+  }
+
+  // Uploads them behind the particles held, then cuts and evaluates density and lambda at rest.
+  void appendOwned(Owned&& o)
+  {
+    device_->activate();
+    const std::size_t n = n_ + o.x.size();
     reserve(n, n_);
-    if (!x.empty())
+    if (!o.x.empty())
     {
-      device_->upload(vec_[xBuffer_] + n_, x.data(), x.size() * sizeof(Vec3<Real>));
-      device_->upload(vec_[vBuffer_] + n_, v.data(), v.size() * sizeof(Vec3<Real>));
-      device_->upload(id_ + n_, id.data(), id.size() * sizeof(std::int64_t));
+      device_->upload(vec_[xBuffer_] + n_, o.x.data(), o.x.size() * sizeof(Vec3<Real>));
+      device_->upload(vec_[vBuffer_] + n_, o.v.data(), o.v.size() * sizeof(Vec3<Real>));
+      device_->upload(id_ + n_, o.id.data(), o.id.size() * sizeof(std::int64_t));
       if (liquid_)
       {
-        device_->upload(liquid_ + n_, liquid.data(), liquid.size());
+        device_->upload(liquid_ + n_, o.liquid.data(), o.liquid.size());
       }
-      device_->synchronize(); // the host vectors die here
+      device_->synchronize(); // the host vectors die with `o`
     }
+    o = Owned{};
     n_ = n;
     cut(xBuffer_, -1); // evaluateAtRest predicts nothing: p = x
     evaluateAtRest();

@@ -77,15 +77,10 @@ SubdomainStepper<Real>::SubdomainStepper(Communicator& communicator, bool parall
     ++perColumn[static_cast<std::size_t>(column(Vec3<Real>::from(q)))];
   });
   slabs_ = Slabs::balanced(perColumn, communicator_.size());
-  const int me = communicator_.rank();
-  // A part that fails its check fails every rank alike, before the collectives of append.
-  ParticleBatch mine;
-  together(communicator_, [&] {
-    mine = fluid.where(
-      [&](const Vec3d& q) { return slabs_.owner(column(Vec3<Real>::from(q))) == me; });
-    checkBatch(fluid_.parameters, mine);
-  });
-  append(mine);
+  // A particle that fails its check fails every rank alike, before the collectives that follow.
+  together(communicator_, [&] { keepOwn(fluid, true); });
+  cut();
+  evaluateAtRest();
 }
 
 template <class Real>
@@ -111,25 +106,34 @@ void SubdomainStepper<Real>::append(const ParticleBatch& batch)
   checkBatch(fluid_.parameters, batch);
   // Every rank holds the whole batch: each keeps the particles in its slab, so each particle is
   // kept once, and the new cut then balances the counts.
-  for (std::size_t i = 0; i < batch.position.size(); ++i)
-  {
-    const Vec3<Real> q = Vec3<Real>::from(batch.position[i]);
-    if (slabs_.owner(column(q)) == communicator_.rank())
-    {
-      fluid_.x.push_back(q);
-      fluid_.v.push_back(Vec3<Real>::from(batch.velocity[i]));
-      fluid_.id.push_back(batch.id[i]);
-      if (!fluid_.parameters.liquids.empty())
+  keepOwn(BatchSource(batch), false);
+  cut();
+  evaluateAtRest();
+}
+
+template <class Real>
+void SubdomainStepper<Real>::keepOwn(const FluidSource& fluid, bool check)
+{
+  const int me = communicator_.rank();
+  const bool liquids = !fluid_.parameters.liquids.empty();
+  fluid.forEachWhere([&](const Vec3d& q) { return slabs_.owner(column(Vec3<Real>::from(q))) == me; },
+    [&](const Vec3d& x, const Vec3d& v, std::int64_t id, std::uint8_t liquid) {
+      if (check)
       {
-        fluid_.liquid.push_back(batch.liquid.empty() ? std::uint8_t(0) : batch.liquid[i]);
+        checkParticle(fluid_.parameters, id, x, v);
+        checkLiquid(fluid_.parameters, id, liquid);
       }
-    }
-  }
+      fluid_.x.push_back(Vec3<Real>::from(x));
+      fluid_.v.push_back(Vec3<Real>::from(v));
+      fluid_.id.push_back(id);
+      if (liquids)
+      {
+        fluid_.liquid.push_back(liquid);
+      }
+    });
   fluid_.density.resize(fluid_.x.size());
   fluid_.lambda.resize(fluid_.x.size());
   fluid_.pressure.resize(fluid_.x.size());
-  cut();
-  evaluateAtRest();
 }
 
 template <class Real>

@@ -135,6 +135,9 @@ private:
   template <class Stage>
   void forOwned(Stage&& stage);
   int column(const Vec3<Real>& q) const;
+  // The particles of `fluid` in this rank's slab behind those held (each checked when `check`:
+  // a part of a fluid that no one checked whole).
+  void keepOwn(const FluidSource& fluid, bool check);
   void cut();                          // balanced slabs from the global column counts
   void migrate(bool byPrediction);     // to the owners of their columns
   void receiveGhosts();                // border particles of the neighbours, appended

@@ -15,11 +15,36 @@ namespace pbf
 class FluidSource
 {
 public:
+  using Keep = std::function<bool(const Vec3d&)>;
+  using Visit = std::function<void(const Vec3d& x, const Vec3d& v, std::int64_t id,
+    std::uint8_t liquid)>;
+
   virtual ~FluidSource() = default;
   // visit(x) for every particle's position, in the fluid's order.
   virtual void forEachPosition(const std::function<void(const Vec3d&)>& visit) const = 0;
+  // visit(x, v, id, liquid) for the particles whose position keep(x) accepts, in the fluid's
+  // order (liquid 0 where the fluid names none): a stepper stores its slab straight into its own
+  // arrays, in its own precision, with no batch of doubles beside them.
+  virtual void forEachWhere(const Keep& keep, const Visit& visit) const = 0;
+  // Whether the particles carry liquids (ParticleBatch::liquid).
+  virtual bool hasLiquids() const = 0;
+
   // The particles whose position keep(x) accepts, in the fluid's order, with their ids.
-  virtual ParticleBatch where(const std::function<bool(const Vec3d&)>& keep) const = 0;
+  ParticleBatch where(const Keep& keep) const
+  {
+    ParticleBatch part;
+    const bool liquids = hasLiquids();
+    forEachWhere(keep, [&](const Vec3d& x, const Vec3d& v, std::int64_t id, std::uint8_t liquid) {
+      part.position.push_back(x);
+      part.velocity.push_back(v);
+      part.id.push_back(id);
+      if (liquids)
+      {
+        part.liquid.push_back(liquid);
+      }
+    });
+    return part;
+  }
 };
 
 // A fluid held whole already (a test's batch, the points of an input): the parts are views of it.
@@ -40,25 +65,19 @@ public:
     }
   }
 
-  ParticleBatch where(const std::function<bool(const Vec3d&)>& keep) const override
+  void forEachWhere(const Keep& keep, const Visit& visit) const override
   {
-    ParticleBatch part;
     for (std::size_t i = 0; i < batch_.position.size(); ++i)
     {
-      if (!keep(batch_.position[i]))
+      if (keep(batch_.position[i]))
       {
-        continue;
-      }
-      part.position.push_back(batch_.position[i]);
-      part.velocity.push_back(batch_.velocity[i]);
-      part.id.push_back(batch_.id[i]);
-      if (!batch_.liquid.empty())
-      {
-        part.liquid.push_back(batch_.liquid[i]);
+        visit(batch_.position[i], batch_.velocity[i], batch_.id[i],
+          batch_.liquid.empty() ? std::uint8_t(0) : batch_.liquid[i]);
       }
     }
-    return part;
   }
+
+  bool hasLiquids() const override { return !batch_.liquid.empty(); }
 
 private:
   const ParticleBatch& batch_;

@@ -26,29 +26,44 @@ void checkBatch(const Parameters& parameters, const ParticleBatch& batch)
   {
     throw InvalidInput("particle count = " + std::to_string(n) + ": more than 32-bit indices hold");
   }
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    checkParticle(parameters, static_cast<std::int64_t>(i), batch.position[i], batch.velocity[i]);
+  }
+}
+
+void checkParticle(
+  const Parameters& parameters, std::int64_t which, const Vec3d& x, const Vec3d& v)
+{
   // A particle within one spacing outside the box is a rounding matter and is projected inside by
   // the first collision step; farther out the scene and the domain disagree.
   const double slack = parameters.particleSpacing;
   const Box& d = parameters.domain;
-  for (std::size_t i = 0; i < n; ++i)
+  if (!isFinite(x))
   {
-    const Vec3d& x = batch.position[i];
-    if (!isFinite(x))
-    {
-      throw InvalidInput("position of particle " + std::to_string(i) + " = " + pointText(x) +
-        ": must be finite");
-    }
-    if (!isFinite(batch.velocity[i]))
-    {
-      throw InvalidInput("velocity of particle " + std::to_string(i) + " = " +
-        pointText(batch.velocity[i]) + ": must be finite");
-    }
-    if (x.x < d.min.x - slack || x.y < d.min.y - slack || x.z < d.min.z - slack ||
-      x.x > d.max.x + slack || x.y > d.max.y + slack || x.z > d.max.z + slack)
-    {
-      throw InvalidInput("position of particle " + std::to_string(i) + " = " + pointText(x) +
-        ": outside the domain " + pointText(d.min) + " - " + pointText(d.max));
-    }
+    throw InvalidInput("position of particle " + std::to_string(which) + " = " + pointText(x) +
+      ": must be finite");
+  }
+  if (!isFinite(v))
+  {
+    throw InvalidInput("velocity of particle " + std::to_string(which) + " = " + pointText(v) +
+      ": must be finite");
+  }
+  if (x.x < d.min.x - slack || x.y < d.min.y - slack || x.z < d.min.z - slack ||
+    x.x > d.max.x + slack || x.y > d.max.y + slack || x.z > d.max.z + slack)
+  {
+    throw InvalidInput("position of particle " + std::to_string(which) + " = " + pointText(x) +
+      ": outside the domain " + pointText(d.min) + " - " + pointText(d.max));
+  }
+}
+
+void checkLiquid(const Parameters& parameters, std::int64_t which, std::uint8_t liquid)
+{
+  if (!parameters.liquids.empty() && liquid >= parameters.liquids.size())
+  {
+    throw InvalidInput("liquid of particle " + std::to_string(which) + " = " +
+      std::to_string(liquid) + ": the scene names " + std::to_string(parameters.liquids.size()) +
+      " liquids (0 to " + std::to_string(parameters.liquids.size() - 1) + ")");
   }
 }
 

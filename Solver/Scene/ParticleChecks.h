@@ -15,6 +15,11 @@ namespace pbf
 // coordinates or velocities, positions outside the domain, more particles than 32-bit indices.
 void checkBatch(const Parameters& parameters, const ParticleBatch& batch);
 
+// checkBatch's tests of one particle, `which` naming it (its id, for a part of a fluid that no one
+// holds whole): finite, inside the domain, and of a liquid the scene names.
+void checkParticle(const Parameters& parameters, std::int64_t which, const Vec3d& x, const Vec3d& v);
+void checkLiquid(const Parameters& parameters, std::int64_t which, std::uint8_t liquid);
+
 // Throws InvalidInput when `liquid` holds an index beyond the parameters' liquids, or when its
 // length is neither `count` nor (where the scene names no liquids, or for a batch all of
 // liquid 0) empty. `what` names the array in the message ("checkpoint", "particle batch").

@@ -43,23 +43,14 @@ void SceneFluid::forEachPosition(const std::function<void(const Vec3d&)>& visit)
   forEachKept([&](const Vec3d& x, const Vec3d&, std::uint8_t, std::int64_t) { visit(x); });
 }
 
-ParticleBatch SceneFluid::where(const std::function<bool(const Vec3d&)>& keep) const
+void SceneFluid::forEachWhere(const Keep& keep, const Visit& visit) const
 {
-  ParticleBatch part;
   forEachKept([&](const Vec3d& x, const Vec3d& v, std::uint8_t liquid, std::int64_t id) {
-    if (!keep(x))
+    if (keep(x))
     {
-      return;
-    }
-    part.position.push_back(x);
-    part.velocity.push_back(v);
-    part.id.push_back(id);
-    if (liquids_)
-    {
-      part.liquid.push_back(liquid);
+      visit(x, v, id, liquid);
     }
   });
-  return part;
 }
 
 } // namespace pbf

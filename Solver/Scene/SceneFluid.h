@@ -29,7 +29,8 @@ public:
     const std::vector<DistanceGrid>& solids = {}, const std::vector<SolidPose>& poses = {});
 
   void forEachPosition(const std::function<void(const Vec3d&)>& visit) const override;
-  ParticleBatch where(const std::function<bool(const Vec3d&)>& keep) const override;
+  void forEachWhere(const Keep& keep, const Visit& visit) const override;
+  bool hasLiquids() const override { return liquids_; }
 
   std::size_t size() const { return size_; }
   // Sites inside a solid, left out.
