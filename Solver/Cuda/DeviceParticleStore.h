@@ -14,9 +14,11 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <exception>
 #include <limits>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace pbf
 {
@@ -66,6 +68,10 @@ public:
       static_cast<std::size_t>(a.lists) * sizeof(std::uint32_t);
   }
 
+  // Head room for what the driver allocates beside us: the kernels' stacks, graphs, CUB's
+  // per-launch state.
+  static constexpr std::size_t kHeadRoom = std::size_t(128) << 20;
+
   std::size_t capacity() const { return capacity_; }
   const ParticleArrays& arrays() const { return arrays_; }
   // The allocation and the sort's scratch at this capacity.
@@ -73,14 +79,27 @@ public:
 
   // Room for `needed` particles: when it must grow, to at least half again the capacity (so that
   // growing by steps reallocates O(log N) times) and 1024. The first `keep` particles of every
-  // Vec3 buffer and of density, lambda, pressure and id are copied into the new arrays on the device.
+  // Vec3 buffer and of density, lambda, pressure, id and liquid are kept. The new arrays are
+  // filled from the old on the device while both fit beside each other; where they do not (a
+  // store that fills most of its device), it grows by a sixteenth only, and if even that does not
+  // fit beside the old, the kept particles wait on the host while the old arrays make room. A
+  // growth that does not fit at all leaves the store as it was and throws InvalidInput.
   void reserve(std::size_t needed, std::size_t keep)
   {
     if (needed <= capacity_ && capacity_ > 0)
     {
       return;
     }
-    const std::size_t capacity = std::max({ needed, capacity_ + capacity_ / 2, std::size_t(1024) });
+    std::size_t capacity = std::max({ needed, capacity_ + capacity_ / 2, std::size_t(1024) });
+    if (arena_ && !fitsBeside(capacity))
+    {
+      capacity = std::max(needed, capacity_ + capacity_ / 16);
+    }
+    if (arena_ && keep > 0 && !fitsBeside(capacity))
+    {
+      growThroughHost(capacity, needed, keep);
+      return;
+    }
     Pointers old = p;
     void* oldArena = arena_;
     arena_ = nullptr;
@@ -306,6 +325,72 @@ private:
       " MiB; use fewer particles, a larger particleSpacing, more ranks or a CPU backend";
   }
 
+  // Whether arrays of `capacity` fit in the device's free memory beside those held now.
+  bool fitsBeside(std::size_t capacity) const
+  {
+    std::size_t freeBytes = 0, totalBytes = 0;
+    device_.memoryInfo(freeBytes, totalBytes);
+    const std::size_t need = layoutOf(capacity, arrays_).total +
+      device_.tempBytesFor(static_cast<std::uint32_t>(std::min<std::size_t>(capacity,
+                             std::numeric_limits<std::uint32_t>::max() - 1)),
+        cells_, keyBits_) +
+      kHeadRoom;
+    return need <= freeBytes;
+  }
+
+  // The kept particles' arrays on the host while the old arena is released and the new one laid
+  // out, then back; where the new one does not fit, the old capacity again, and the error.
+  void growThroughHost(std::size_t capacity, std::size_t needed, std::size_t keep)
+  {
+    std::vector<Vec3<Real>> vec[4];
+    std::vector<Real> density(keep), lambda(keep), pressure(keep);
+    std::vector<std::int64_t> id(keep);
+    std::vector<std::uint8_t> liquid(p.liquid ? keep : 0);
+    for (int i = 0; i < 4; ++i)
+    {
+      vec[i].resize(keep);
+      device_.download(vec[i].data(), p.vec[i], keep * sizeof(Vec3<Real>));
+    }
+    device_.download(density.data(), p.density, keep * sizeof(Real));
+    device_.download(lambda.data(), p.lambda, keep * sizeof(Real));
+    device_.download(pressure.data(), p.pressure, keep * sizeof(Real));
+    device_.download(id.data(), p.id, keep * sizeof(std::int64_t));
+    if (p.liquid)
+    {
+      device_.download(liquid.data(), p.liquid, keep);
+    }
+    device_.synchronize();
+    const std::size_t before = capacity_;
+    release();
+    std::exception_ptr failure;
+    try
+    {
+      layOut(capacity, needed);
+    }
+    catch (...)
+    {
+      failure = std::current_exception();
+      layOut(before, keep); // it held them a moment ago
+    }
+    for (int i = 0; i < 4; ++i)
+    {
+      device_.upload(p.vec[i], vec[i].data(), keep * sizeof(Vec3<Real>));
+    }
+    device_.upload(p.density, density.data(), keep * sizeof(Real));
+    device_.upload(p.lambda, lambda.data(), keep * sizeof(Real));
+    device_.upload(p.pressure, pressure.data(), keep * sizeof(Real));
+    device_.upload(p.id, id.data(), keep * sizeof(std::int64_t));
+    if (p.liquid)
+    {
+      device_.upload(p.liquid, liquid.data(), keep);
+    }
+    device_.synchronize(); // the host vectors die here
+    if (failure)
+    {
+      std::rethrow_exception(failure);
+    }
+  }
+
   void layOut(std::size_t capacity, std::size_t particles)
   {
     if (capacity >= std::numeric_limits<std::uint32_t>::max())
@@ -319,9 +404,7 @@ private:
       device_.tempBytesFor(static_cast<std::uint32_t>(capacity), cells_, keyBits_);
     std::size_t freeBytes = 0, totalBytes = 0;
     device_.memoryInfo(freeBytes, totalBytes);
-    // Head room for what the driver allocates beside us: the kernels' stacks, graphs, CUB's
-    // per-launch state.
-    const std::size_t reserve = std::size_t(128) << 20;
+    const std::size_t reserve = kHeadRoom;
     const std::string need =
       memoryNeed(particles, capacity, total, temp, reserve, freeBytes, totalBytes);
     if (total + temp + reserve > freeBytes)

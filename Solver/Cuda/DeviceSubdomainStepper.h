@@ -161,7 +161,10 @@ public:
     });
     slabs_ = distributed::Slabs::balanced(perColumn, communicator_.size());
     uploadSlabs();
-    distributed::together(communicator_, [&] { appendOwned(ownedOf(fluid)); });
+    distributed::together(communicator_, [&] {
+      reserve(plannedCapacity(perColumn), 0);
+      appendOwned(ownedOf(fluid));
+    });
   }
   catch (...)
   {
@@ -250,6 +253,12 @@ public:
   Health health() const override
   {
     return distributed::together(communicator_, [&] { return healthAlone(); });
+  }
+  // Device memory this rank holds: the particle store and its scratch, the fixed arrays and the
+  // message buffers (the solids' fields aside: small beside them).
+  std::size_t deviceBytes() const override
+  {
+    return (store_ ? store_->bytes() : 0) + fixedBytes_ + packBytes_ + recvBytes_;
   }
   void load(const Snapshot<float>& state) override
   {
@@ -487,8 +496,10 @@ private:
   template <class T>
   T* allocateFixed(std::size_t n)
   {
-    void* p = device_->allocate(std::max<std::size_t>(n, 1) * sizeof(T));
+    const std::size_t bytes = std::max<std::size_t>(n, 1) * sizeof(T);
+    void* p = device_->allocate(bytes);
     fixed_.push_back(p);
+    fixedBytes_ += bytes;
     return static_cast<T*>(p);
   }
 
@@ -496,10 +507,16 @@ private:
 
   void releaseParticles();
 
-  // Grows the per-particle arrays to hold `needed` (by half again at least, so growth happens
-  // O(log N) times), keeping the first `keep` entries of the four Vec3 buffers, density, lambda
-  // and id. Never shrinks: once grown, steps allocate nothing.
+  // Grows the per-particle arrays to hold `needed` (DeviceParticleStore::reserve: by half again
+  // where both arenas fit, else by a sixteenth, through the host where even that does not fit
+  // beside the old), keeping the first `keep` entries of the four Vec3 buffers, density, lambda,
+  // id and liquid. Never shrinks: once grown, steps allocate nothing.
   void reserve(std::size_t needed, std::size_t keep);
+  // The arrays' first capacity, from the fluid's count per column: this rank's share, its ghosts
+  // (its neighbours' border columns) and the migration's swing (a balanced cut moves by whole
+  // columns: two of the largest), and 1 % more. The first evaluation then grows nothing, and the
+  // store holds 1.01-1.02 particles a particle at hundreds of millions.
+  std::size_t plannedCapacity(const std::vector<std::uint64_t>& perColumn) const;
   // The array pointers below from the store, after it grew or swapped its alternates.
   void adoptStore();
 
@@ -690,6 +707,7 @@ private:
 
   // Fixed-size device arrays.
   std::vector<void*> fixed_;
+  std::size_t fixedBytes_ = 0;
   void* solids_ = nullptr; // constants_.obstacles and .boundary: views, table, nodes
   std::vector<DistanceGridView<Real>> solidViews_; // as sampled, for placeSolids
   std::uint32_t* cellOffsets_ = nullptr;

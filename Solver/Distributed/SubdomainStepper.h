@@ -62,6 +62,8 @@ public:
   virtual const ExchangeReport& lastExchange() const = 0;
   virtual int rank() const = 0;
   virtual int ranks() const = 0;
+  // Device memory this rank's stepper holds (0 on the CPU).
+  virtual std::size_t deviceBytes() const { return 0; }
 };
 
 template <class Real>

@@ -137,6 +137,11 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
   const std::vector<double> peakHostPerRank =
     gatherToRankZero(static_cast<double>(usage.ru_maxrss) / 1024.0, ranks);
   const std::size_t particleCount = fluid.size();
+  // Device bytes per particle on each rank: all it holds on its GPU over the particles it owns.
+  const std::vector<double> deviceBytesPerRank =
+    gatherToRankZero(static_cast<double>(stepper.deviceBytes()) /
+        static_cast<double>(std::max<std::size_t>(stepper.size(), 1)),
+      ranks);
   if (communicator.rank() != 0)
   {
     return 0;
@@ -151,6 +156,8 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
     listed(ownPerRank).c_str(), listed(deviceWaitPerRank).c_str(),
     listed(refreshWaitPerRank).c_str(), listed(beforePerRank).c_str());
   std::fprintf(stderr, "peak host memory per rank [MB]: [%s]\n", listed(peakHostPerRank).c_str());
+  std::fprintf(stderr, "device bytes per particle per rank: [%s]\n",
+    listed(deviceBytesPerRank).c_str());
   std::printf("| ranks | backend | precision | particles | ms/step median (p10-p90) | steps/s | "
               "ghost ms | migration ms | particles per rank (min-max) | ghosts (max) | finite |\n");
   std::printf("| %d | %s | %s | %zu | %.2f (%.2f-%.2f) | %.1f | %.2f | %.2f | %llu-%llu | %.0f | "
@@ -175,6 +182,7 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
         << "], \"refresh_wait_ms_per_rank\": [" << listed(refreshWaitPerRank)
         << "], \"before_passes_ms_per_rank\": [" << listed(beforePerRank)
         << "], \"peak_host_mb_per_rank\": [" << listed(peakHostPerRank)
+        << "], \"device_bytes_per_particle_per_rank\": [" << listed(deviceBytesPerRank)
         << "], \"particles_per_rank\": [";
     for (std::size_t r = 0; r < perRank.size(); ++r)
     {

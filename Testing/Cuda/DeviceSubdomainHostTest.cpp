@@ -577,3 +577,68 @@ TEST(DeviceSubdomainOnHost, TwoLiquidsWithSurfaceTensionMatchTheSerialBackend)
   setup.parameters.surfaceTension = 1.0;
   expectRanksMatchSerial(setup, 10, onHost<double>(), nullptr, true);
 }
+
+namespace
+{
+
+using Store = cuda::DeviceParticleStore<float, HostDevicePolicy>;
+
+// A store of `n` particles whose x, density and id read k at particle k.
+void fill(Store& store, std::size_t n)
+{
+  store.reserve(n, 0);
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    store.p.vec[0][k] = Vec3<float>{ float(k), 0.f, 0.f };
+    store.p.density[k] = float(k);
+    store.p.id[k] = static_cast<std::int64_t>(k);
+  }
+}
+
+bool holds(const Store& store, std::size_t n)
+{
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    if (store.p.vec[0][k].x != float(k) || store.p.density[k] != float(k) ||
+      store.p.id[k] != static_cast<std::int64_t>(k))
+    {
+      return false;
+    }
+  }
+  return true;
+}
+
+} // namespace
+
+// A store that fills most of its device grows without holding two arenas at once: by a
+// sixteenth, its particles on the host while the old arena makes room; a growth that does not
+// fit even then leaves it as it was, with its particles, and names the count.
+TEST(DeviceParticleStore, GrowsThroughTheHostWhereBothArenasDoNotFitAndKeepsItsParticles)
+{
+  const std::size_t n = 100000;
+  const std::size_t perParticle = Store::bytesPerParticle(cuda::ParticleArrays{});
+  for (bool fits : { true, false })
+  {
+    HostDevicePolicy device;
+    Store store(device, cuda::ParticleArrays{}, 1000, 16);
+    fill(store, n);
+    const std::size_t held = device.allocatedBytes();
+    ASSERT_GE(held, n * perParticle);
+    // A sixteenth more (106,250 particles) fits once the old arena is gone, not beside it (the
+    // arena's padding and block sums are a few KiB); or only the old arena fits.
+    const std::size_t grown = (n + n / 16) * perParticle + (std::size_t(64) << 10);
+    device.setFreeMemory(Store::kHeadRoom + (fits ? grown : held));
+    if (fits)
+    {
+      store.reserve(n + 1, n);
+      EXPECT_EQ(store.capacity(), n + n / 16);
+      EXPECT_LE(device.allocatedBytes(), grown);
+    }
+    else
+    {
+      EXPECT_THROW(store.reserve(n + 1, n), InvalidInput);
+      EXPECT_EQ(store.capacity(), n);
+    }
+    EXPECT_TRUE(holds(store, n)) << (fits ? "grown" : "refused");
+  }
+}

@@ -15,6 +15,7 @@
 #include <cstring>
 #include <functional>
 #include <numeric>
+#include <unordered_map>
 #include <vector>
 
 namespace pbf
@@ -256,8 +257,24 @@ public:
   HostExecutor borderExecutor() const { return HostExecutor(backwards_); }
   void forkBorder() {}
   void joinBorder() {}
-  void* allocate(std::size_t bytes) { return std::calloc(bytes > 0 ? bytes : 1, 1); }
-  void release(void* pointer) { std::free(pointer); }
+  // Device memory as a budget (setFreeMemory): what is allocated is no longer free.
+  void* allocate(std::size_t bytes)
+  {
+    void* p = std::calloc(bytes > 0 ? bytes : 1, 1);
+    sizes_[p] = bytes;
+    allocated_ += bytes;
+    return p;
+  }
+  void release(void* pointer)
+  {
+    const auto found = sizes_.find(pointer);
+    if (found != sizes_.end())
+    {
+      allocated_ -= found->second;
+      sizes_.erase(found);
+    }
+    std::free(pointer);
+  }
   void* allocateHost(std::size_t bytes) { return std::malloc(bytes > 0 ? bytes : 1); }
   void releaseHost(void* pointer) { std::free(pointer); }
   void download(void* host, const void* device, std::size_t bytes) { std::memcpy(host, device, bytes); }
@@ -299,10 +316,12 @@ public:
   // As much memory as a test says (64 GiB free unless told).
   void memoryInfo(std::size_t& freeBytes, std::size_t& totalBytes) const
   {
-    freeBytes = freeBytes_;
+    freeBytes = freeBytes_ > allocated_ ? freeBytes_ - allocated_ : 0;
     totalBytes = freeBytes_;
   }
+  // The device's whole memory (what memoryInfo calls free before anything is allocated).
   void setFreeMemory(std::size_t bytes) { freeBytes_ = bytes; }
+  std::size_t allocatedBytes() const { return allocated_; }
   void* stream() const { return nullptr; }
 
   // A captured step keeps its closure, with the arguments of the capture, and launch runs it:
@@ -362,6 +381,8 @@ public:
 
 private:
   std::size_t freeBytes_ = std::size_t(64) << 30;
+  std::size_t allocated_ = 0;
+  std::unordered_map<void*, std::size_t> sizes_;
   long captures_ = 0;
   bool backwards_;
   long faultIn_ = -1;
