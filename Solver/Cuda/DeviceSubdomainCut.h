@@ -189,6 +189,7 @@ typename DeviceSubdomainStepper<Real, Device>::Roles4 DeviceSubdomainStepper<Rea
   device_->recordEvent();
   if (leaving > 0)
   {
+    reserveBorderLists(leaving); // holes and movers: at most the leavers each
     subdomain::selectHolesAndMovers<Real>(
       exec, n, stay, keys_[0], sendList_, ghostList_, selected_);
     const std::uint32_t most = std::min(stay, leaving);

@@ -31,8 +31,6 @@ DeviceSubdomainStepper<Real, Device>::receiveGhostsAs(Roles4 r)
   // No column is -1 or nx: a side without a neighbour selects nothing.
   const int leftColumn = me > 0 ? slabs_.first[static_cast<std::size_t>(me)] : -1;
   const int rightColumn = me < last ? slabs_.first[static_cast<std::size_t>(me) + 1] - 1 : -1;
-  subdomain::selectColumn(exec, g, n, vec_[r.p], leftColumn, sendList_, selected_);
-  subdomain::selectColumn(exec, g, n, vec_[r.p], rightColumn, ghostList_, selected_ + 1);
   // Every message's length from the global predicted column counts (the cut's): no wait for
   // the device's counts, which come back with the seeds and are checked then.
   const std::size_t ranks = static_cast<std::size_t>(communicator_.size());
@@ -40,6 +38,11 @@ DeviceSubdomainStepper<Real, Device>::receiveGhostsAs(Roles4 r)
   sendRight_ = ghostsSentRight(me);
   ghostLeft_ = me > 0 ? ghostsSentRight(me - 1) : 0u;
   ghostRight_ = me < last ? ghostsSentLeft(me + 1) : 0u;
+  // Room for this step's border lists: the columns sent, the ghosts, the border (sortByCell).
+  reserveBorderLists(std::max(sendLeft_ + sendRight_, ghostLeft_ + ghostRight_));
+  exec = device_->executor();
+  subdomain::selectColumn(exec, g, n, vec_[r.p], leftColumn, sendList_, selected_);
+  subdomain::selectColumn(exec, g, n, vec_[r.p], rightColumn, ghostList_, selected_ + 1);
   const std::uint32_t sent[2] = { sendLeft_, sendRight_ };
   device_->download(
     setupCounts_ + (ranks + 1) * subdomain::kCounterCopies, selected_, 2 * sizeof(std::uint32_t));

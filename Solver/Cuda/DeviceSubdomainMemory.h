@@ -150,9 +150,37 @@ std::size_t DeviceSubdomainStepper<Real, Device>::removeOutflow(const std::vecto
 }
 
 template <class Real, class Device>
+void DeviceSubdomainStepper<Real, Device>::reserveBorderLists(std::size_t count)
+{
+  if (count <= borderCapacity_ && borderLists_)
+  {
+    return;
+  }
+  const std::size_t capacity = std::max({ count, borderCapacity_ + borderCapacity_ / 2,
+    std::size_t(1024) });
+  device_->synchronize(); // queued work may still read the old lists
+  if (borderLists_)
+  {
+    device_->release(borderLists_);
+  }
+  borderLists_ = static_cast<std::uint32_t*>(
+    device_->allocate(3 * capacity * sizeof(std::uint32_t)));
+  borderCapacity_ = capacity;
+  sendList_ = borderLists_;
+  ghostList_ = borderLists_ + capacity;
+  borderList_ = borderLists_ + 2 * capacity;
+}
+
+template <class Real, class Device>
 void DeviceSubdomainStepper<Real, Device>::releaseParticles()
 {
   store_.reset();
+  if (borderLists_)
+  {
+    device_->release(borderLists_);
+  }
+  borderLists_ = nullptr;
+  borderCapacity_ = 0;
   if (pack_)
   {
     device_->release(pack_);
@@ -170,11 +198,12 @@ void DeviceSubdomainStepper<Real, Device>::reserve(std::size_t needed, std::size
 {
   if (!store_)
   {
-    // The alternates and the five lists are the migration's and the ghosts' (ParticleArrays).
+    // The alternates and the owned and interior lists are the migration's and the passes'
+    // (ParticleArrays); the border lists are apart (reserveBorderLists).
     ParticleArrays arrays;
     arrays.masks = constants_.schedule.enabled != 0;
     arrays.alternates = true;
-    arrays.lists = 5;
+    arrays.lists = 2;
     arrays.liquids = static_cast<int>(parameters_.liquids.size());
     arrays.colour = constants_.c.surfaceTension;
     store_ = std::make_unique<DeviceParticleStore<Real, Device>>(
@@ -226,11 +255,8 @@ void DeviceSubdomainStepper<Real, Device>::adoptStore()
   keys_[0] = p.keys[0];
   keys_[1] = p.keys[1];
   masks_ = p.masks;
-  sendList_ = p.list[0];
-  ghostList_ = p.list[1];
-  ownedList_ = p.list[2];
-  borderList_ = p.list[3];
-  interiorList_ = p.list[4];
+  ownedList_ = p.list[0];
+  interiorList_ = p.list[1];
   blockSums_ = p.blockSums;
   capacity_ = store_->capacity();
 }

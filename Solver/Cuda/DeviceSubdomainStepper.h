@@ -258,7 +258,8 @@ public:
   // message buffers (the solids' fields aside: small beside them).
   std::size_t deviceBytes() const override
   {
-    return (store_ ? store_->bytes() : 0) + fixedBytes_ + packBytes_ + recvBytes_;
+    return (store_ ? store_->bytes() : 0) + fixedBytes_ + packBytes_ + recvBytes_ +
+      3 * borderCapacity_ * sizeof(std::uint32_t);
   }
   void load(const Snapshot<float>& state) override
   {
@@ -517,6 +518,9 @@ private:
   // columns: two of the largest), and 1 % more. The first evaluation then grows nothing, and the
   // store holds 1.01-1.02 particles a particle at hundreds of millions.
   std::size_t plannedCapacity(const std::vector<std::uint64_t>& perColumn) const;
+  // Room for `count` entries in each of the border lists (their contents are not kept: every
+  // use writes them first); the host knows every count before the device selects.
+  void reserveBorderLists(std::size_t count);
   // The array pointers below from the store, after it grew or swapped its alternates.
   void adoptStore();
 
@@ -700,6 +704,10 @@ private:
   CellKey* keys_[2] = {};
   std::uint32_t* masks_ = nullptr;
   std::uint32_t *sendList_ = nullptr, *ghostList_ = nullptr, *ownedList_ = nullptr;
+  // The lists of a few columns (sendList_, ghostList_, borderList_) in one allocation of their
+  // own, borderCapacity_ entries each: 12 bytes a particle less than lists as long as the store.
+  std::uint32_t* borderLists_ = nullptr;
+  std::size_t borderCapacity_ = 0;
   // The owned particles that a neighbour mirrors (this slab's border columns, each once) and the
   // others: a pass computes the border first and sends it while the interior is computed.
   std::uint32_t *borderList_ = nullptr, *interiorList_ = nullptr;
