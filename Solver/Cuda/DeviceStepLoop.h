@@ -196,21 +196,9 @@ public:
   {
     const FluidView<Real, MaskedNeighbors<Real>> f = afterView();
     Vec3<Real>* const velocity = f.scratch;
-    auto run = [&](auto pass) {
+    detail::withConfinementPass(f, [&](auto pass) {
       detail::confinementPass(exec_, n_, detail::AllParticles{}, f, velocity, pass);
-    };
-    if (f.colour && f.obstacleCount > 0)
-    {
-      detail::withPass<detail::SolidTensionConfinementPass>(k_.c.xsphHyper, run);
-    }
-    else if (f.colour)
-    {
-      detail::withPass<detail::TensionConfinementPass>(k_.c.xsphHyper, run);
-    }
-    else
-    {
-      detail::withPass<detail::PlainConfinementPass>(k_.c.xsphHyper, run);
-    }
+    });
   }
 
   // Line 23, x_i = x*_i: the corrected positions' buffer becomes x.

@@ -501,6 +501,25 @@ void withPass(bool on, Run&& run)
   }
 }
 
+// run(pass) with the confinement pass the view needs: surface tension only with its buffers
+// (FluidView::colour), the solids' images only where the scene has solids.
+template <class Real, class Run>
+void withConfinementPass(const FluidView<Real, MaskedNeighbors<Real>>& f, Run&& run)
+{
+  if (f.colour && f.obstacleCount > 0)
+  {
+    withPass<SolidTensionConfinementPass>(f.c.xsphHyper, run);
+  }
+  else if (f.colour)
+  {
+    withPass<TensionConfinementPass>(f.c.xsphHyper, run);
+  }
+  else
+  {
+    withPass<PlainConfinementPass>(f.c.xsphHyper, run);
+  }
+}
+
 // Lines 10-19 and, in the last iteration, 21: delta p_i (eq. 14) into f.scratch, then the Jacobi
 // update in place there, so f.scratch holds the corrected positions afterwards; the largest
 // |delta p_i| goes to maxMoved[iteration] for the mask schedule. With Chebyshev's acceleration

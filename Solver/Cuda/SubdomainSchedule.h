@@ -394,21 +394,9 @@ template <class Real, class Exec>
 void confine(Exec& exec, std::uint32_t n, const std::uint32_t* list,
   const FluidView<Real, MaskedNeighbors<Real>>& f)
 {
-  auto run = [&](auto pass) {
+  detail::withConfinementPass(f, [&](auto pass) {
     detail::confinementPass(exec, n, detail::ListedParticles{ list }, f, f.v, pass);
-  };
-  if (f.colour && f.obstacleCount > 0)
-  {
-    detail::withPass<detail::SolidTensionConfinementPass>(f.c.xsphHyper, run);
-  }
-  else if (f.colour)
-  {
-    detail::withPass<detail::TensionConfinementPass>(f.c.xsphHyper, run);
-  }
-  else
-  {
-    detail::withPass<detail::PlainConfinementPass>(f.c.xsphHyper, run);
-  }
+  });
 }
 
 // Algorithm 1, line 21, for the particles of a list: v_i = (x*_i - x_i) / dt (adaptive mode, when

@@ -171,16 +171,13 @@ Scene twoLiquids()
 
 Scene sideBySideLiquids()
 {
-  return parseScene(R"({
-    "domain": { "min": [0, 0, 0], "max": [0.8, 0.6, 0.24] },
-    "liquids": [
-      { "name": "water", "restDensity": 1000 },
-      { "name": "oil", "restDensity": 800, "xsphViscosity": 0.05 }
-    ],
-    "fluid": [
-      { "type": "box", "min": [0, 0, 0], "max": [0.2, 0.4, 0.24], "liquid": "water" },
-      { "type": "box", "min": [0.2, 0, 0], "max": [0.4, 0.4, 0.24], "liquid": "oil" }
-    ] })");
+  // twoLiquids' tank and liquids, the regions moved side by side, no nozzle.
+  Scene scene = twoLiquids();
+  scene.name = "water and oil side by side";
+  scene.emitters.clear();
+  scene.boxes = { FluidBox{ { 0, 0, 0 }, { 0.2, 0.4, 0.24 }, {}, 0 },
+    FluidBox{ { 0.2, 0, 0 }, { 0.4, 0.4, 0.24 }, {}, 1 } };
+  return scene;
 }
 
 Scene damBreakWithSolids()
