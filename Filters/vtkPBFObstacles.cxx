@@ -152,20 +152,6 @@ std::vector<std::string> vtkPBFSceneMeshFiles(const std::string& sceneFile)
 }
 
 //------------------------------------------------------------------------------
-bool vtkPBFSceneNamesLiquids(const std::string& sceneFile, const std::string& preset)
-{
-  try
-  {
-    return !(sceneFile.empty() ? pbf::presetScene(preset) : pbf::loadSceneFile(sceneFile))
-              .liquids.empty();
-  }
-  catch (const std::exception&)
-  {
-    return false;
-  }
-}
-
-//------------------------------------------------------------------------------
 std::string vtkPBFFileVersions(const std::vector<std::string>& files)
 {
   std::string versions;

@@ -28,10 +28,6 @@ void vtkPBFReadMeshFiles(pbf::Scene& scene);
 // scene file that does not parse gives none here; building the run reports it.
 std::vector<std::string> vtkPBFSceneMeshFiles(const std::string& sceneFile);
 
-// Whether the scene file (or, without one, the preset) names liquids; false for a scene that
-// does not parse (the run reports why).
-bool vtkPBFSceneNamesLiquids(const std::string& sceneFile, const std::string& preset);
-
 // The size and modification time of each file: a mesh edited in place is another run, as an
 // edited scene file is.
 std::string vtkPBFFileVersions(const std::vector<std::string>& files);

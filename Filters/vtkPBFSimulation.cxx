@@ -230,10 +230,13 @@ int vtkPBFSimulation::RequestInformation(
 
 //------------------------------------------------------------------------------
 int vtkPBFSimulation::RequestUpdateExtent(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Every input (the fluid's points, the obstacles) whole, in one piece, on every rank alike so
-  // that a collective upstream filter sees the same request everywhere; only piece 0 simulates.
+  // The obstacles and probes whole, in one piece, on every rank alike so that a collective
+  // upstream filter sees the same request everywhere. The fluid's points likewise, except in a
+  // decomposed run: there each rank asks for its own piece of them, as ParaView's parallel
+  // engine asks every filter, and no rank holds the whole input (RequestData sends each piece's
+  // particles to the ranks that own them). Without decomposition only piece 0 simulates.
   // The fluid's points are the initial state, read at their first time, so playing the animation
   // does not re-execute them; the obstacles are read at the frame's time, so that one that moves
   // with time (a reader's time steps) is seen where it is (vtkPBFObstacleMotion.h); the probes
@@ -242,13 +245,16 @@ int vtkPBFSimulation::RequestUpdateExtent(
   const bool timed = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
   const double frameTime =
     timed ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()) : 0.0;
+  const FrameRequest r = this->Internals->ParseRequest(this->Settings(), request, outputVector);
   for (int port = 0; port < 3; ++port)
   {
     for (int c = 0; c < this->GetNumberOfInputConnections(port); ++c)
     {
       vtkInformation* inInfo = inputVector[port]->GetInformationObject(c);
-      inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER(), 0);
-      inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES(), 1);
+      const bool piece = port == 0 && r.Decomposed;
+      inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER(), piece ? r.Piece : 0);
+      inInfo->Set(
+        vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES(), piece ? r.Pieces : 1);
       inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_GHOST_LEVELS(), 0);
       if (inInfo->Has(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) &&
         inInfo->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) > 0)

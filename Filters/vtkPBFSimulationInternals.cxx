@@ -23,6 +23,7 @@
 #include "Scene.h"
 #include "Stepper.h"
 #include "SurfaceShare.h"
+#include "Distributed/RankFailure.h"
 #include "Distributed/SubdomainStepper.h"
 #ifdef PBF_WITH_CUDA
 #include "Cuda/CudaBackend.h"
@@ -121,7 +122,6 @@ pbf::PlaybackKey vtkPBFSimulationInternals::MakeKey(const vtkPBFSettings& settin
   if (key.scene != this->MeshFilesOf)
   {
     this->MeshFiles = vtkPBFSceneMeshFiles(sceneFile);
-    this->SceneLiquids = vtkPBFSceneNamesLiquids(sceneFile, settings.PresetName);
     this->MeshFilesOf = key.scene;
   }
   key.scene += vtkPBFFileVersions(this->MeshFiles);
@@ -183,17 +183,10 @@ pbf::PlaybackKey vtkPBFSimulationInternals::MakeKey(const vtkPBFSettings& settin
   }
   this->Playback.setRanks(ranks);
   key.ranks = r.Decomposed ? r.Pieces : 1;
-  // HasCuda() first: it fills CudaAbsence. CUDA ranks do not run named liquids or surface
-  // tension yet (one GPU does).
+  // HasCuda() first: it fills CudaAbsence.
   const bool cuda = this->HasCuda();
-  const bool liquidRanks = this->SceneLiquids && ranks;
-  const bool tensionRanks = p.largestSurfaceTension() > 0 && ranks;
-  const pbf::BackendChoice choice = pbf::chooseBackend(settings.Backend,
-    cuda && !liquidRanks && !tensionRanks,
-    liquidRanks ? "the scene names liquids, which CUDA ranks do not run yet"
-                : (tensionRanks ? "the scene has surface tension, which CUDA ranks do not run yet"
-                                : this->CudaAbsence),
-    ranks);
+  const pbf::BackendChoice choice =
+    pbf::chooseBackend(settings.Backend, cuda, this->CudaAbsence, ranks);
   key.backend = choice.backend;
   if (!choice.noCuda.empty() && !this->FallbackReported)
   {
@@ -253,18 +246,42 @@ std::unique_ptr<pbf::Simulation> vtkPBFSimulationInternals::Build(const vtkPBFSe
       solid.name = called;
     }
   }
-  // Decomposed, every rank generates only its slab of the scene's fluid (pbf::SceneFluid); an
-  // input's points come whole to every rank (RequestUpdateExtent asks for the whole input), and
-  // each keeps its slab of them.
+  // Decomposed, every rank generates only its slab of the scene's fluid (pbf::SceneFluid), and
+  // an input's points come in pieces, one a rank (RequestUpdateExtent), which the ranks hand to
+  // the ranks that own them (pbf::distributed::FluidPieces): no rank holds the whole fluid.
   pbf::distributed::Communicator* ranks = key.ranks > 1 ? this->Ranks.get() : nullptr;
   if (ranks && ranks->failed())
   {
     ranks->recover();
   }
-  auto simulation = input
-    ? std::make_unique<pbf::Simulation>(scene, key.parameters, key.backend, key.precision,
-        vtkPBFBatchFromInput(input), ranks)
-    : std::make_unique<pbf::Simulation>(scene, key.parameters, key.backend, key.precision, ranks);
+  std::unique_ptr<pbf::Simulation> simulation;
+  if (input && ranks)
+  {
+    // Where this piece starts in the whole input, so that ids and messages count as one process.
+    vtkIdType first = 0, total = 0;
+    const auto counts =
+      pbf::distributed::allGather(*ranks, { double(input->GetNumberOfPoints()) });
+    for (int r = 0; r < static_cast<int>(counts.size()); ++r)
+    {
+      first += r < ranks->rank() ? static_cast<vtkIdType>(counts[r][0]) : 0;
+      total += static_cast<vtkIdType>(counts[r][0]);
+    }
+    // A bad point lies in one rank's piece: that rank fails, and every rank with it.
+    const pbf::ParticleBatch piece = pbf::distributed::together(
+      *ranks, [&] { return vtkPBFBatchFromInput(input, first, total); });
+    simulation = std::make_unique<pbf::Simulation>(scene, key.parameters, key.backend,
+      key.precision, piece, *ranks, pbf::Simulation::InPieces{});
+  }
+  else if (input)
+  {
+    simulation = std::make_unique<pbf::Simulation>(
+      scene, key.parameters, key.backend, key.precision, vtkPBFBatchFromInput(input), ranks);
+  }
+  else
+  {
+    simulation =
+      std::make_unique<pbf::Simulation>(scene, key.parameters, key.backend, key.precision, ranks);
+  }
   if (simulation->seededInsideSolids() > 0 && (!ranks || ranks->rank() == 0))
   {
     vtkWarningWithObjectMacro(settings.Owner, << simulation->seededInsideSolids()

@@ -91,8 +91,6 @@ public:
   // The mesh files of the scene file whose path and text MeshFilesOf holds.
   std::string MeshFilesOf;
   std::vector<std::string> MeshFiles;
-  // Whether that scene names liquids: Backend Auto then runs ranks on the CPU (Solver/Backends).
-  bool SceneLiquids = false;
   // Reused from frame to frame while the particle count stays.
   vtkSmartPointer<vtkCellArray> Vertices;
   // The diagnostics table of the rows of version TableVersion.

@@ -29,13 +29,14 @@ std::string FormatPoint(const double x[3])
 } // namespace
 
 //------------------------------------------------------------------------------
-pbf::ParticleBatch vtkPBFBatchFromInput(vtkPointSet* input)
+pbf::ParticleBatch vtkPBFBatchFromInput(vtkPointSet* input, vtkIdType first, vtkIdType total)
 {
   const vtkIdType n = input->GetNumberOfPoints();
-  if (n < 2)
+  const vtkIdType all = total < 0 ? n : total;
+  if (all < 2)
   {
     // One particle has no neighbour: no density to constrain, nothing that behaves as a fluid.
-    throw pbf::InvalidInput("input number of points = " + std::to_string(n) +
+    throw pbf::InvalidInput("input number of points = " + std::to_string(all) +
       ": the filter needs at least 2 points to become the fluid (a particle alone has no "
       "neighbour within the smoothing length, so it only falls)");
   }
@@ -68,7 +69,7 @@ pbf::ParticleBatch vtkPBFBatchFromInput(vtkPointSet* input)
     input->GetPoint(i, x);
     if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]))
     {
-      throw pbf::InvalidInput("input point " + std::to_string(i) + " = " + FormatPoint(x) +
+      throw pbf::InvalidInput("input point " + std::to_string(first + i) + " = " + FormatPoint(x) +
         ": coordinates must be finite");
     }
     const auto k = static_cast<std::size_t>(i);
@@ -79,18 +80,18 @@ pbf::ParticleBatch vtkPBFBatchFromInput(vtkPointSet* input)
       velocity->GetTuple(i, v);
       if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
       {
-        throw pbf::InvalidInput("input velocity of point " + std::to_string(i) + " = " +
+        throw pbf::InvalidInput("input velocity of point " + std::to_string(first + i) + " = " +
           FormatPoint(v) + ": must be finite");
       }
       batch.velocity[k] = pbf::Vec3d{ v[0], v[1], v[2] };
     }
-    batch.id[k] = static_cast<std::int64_t>(i);
+    batch.id[k] = static_cast<std::int64_t>(first + i);
     if (liquid)
     {
       const double l = liquid->GetTuple1(i);
       if (!(l >= 0 && l < pbf::kMaxLiquids && l == std::floor(l)))
       {
-        throw pbf::InvalidInput("input liquid of point " + std::to_string(i) + " = " +
+        throw pbf::InvalidInput("input liquid of point " + std::to_string(first + i) + " = " +
           std::to_string(l) + ": must be an index into the scene's \"liquids\" (0 to " +
           std::to_string(pbf::kMaxLiquids - 1) + ")");
       }

@@ -8,12 +8,17 @@
 
 #include <string>
 
+#include "vtkType.h"
+
 class vtkPointSet;
 
-// Point i becomes particle i, with the initial velocity of a 3-component point array "velocity"
-// when there is one. Throws pbf::InvalidInput for fewer than 2 points, a non-finite coordinate or
-// velocity, or a "velocity" array of another shape.
-pbf::ParticleBatch vtkPBFBatchFromInput(vtkPointSet* input);
+// Point i becomes particle first + i, with the initial velocity of a 3-component point array
+// "velocity" when there is one. Throws pbf::InvalidInput for fewer than 2 points in all (`total`,
+// the input's own count when negative), a non-finite coordinate or velocity, or a "velocity"
+// array of another shape. `first` and `total` place a rank's piece of a parallel input in the
+// whole, so that a message names the point as the whole input numbers it.
+pbf::ParticleBatch vtkPBFBatchFromInput(
+  vtkPointSet* input, vtkIdType first = 0, vtkIdType total = -1);
 
 // The solver's messages name its own fields (timeStep, cflNumber, solverIterations); a ParaView
 // user sees properties. Advice about a field becomes advice about the properties that set it,

@@ -150,15 +150,16 @@ public:
     device_->activate();
     allocateFixed();
     setTimeStep(parameters_.timeStep);
-    // Every rank counts the whole initial fluid per column: the balanced cut follows from the
-    // counts on every rank alike, so each keeps its share at once and nothing migrates (a cut
+    // The whole initial fluid's count per column (FluidSource::countPerColumn): the balanced cut
+    // follows from the counts on every rank alike, so each keeps its share at once and nothing migrates (a cut
     // from uniform slabs would first gather most of a dam break on one rank and then move it:
     // gigabytes at 64M).
     const GridGeometry<Real> g = constants_.geometry;
-    std::vector<std::uint64_t> perColumn(static_cast<std::size_t>(g.nx), 0);
-    fluid.forEachPosition([&](const Vec3d& q) {
-      ++perColumn[static_cast<std::size_t>(subdomain::columnOf(g, Vec3<Real>::from(q)))];
-    });
+    const std::vector<std::uint64_t> perColumn = fluid.countPerColumn(
+      [&](const Vec3d& q) {
+        return static_cast<std::size_t>(subdomain::columnOf(g, Vec3<Real>::from(q)));
+      },
+      static_cast<std::size_t>(g.nx));
     slabs_ = distributed::Slabs::balanced(perColumn, communicator_.size());
     uploadSlabs();
     distributed::together(communicator_, [&] {
@@ -389,10 +390,8 @@ private:
     Owned o;
     const GridGeometry<Real> g = constants_.geometry;
     const int me = communicator_.rank();
-    fluid.forEachWhere(
-      [&](const Vec3d& q) {
-        return slabs_.owner(subdomain::columnOf(g, Vec3<Real>::from(q))) == me;
-      },
+    fluid.forEachOwned(
+      [&](const Vec3d& q) { return slabs_.owner(subdomain::columnOf(g, Vec3<Real>::from(q))); }, me,
       [&](const Vec3d& x, const Vec3d& v, std::int64_t id, std::uint8_t liquid) {
         if (check)
         {

@@ -72,11 +72,12 @@ SubdomainStepper<Real>::SubdomainStepper(Communicator& communicator, bool parall
   const auto ranks = static_cast<std::size_t>(communicator_.size());
   sendIndex_.resize(ranks);
   ghostIndex_.resize(ranks);
-  std::vector<std::uint64_t> perColumn(static_cast<std::size_t>(fluid_.geometry.nx), 0);
-  fluid.forEachPosition([&](const Vec3d& q) {
-    ++perColumn[static_cast<std::size_t>(column(Vec3<Real>::from(q)))];
-  });
-  slabs_ = Slabs::balanced(perColumn, communicator_.size());
+  slabs_ = Slabs::balanced(fluid.countPerColumn(
+                              [&](const Vec3d& q) {
+                                return static_cast<std::size_t>(column(Vec3<Real>::from(q)));
+                              },
+                              static_cast<std::size_t>(fluid_.geometry.nx)),
+    communicator_.size());
   // A particle that fails its check fails every rank alike, before the collectives that follow.
   together(communicator_, [&] { keepOwn(fluid, true); });
   cut();
@@ -116,7 +117,7 @@ void SubdomainStepper<Real>::keepOwn(const FluidSource& fluid, bool check)
 {
   const int me = communicator_.rank();
   const bool liquids = !fluid_.parameters.liquids.empty();
-  fluid.forEachWhere([&](const Vec3d& q) { return slabs_.owner(column(Vec3<Real>::from(q))) == me; },
+  fluid.forEachOwned([&](const Vec3d& q) { return slabs_.owner(column(Vec3<Real>::from(q))); }, me,
     [&](const Vec3d& x, const Vec3d& v, std::int64_t id, std::uint8_t liquid) {
       if (check)
       {

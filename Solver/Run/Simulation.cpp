@@ -7,6 +7,7 @@
 #include "ParticleChecks.h"
 #include "SceneFluid.h"
 
+#include "Distributed/FluidPieces.h"
 #include "Distributed/SubdomainStepper.h"
 
 #include <algorithm>
@@ -48,22 +49,29 @@ double extentAlong(const Box& box, const Vec3d& u)
 
 Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
   Precision precision, distributed::Communicator* communicator)
-  : Simulation(scene, parameters, backend, precision, nullptr, communicator)
+  : Simulation(scene, parameters, backend, precision, nullptr, false, communicator)
 {
 }
 
 Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
   Precision precision, const ParticleBatch& given, distributed::Communicator* communicator)
-  : Simulation(scene, parameters, backend, precision, &given, communicator)
+  : Simulation(scene, parameters, backend, precision, &given, false, communicator)
 {
 }
 
-// The fluid is the given particles, or the scene's regions: whole on one process, and on each
-// rank of a decomposed run only that rank's slab (SceneFluid), so that no rank holds the whole
-// fluid. Both leave out what the solids hold at t = 0 (seeded inside, it would be thrown out at
-// once) and number the rest 0..N-1.
 Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
-  Precision precision, const ParticleBatch* given, distributed::Communicator* communicator)
+  Precision precision, const ParticleBatch& piece, distributed::Communicator& communicator, InPieces)
+  : Simulation(scene, parameters, backend, precision, &piece, true, &communicator)
+{
+}
+
+// The fluid is the given particles (whole, or this rank's piece of them), or the scene's regions:
+// whole on one process, and on each rank of a decomposed run only that rank's slab (SceneFluid),
+// so that no rank holds the whole fluid. All leave out what the solids hold at t = 0 (seeded
+// inside, it would be thrown out at once) and number the rest 0..N-1.
+Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
+  Precision precision, const ParticleBatch* given, bool givenInPieces,
+  distributed::Communicator* communicator)
   : scene_(scene)
   , parameters_(withSceneDomain(parameters, scene))
   , layersEmitted_(scene.emitters.size(), 0)
@@ -92,9 +100,32 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
     parts.emplace(scene_, parameters_, solids, poses);
     seededInsideSolids_ = parts->insideSolids();
   }
+  std::optional<distributed::FluidPieces> pieces;
+  std::size_t count = parts ? parts->size() : whole.position.size();
+  if (given && givenInPieces)
+  {
+    // The ids count across the pieces in rank order; the removed are added up.
+    double before = 0, total = 0, removed = 0;
+    const auto counts = distributed::allGather(*communicator,
+      { static_cast<double>(whole.position.size()), static_cast<double>(seededInsideSolids_) });
+    for (std::size_t r = 0; r < counts.size(); ++r)
+    {
+      before += r < static_cast<std::size_t>(communicator->rank()) ? counts[r][0] : 0.0;
+      total += counts[r][0];
+      removed += counts[r][1];
+    }
+    for (std::size_t i = 0; i < whole.id.size(); ++i)
+    {
+      whole.id[i] = static_cast<std::int64_t>(before) + static_cast<std::int64_t>(i);
+    }
+    count = static_cast<std::size_t>(total);
+    seededInsideSolids_ = static_cast<std::size_t>(removed);
+    pieces.emplace(whole, *communicator);
+  }
   const BatchSource held(whole);
-  const FluidSource& initial = parts ? static_cast<const FluidSource&>(*parts) : held;
-  const std::size_t count = parts ? parts->size() : whole.position.size();
+  const FluidSource& initial = parts
+    ? static_cast<const FluidSource&>(*parts)
+    : (pieces ? static_cast<const FluidSource&>(*pieces) : held);
   if (count == 0 && scene_.emitters.empty())
   {
     if (!scene_.boxes.empty() || !scene_.spheres.empty())
@@ -120,7 +151,7 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   }
   else
   {
-    checkPacking(parameters_, whole, where);
+    checkPacking(parameters_, initial, where);
   }
   // The scene's speed scale, from the initial velocities and the emitters: the floor of the
   // automatic step and the scale of XSPH's viscosity (Parameters::sceneSpeedHint).
@@ -139,6 +170,13 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   for (const Vec3d& v : whole.velocity)
   {
     v0 = std::max(v0, length(v)); // a NaN velocity is rejected by the stepper below
+  }
+  if (pieces)
+  {
+    for (const std::vector<double>& part : pieces->allParts({ v0 }))
+    {
+      v0 = std::max(v0, part[0]);
+    }
   }
   for (const Emitter& e : scene_.emitters)
   {
@@ -305,8 +343,7 @@ void Simulation::checkOutflows(const FluidSource& initial, std::size_t count) co
   {
     return;
   }
-  std::size_t inside = 0;
-  initial.forEachPosition([&](const Vec3d& x) { inside += all.contains(x) ? 1 : 0; });
+  const std::uint64_t inside = initial.countWhere([&](const Vec3d& x) { return all.contains(x); });
   if (inside < count)
   {
     return;
@@ -316,9 +353,7 @@ void Simulation::checkOutflows(const FluidSource& initial, std::size_t count) co
   for (std::size_t k = 0; k < outflowZones_.size(); ++k)
   {
     const OutflowZones<double> one = OutflowZones<double>::make({ outflowZones_[k] });
-    bool holdsAll = true;
-    initial.forEachPosition([&](const Vec3d& x) { holdsAll = holdsAll && one.contains(x); });
-    if (holdsAll)
+    if (initial.countWhere([&](const Vec3d& x) { return one.contains(x); }) == count)
     {
       which = "." + outflowName(scene_, k);
       break;

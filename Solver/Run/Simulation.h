@@ -134,6 +134,16 @@ public:
   Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
     Precision precision, const ParticleBatch& initial,
     distributed::Communicator* communicator = nullptr);
+  // As above on one rank of a decomposed run whose given particles come in pieces: each rank
+  // passes its own piece (what its part of a parallel pipeline holds), and the pieces in rank
+  // order are the fluid, its order and its ids (Distributed/FluidPieces.h). No rank holds the
+  // particles whole; each piece's particles go to the ranks that own them.
+  struct InPieces
+  {
+  };
+  Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
+    Precision precision, const ParticleBatch& piece, distributed::Communicator& communicator,
+    InPieces);
 
   // Throws SimulationDiverged from the divergence check; InvalidInput when emitted particles no
   // longer fit in the device's memory (the stepper keeps the particles it had); DeviceFault for a
@@ -243,7 +253,8 @@ private:
   void checkOutflows(const FluidSource& initial, std::size_t count) const;
   // given: the initial particles, or null for the scene's regions.
   Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
-    Precision precision, const ParticleBatch* given, distributed::Communicator* communicator);
+    Precision precision, const ParticleBatch* given, bool givenInPieces,
+    distributed::Communicator* communicator);
   // Throws InvalidInput when the scene's speed, gravity or XSPH force an automatic step below
   // the smallest one (the constructor's check).
   void checkAutomaticStep(double sceneSpeed, double v0) const;

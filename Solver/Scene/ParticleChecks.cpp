@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <sstream>
 #include <unordered_map>
@@ -125,19 +126,76 @@ bool onAMirrorWall(const Parameters& parameters, const Vec3d& x)
 
 } // namespace
 
-void checkPacking(const Parameters& parameters, const ParticleBatch& batch, const std::string& where)
+namespace
+{
+
+// What the parts of a fluid find on the walls, added up over the parts in order: how many points
+// lie on a wall, and the first of them (its index in the whole fluid, its position).
+struct OnWalls
+{
+  double points = 0; // of the whole fluid
+  std::size_t count = 0;
+  std::size_t firstIndex = 0;
+  Vec3d first{};
+};
+
+// Each part's [points, on walls, first on a wall's index in the part, x, y, z, extra...] gathered
+// (FluidSource::allParts); returns the walls' findings and the sums of the extra values.
+OnWalls wallsOverParts(const FluidSource& fluid, const std::vector<double>& mine,
+  std::vector<double>& extraSums)
+{
+  OnWalls walls;
+  double before = 0;
+  extraSums.assign(mine.size() - 6, 0.0);
+  for (const std::vector<double>& part : fluid.allParts(mine))
+  {
+    if (part[1] > 0 && walls.count == 0)
+    {
+      walls.firstIndex = static_cast<std::size_t>(before + part[2]);
+      walls.first = Vec3d{ part[3], part[4], part[5] };
+    }
+    walls.count += static_cast<std::size_t>(part[1]);
+    before += part[0];
+    for (std::size_t k = 6; k < part.size(); ++k)
+    {
+      extraSums[k - 6] += part[k];
+    }
+  }
+  walls.points = before;
+  return walls;
+}
+
+// This part's [points, on walls, first on a wall, x, y, z], visiting each of its positions.
+std::vector<double> wallsOfPart(const Parameters& parameters, const FluidSource& fluid,
+  const std::function<void(const Vec3d&)>& alsoVisit)
+{
+  std::size_t at = 0, onWalls = 0, first = 0;
+  Vec3d firstX{};
+  fluid.forEachPosition([&](const Vec3d& x) {
+    if (isFinite(x) && onAMirrorWall(parameters, x) && onWalls++ == 0)
+    {
+      first = at;
+      firstX = x;
+    }
+    alsoVisit(x);
+    ++at;
+  });
+  return { double(at), double(onWalls), double(first), firstX.x, firstX.y, firstX.z };
+}
+
+} // namespace
+
+void checkPacking(const Parameters& parameters, const FluidSource& fluid, const std::string& where)
 {
   const double s = parameters.particleSpacing;
   const Box& d = parameters.domain;
+  // The occupied cells of this part: a cell that two pieces share counts in both, which can only
+  // lower the ratio (pieces of a parallel input are compact, so few cells are shared).
   std::unordered_map<std::uint64_t, std::uint32_t> perCell;
-  perCell.reserve(batch.position.size());
-  std::size_t onWalls = 0, firstOnWall = 0;
-  for (std::size_t i = 0; i < batch.position.size(); ++i)
-  {
-    const Vec3d& x = batch.position[i];
+  std::vector<double> mine = wallsOfPart(parameters, fluid, [&](const Vec3d& x) {
     if (!isFinite(x))
     {
-      continue; // checkBatch names it
+      return; // checkBatch names it
     }
     // Cells of side s from the domain's corner, 21 bits an axis (2 million cells along each).
     auto cell = [&](double value, double low) {
@@ -145,18 +203,19 @@ void checkPacking(const Parameters& parameters, const ParticleBatch& batch, cons
       return static_cast<std::uint64_t>(std::min(std::max(c, 0.0), 2097151.0));
     };
     ++perCell[cell(x.x, d.min.x) | cell(x.y, d.min.y) << 21 | cell(x.z, d.min.z) << 42];
-    if (onAMirrorWall(parameters, x))
-    {
-      firstOnWall = onWalls++ == 0 ? i : firstOnWall;
-    }
-  }
-  const double occupied = static_cast<double>(perCell.size());
-  const double perOccupied = occupied > 0 ? static_cast<double>(batch.position.size()) / occupied : 0;
+  });
+  mine.push_back(static_cast<double>(perCell.size()));
+  std::vector<double> sums;
+  const OnWalls walls = wallsOverParts(fluid, mine, sums);
+  const double occupied = sums[0];
+  const double points = walls.points;
+  const double perOccupied = occupied > 0 ? points / occupied : 0;
   if (perOccupied > kMaxParticlesPerCell)
   {
     std::ostringstream text;
     text.precision(3);
-    text << "initial particles: " << batch.position.size() << " points in " << perCell.size()
+    text << "initial particles: " << static_cast<std::size_t>(points) << " points in "
+         << static_cast<std::size_t>(occupied)
          << " occupied cells of side particleSpacing = " << s << " m, " << perOccupied
          << " per cell where the fluid holds 1 (more than " << kMaxParticlesPerCell
          << "): the points are packed about " << std::cbrt(perOccupied)
@@ -165,28 +224,27 @@ void checkPacking(const Parameters& parameters, const ParticleBatch& batch, cons
          << s / std::cbrt(perOccupied) << " m (the points' own spacing), or resample the points";
     throw InvalidInput(text.str());
   }
-  if (onWalls > 0)
+  if (walls.count > 0)
   {
-    refuseOnWalls(
-      parameters, onWalls, batch.id[firstOnWall], batch.position[firstOnWall], where);
+    refuseOnWalls(parameters, walls.count, static_cast<std::int64_t>(walls.firstIndex),
+      walls.first, where);
   }
+}
+
+void checkPacking(const Parameters& parameters, const ParticleBatch& batch, const std::string& where)
+{
+  checkPacking(parameters, BatchSource(batch), where);
 }
 
 void checkOffWalls(const Parameters& parameters, const FluidSource& fluid, const std::string& where)
 {
-  std::size_t onWalls = 0, at = 0, firstOnWall = 0;
-  Vec3d first{};
-  fluid.forEachPosition([&](const Vec3d& x) {
-    if (isFinite(x) && onAMirrorWall(parameters, x) && onWalls++ == 0)
-    {
-      firstOnWall = at;
-      first = x;
-    }
-    ++at;
-  });
-  if (onWalls > 0)
+  std::vector<double> sums;
+  const OnWalls walls =
+    wallsOverParts(fluid, wallsOfPart(parameters, fluid, [](const Vec3d&) {}), sums);
+  if (walls.count > 0)
   {
-    refuseOnWalls(parameters, onWalls, static_cast<std::int64_t>(firstOnWall), first, where);
+    refuseOnWalls(parameters, walls.count, static_cast<std::int64_t>(walls.firstIndex),
+      walls.first, where);
   }
 }
 

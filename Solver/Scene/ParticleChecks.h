@@ -30,11 +30,15 @@ void checkLiquids(const Parameters& parameters, const std::vector<std::uint8_t>&
 // input points, say): packed several times denser than the fluid's one particle per spacing^3
 // (the first projection flings them out, and the neighbour search takes minutes on the way), or,
 // with mirror walls, lying on a wall (the wall's image doubles them). Throws InvalidInput with the
-// numbers and what to set; `where` names the scene whose domain it is.
+// numbers and what to set, point k being the k-th of the fluid's positions; `where` names the
+// scene whose domain it is. Over a fluid in pieces each piece counts its own occupied cells
+// (collective), which holds memory to the piece.
+void checkPacking(const Parameters& parameters, const FluidSource& fluid, const std::string& where);
 void checkPacking(const Parameters& parameters, const ParticleBatch& batch, const std::string& where);
 
-// checkPacking's walls alone, over a fluid that no one holds whole (a decomposed run's scene: its
-// lattice is one particle per spacing^3 by construction), point k the k-th of its positions.
+// checkPacking's walls alone, over a fluid that every rank generates whole (a decomposed run's
+// scene: its lattice is one particle per spacing^3 by construction, and counting its cells would
+// hold the whole fluid's).
 void checkOffWalls(const Parameters& parameters, const FluidSource& fluid, const std::string& where);
 
 // The mean number of particles per occupied cell of side particleSpacing above which

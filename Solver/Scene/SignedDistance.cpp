@@ -71,6 +71,10 @@ void forEachNode(DistanceGrid& g, F&& f)
 
 double DistanceGrid::at(const Vec3d& x) const
 {
+  if (!isFinite(x))
+  {
+    return std::numeric_limits<double>::quiet_NaN(); // converting NaN to a node index is undefined
+  }
   const double u[3] = { (x.x - origin.x) / cell, (x.y - origin.y) / cell, (x.z - origin.z) / cell };
   const int n[3] = { nx, ny, nz };
   int i[3];
@@ -95,6 +99,10 @@ double DistanceGrid::at(const Vec3d& x) const
 
 Vec3d DistanceGrid::gradient(const Vec3d& x) const
 {
+  if (!isFinite(x))
+  {
+    return Vec3d{ 0, 0, 0 };
+  }
   const double u[3] = { (x.x - origin.x) / cell, (x.y - origin.y) / cell, (x.z - origin.z) / cell };
   const int n[3] = { nx, ny, nz };
   int i[3];

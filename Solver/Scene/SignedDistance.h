@@ -60,9 +60,11 @@ struct DistanceGrid
     return origin + Vec3d{ i * cell, j * cell, k * cell };
   }
   // The field at x, trilinear between the nodes. Beyond the grid: the value at the nearest point
-  // of the grid plus the distance to it, which stays positive far from the solid.
+  // of the grid plus the distance to it, which stays positive far from the solid. NaN where x is
+  // not finite (neither inside nor outside: the particle checks name such a point).
   double at(const Vec3d& x) const;
-  // The gradient of the trilinear field at x (about the outward normal near the surface).
+  // The gradient of the trilinear field at x (about the outward normal near the surface); zero
+  // where x is not finite.
   Vec3d gradient(const Vec3d& x) const;
   // How the stages read this grid, its node values at `nodes` (host or device memory).
   template <class Real>

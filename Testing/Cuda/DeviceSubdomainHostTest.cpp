@@ -7,6 +7,7 @@
 #include "HostExecutor.h"
 
 #include "Cuda/DeviceSubdomainStepper.h"
+#include "Distributed/FluidPieces.h"
 #include "Distributed/SubdomainStepper.h"
 #include "SignedDistance.h"
 #include "TestScenes.h"
@@ -640,5 +641,41 @@ TEST(DeviceParticleStore, GrowsThroughTheHostWhereBothArenasDoNotFitAndKeepsItsP
       EXPECT_EQ(store.capacity(), n);
     }
     EXPECT_TRUE(holds(store, n)) << (fits ? "grown" : "refused");
+  }
+}
+
+// The fluid in pieces, one a rank (the filter's input under a parallel pipeline): each rank's
+// piece goes to the ranks that own its particles, and the run is the run of ranks handed the
+// whole batch, the same particles on the same ranks in the same order, to the bit.
+TEST(DeviceSubdomainOnHost, RanksGivenPiecesOfTheFluidRunAsRanksHandedItWhole)
+{
+  const PresetFluid setup = sceneFluid(sideBySideLiquids(), 0.04);
+  const DecomposedFactory fromPieces = [](distributed::Communicator& communicator,
+                                         const PresetFluid& whole) {
+    // The rank's share of the batch in its own order, which cuts across the slabs.
+    const ParticleBatch& all = whole.fluid;
+    const std::size_t n = all.position.size();
+    const auto r = static_cast<std::size_t>(communicator.rank());
+    const auto k = static_cast<std::size_t>(communicator.size());
+    const auto from = static_cast<std::ptrdiff_t>(n * r / k);
+    const auto to = static_cast<std::ptrdiff_t>(n * (r + 1) / k);
+    ParticleBatch piece;
+    piece.position.assign(all.position.begin() + from, all.position.begin() + to);
+    piece.velocity.assign(all.velocity.begin() + from, all.velocity.begin() + to);
+    piece.id.assign(all.id.begin() + from, all.id.begin() + to);
+    piece.liquid.assign(all.liquid.begin() + from, all.liquid.begin() + to);
+    const distributed::FluidPieces fluid(piece, communicator);
+    return std::unique_ptr<distributed::DecomposedStepper>(
+      new cuda::DeviceSubdomainStepper<double, HostDevicePolicy>(communicator, whole.parameters,
+        fluid, std::make_unique<HostDevicePolicy>()));
+  };
+  for (int ranks : { 2, 3 })
+  {
+    SCOPED_TRACE(std::to_string(ranks) + " ranks");
+    const DecomposedOutcome pieces = runDecomposed(ranks, setup, 6, fromPieces);
+    const DecomposedOutcome handed = runDecomposed(ranks, setup, 6, onHost<double>());
+    EXPECT_EQ(pieces.state.id, handed.state.id);
+    EXPECT_EQ(pieces.state.liquid, handed.state.liquid);
+    expectBitIdentical(pieces.state, handed.state);
   }
 }

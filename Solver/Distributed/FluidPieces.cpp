@@ -1,0 +1,95 @@
+#include "FluidPieces.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace pbf::distributed
+{
+namespace
+{
+
+// A particle's record in the exchange: x, v, id, liquid.
+constexpr std::size_t kRecord = 6 * sizeof(double) + sizeof(std::int64_t) + sizeof(std::uint8_t);
+
+} // namespace
+
+FluidPieces::FluidPieces(const ParticleBatch& piece, Communicator& communicator)
+  : piece_(piece)
+  , communicator_(communicator)
+{
+  // A piece with no points carries no liquid array: the others say whether the fluid has one.
+  for (const std::vector<double>& part : allGather(communicator_, { piece_.liquid.empty() ? 0.0 : 1.0 }))
+  {
+    liquids_ = liquids_ || part[0] != 0.0;
+  }
+}
+
+void FluidPieces::forEachPosition(const std::function<void(const Vec3d&)>& visit) const
+{
+  for (const Vec3d& x : piece_.position)
+  {
+    visit(x);
+  }
+}
+
+void FluidPieces::forEachWhere(const Keep& keep, const Visit& visit) const
+{
+  for (std::size_t i = 0; i < piece_.position.size(); ++i)
+  {
+    if (keep(piece_.position[i]))
+    {
+      visit(piece_.position[i], piece_.velocity[i], piece_.id[i],
+        piece_.liquid.empty() ? std::uint8_t(0) : piece_.liquid[i]);
+    }
+  }
+}
+
+std::vector<std::vector<double>> FluidPieces::allParts(const std::vector<double>& mine) const
+{
+  return allGather(communicator_, mine);
+}
+
+void FluidPieces::forEachOwned(const Owner& owner, int rank, const Visit& visit) const
+{
+  if (rank != communicator_.rank())
+  {
+    throw std::logic_error("FluidPieces::forEachOwned: rank " + std::to_string(rank) +
+      " asked on rank " + std::to_string(communicator_.rank()) + ": a rank receives its own slab");
+  }
+  const auto ranks = static_cast<std::size_t>(communicator_.size());
+  std::vector<Bytes> outgoing(ranks);
+  for (std::size_t i = 0; i < piece_.position.size(); ++i)
+  {
+    const int to = owner(piece_.position[i]);
+    if (to < 0 || static_cast<std::size_t>(to) >= ranks)
+    {
+      throw std::logic_error("FluidPieces::forEachOwned: owner " + std::to_string(to) + " of " +
+        std::to_string(ranks) + " ranks");
+    }
+    Bytes& out = outgoing[static_cast<std::size_t>(to)];
+    put(out, piece_.position[i]);
+    put(out, piece_.velocity[i]);
+    put(out, piece_.id[i]);
+    put(out, piece_.liquid.empty() ? std::uint8_t(0) : piece_.liquid[i]);
+  }
+  const std::vector<Bytes> incoming = communicator_.exchange(outgoing);
+  outgoing.clear();
+  for (const Bytes& from : incoming)
+  {
+    if (from.size() % kRecord != 0)
+    {
+      throw std::runtime_error("FluidPieces: a message of " + std::to_string(from.size()) +
+        " bytes is not whole particles of " + std::to_string(kRecord));
+    }
+    for (std::size_t at = 0; at < from.size();)
+    {
+      const auto x = take<Vec3d>(from, at);
+      const auto v = take<Vec3d>(from, at);
+      const auto id = take<std::int64_t>(from, at);
+      const auto liquid = take<std::uint8_t>(from, at);
+      visit(x, v, id, liquid);
+    }
+  }
+}
+
+} // namespace pbf::distributed
