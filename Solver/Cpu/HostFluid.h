@@ -151,6 +151,62 @@ struct HostFluid
     }
   }
 
+  // Room for n particles in every per-particle array, so that none reallocates below n (the
+  // sort's gathers swap buffers of one capacity); the liquids' and the tension's arrays only
+  // where the scene uses them.
+  void reserveParticles(std::size_t n)
+  {
+    for (auto* a : { &x, &p, &v, &scratch, &omega, &gatherVec })
+    {
+      a->reserve(n);
+    }
+    if (coefficients.surfaceTension)
+    {
+      colour.reserve(n);
+      normal.reserve(n);
+    }
+    for (auto* a : { &density, &lambda, &pressure })
+    {
+      a->reserve(n);
+    }
+    id.reserve(n);
+    gatherId.reserve(n);
+    if (!parameters.liquids.empty())
+    {
+      liquid.reserve(n);
+      gatherLiquid.reserve(n);
+    }
+    keys.reserve(n);
+    gatherKey.reserve(n);
+    order.reserve(n);
+  }
+
+  // The bytes a particle takes in those arrays.
+  std::size_t bytesPerParticle() const
+  {
+    const std::size_t vectors = 6 + (coefficients.surfaceTension ? 2 : 0);
+    const std::size_t liquids = parameters.liquids.empty() ? 0 : 2;
+    return vectors * sizeof(Vec3<Real>) + 3 * sizeof(Real) + 2 * sizeof(std::int64_t) +
+      liquids * sizeof(std::uint8_t) + 2 * sizeof(CellKey) + sizeof(std::uint32_t);
+  }
+
+  // The bytes the arrays hold (their capacities), the grid's cell offsets included.
+  std::size_t heldBytes() const
+  {
+    auto bytes = [](const auto& a) { return a.capacity() * sizeof(a[0]); };
+    std::size_t sum = bytes(cellOffsets) + bytes(cursor) + bytes(order);
+    for (const auto* a : { &x, &p, &v, &scratch, &omega, &gatherVec, &colour, &normal })
+    {
+      sum += bytes(*a);
+    }
+    for (const auto* a : { &density, &lambda, &pressure })
+    {
+      sum += bytes(*a);
+    }
+    return sum + bytes(id) + bytes(gatherId) + bytes(liquid) + bytes(gatherLiquid) + bytes(keys) +
+      bytes(gatherKey);
+  }
+
   // The work arrays that follow the particle count (x, v and id are the state).
   void resizeWork(std::size_t n)
   {

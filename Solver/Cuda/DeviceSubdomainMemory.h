@@ -214,25 +214,6 @@ void DeviceSubdomainStepper<Real, Device>::reserve(std::size_t needed, std::size
 }
 
 template <class Real, class Device>
-std::size_t DeviceSubdomainStepper<Real, Device>::plannedCapacity(
-  const std::vector<std::uint64_t>& perColumn) const
-{
-  const int me = communicator_.rank();
-  const int last = communicator_.size() - 1;
-  const auto first = static_cast<std::size_t>(slabs_.first[static_cast<std::size_t>(me)]);
-  const auto end = static_cast<std::size_t>(slabs_.first[static_cast<std::size_t>(me) + 1]);
-  std::uint64_t owned = 0, largest = 0, ghosts = 0;
-  for (std::size_t c = 0; c < perColumn.size(); ++c)
-  {
-    owned += c >= first && c < end ? perColumn[c] : 0;
-    largest = std::max(largest, perColumn[c]);
-  }
-  ghosts += me > 0 && first > 0 ? perColumn[first - 1] : 0;
-  ghosts += me < last && end < perColumn.size() ? perColumn[end] : 0;
-  return static_cast<std::size_t>(owned + ghosts + 2 * largest + owned / 100);
-}
-
-template <class Real, class Device>
 void DeviceSubdomainStepper<Real, Device>::adoptStore()
 {
   const typename DeviceParticleStore<Real, Device>::Pointers& p = store_->p;

@@ -163,7 +163,8 @@ public:
     slabs_ = distributed::Slabs::balanced(perColumn, communicator_.size());
     uploadSlabs();
     distributed::together(communicator_, [&] {
-      reserve(plannedCapacity(perColumn), 0);
+      // Slabs::plannedCapacity: the first evaluation grows nothing.
+      reserve(slabs_.plannedCapacity(perColumn, communicator_.rank()), 0);
       appendOwned(ownedOf(fluid, true));
     });
   }
@@ -516,11 +517,6 @@ private:
   // beside the old), keeping the first `keep` entries of the four Vec3 buffers, density, lambda,
   // id and liquid. Never shrinks: once grown, steps allocate nothing.
   void reserve(std::size_t needed, std::size_t keep);
-  // The arrays' first capacity, from the fluid's count per column: this rank's share, its ghosts
-  // (its neighbours' border columns) and the migration's swing (a balanced cut moves by whole
-  // columns: two of the largest), and 1 % more. The first evaluation then grows nothing, and the
-  // store holds 1.01-1.02 particles a particle at hundreds of millions.
-  std::size_t plannedCapacity(const std::vector<std::uint64_t>& perColumn) const;
   // Room for `count` entries in each of the border lists (their contents are not kept: every
   // use writes them first); the host knows every count before the device selects.
   void reserveBorderLists(std::size_t count);

@@ -4,6 +4,7 @@
 // candidates as in a single-rank run.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -28,6 +29,25 @@ struct Slabs
       ++r;
     }
     return r;
+  }
+
+  // The particles rank r's arrays first make room for, from the fluid's count per column: its
+  // share, its ghosts (its neighbours' border columns), the migration's swing (a balanced cut
+  // moves by whole columns: two of the largest) and 1 % more. The first evaluation and the first
+  // steps then grow nothing, and the arrays hold 1.01-1.02 particles a particle at scale.
+  std::size_t plannedCapacity(const std::vector<std::uint64_t>& perColumn, int r) const
+  {
+    const auto from = static_cast<std::size_t>(first[static_cast<std::size_t>(r)]);
+    const auto to = static_cast<std::size_t>(first[static_cast<std::size_t>(r) + 1]);
+    std::uint64_t owned = 0, largest = 0, ghosts = 0;
+    for (std::size_t c = 0; c < perColumn.size(); ++c)
+    {
+      owned += c >= from && c < to ? perColumn[c] : 0;
+      largest = largest > perColumn[c] ? largest : perColumn[c];
+    }
+    ghosts += r > 0 && from > 0 ? perColumn[from - 1] : 0;
+    ghosts += r < ranks() - 1 && to < perColumn.size() ? perColumn[to] : 0;
+    return static_cast<std::size_t>(owned + ghosts + 2 * largest + owned / 100);
   }
 
   // Cuts so that each rank holds about the same number of particles (perColumn: the particle

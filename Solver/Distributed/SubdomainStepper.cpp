@@ -1,5 +1,7 @@
 #include "SubdomainStepper.h"
 
+#include "HostMemory.h"
+
 #include "RankFailure.h"
 
 #include "CellSort.h"
@@ -13,6 +15,7 @@
 #include <initializer_list>
 #include <limits>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <type_traits>
 
@@ -72,14 +75,26 @@ SubdomainStepper<Real>::SubdomainStepper(Communicator& communicator, bool parall
   const auto ranks = static_cast<std::size_t>(communicator_.size());
   sendIndex_.resize(ranks);
   ghostIndex_.resize(ranks);
-  slabs_ = Slabs::balanced(fluid.countPerColumn(
-                              [&](const Vec3d& q) {
-                                return static_cast<std::size_t>(column(Vec3<Real>::from(q)));
-                              },
-                              static_cast<std::size_t>(fluid_.geometry.nx)),
-    communicator_.size());
-  // A particle that fails its check fails every rank alike, before the collectives that follow.
-  together(communicator_, [&] { keepOwn(fluid, true); });
+  const std::vector<std::uint64_t> perColumn = fluid.countPerColumn(
+    [&](const Vec3d& q) { return static_cast<std::size_t>(column(Vec3<Real>::from(q))); },
+    static_cast<std::size_t>(fluid_.geometry.nx));
+  slabs_ = Slabs::balanced(perColumn, communicator_.size());
+  // A particle that fails its check, or a share that the host cannot hold, fails every rank
+  // alike, before the collectives that follow.
+  together(communicator_, [&] {
+    reserveParticles(slabs_.plannedCapacity(perColumn, communicator_.rank()));
+    // A neighbour's border lists: one column, as large as the largest, and as much swing.
+    const std::uint64_t largest = *std::max_element(perColumn.begin(), perColumn.end());
+    for (int r : { communicator_.rank() - 1, communicator_.rank() + 1 })
+    {
+      if (r >= 0 && r < communicator_.size())
+      {
+        sendIndex_[static_cast<std::size_t>(r)].reserve(2 * largest);
+        ghostIndex_[static_cast<std::size_t>(r)].reserve(2 * largest);
+      }
+    }
+    keepOwn(fluid, true);
+  });
   cut();
   evaluateAtRest();
 }
@@ -124,6 +139,7 @@ void SubdomainStepper<Real>::keepOwn(const FluidSource& fluid, bool check)
         checkParticle(fluid_.parameters, id, x, v);
         checkLiquid(fluid_.parameters, id, liquid);
       }
+      roomFor(fluid_.x.size() + 1);
       fluid_.x.push_back(Vec3<Real>::from(x));
       fluid_.v.push_back(Vec3<Real>::from(v));
       fluid_.id.push_back(id);
@@ -135,6 +151,66 @@ void SubdomainStepper<Real>::keepOwn(const FluidSource& fluid, bool check)
   fluid_.density.resize(fluid_.x.size());
   fluid_.lambda.resize(fluid_.x.size());
   fluid_.pressure.resize(fluid_.x.size());
+}
+
+template <class Real>
+std::size_t SubdomainStepper<Real>::bytesPerParticle() const
+{
+  // The fluid's arrays, and tag_, owned_, ghostFrom_ and the sort's gathers of the last two.
+  return fluid_.bytesPerParticle() + 3 * sizeof(std::uint32_t) + 2 * sizeof(std::int32_t);
+}
+
+template <class Real>
+void SubdomainStepper<Real>::reserveParticles(std::size_t count)
+{
+  if (count <= capacity_)
+  {
+    return;
+  }
+  const std::size_t more = (count - capacity_) * bytesPerParticle();
+  const std::size_t available = availableHostBytes();
+  if (more > available)
+  {
+    std::ostringstream text;
+    text << "particle count = " << fluid_.x.size() << " (capacity " << count << ") on rank "
+         << communicator_.rank() << " of " << communicator_.size() << ": its CPU sub-domain needs "
+         << (more >> 20) << " MiB more for its particle arrays (" << bytesPerParticle()
+         << " bytes a particle), but the host has " << (available >> 20)
+         << " MiB available; use more ranks (on more hosts) or a larger particleSpacing";
+    throw InvalidInput(text.str());
+  }
+  fluid_.reserveParticles(count);
+  tag_.reserve(count);
+  owned_.reserve(count);
+  ghostFrom_.reserve(count);
+  gatherIndex_.reserve(count);
+  gatherFrom_.reserve(count);
+  capacity_ = count;
+}
+
+template <class Real>
+void SubdomainStepper<Real>::roomFor(std::size_t n)
+{
+  if (n > capacity_)
+  {
+    reserveParticles(std::max(n, capacity_ + capacity_ / 16 + 1));
+  }
+}
+
+template <class Real>
+std::size_t SubdomainStepper<Real>::hostBytes() const
+{
+  auto bytes = [](const auto& a) { return a.capacity() * sizeof(a[0]); };
+  std::size_t lists = 0;
+  for (const auto* perRank : { &sendIndex_, &ghostIndex_ })
+  {
+    for (const std::vector<std::uint32_t>& list : *perRank)
+    {
+      lists += bytes(list);
+    }
+  }
+  return fluid_.heldBytes() + bytes(tag_) + bytes(owned_) + bytes(ghostFrom_) +
+    bytes(gatherIndex_) + bytes(gatherFrom_) + lists;
 }
 
 template <class Real>
@@ -243,6 +319,15 @@ void SubdomainStepper<Real>::migrate(bool byPrediction)
   fluid_.pressure.resize(kept);
   fluid_.liquid.resize(liquids ? kept : 0);
   const std::vector<Bytes> in = communicator_.exchange(out);
+  out.clear();
+  std::size_t arriving = 0;
+  const std::size_t record = 3 * sizeof(Vec3<Real>) + sizeof(std::int64_t) + 3 * sizeof(Real) +
+    (liquids ? sizeof(std::uint8_t) : 0);
+  for (const Bytes& b : in)
+  {
+    arriving += b.size() / record;
+  }
+  roomFor(kept + arriving);
   for (const Bytes& b : in)
   {
     for (std::size_t offset = 0; offset < b.size();)
@@ -297,7 +382,17 @@ void SubdomainStepper<Real>::receiveGhosts()
     }
   }
   const std::vector<Bytes> in = communicator_.exchange(out);
-  std::vector<std::int32_t> from(owned, -1);
+  out.clear();
+  std::size_t arriving = 0;
+  const std::size_t record = sizeof(Vec3<Real>) + sizeof(std::int64_t) + (liquids ? sizeof(std::uint8_t) : 0);
+  for (const Bytes& b : in)
+  {
+    arriving += b.size() / record;
+  }
+  roomFor(owned + arriving);
+  std::vector<std::int32_t> from;
+  from.reserve(capacity_);
+  from.assign(owned, -1);
   for (std::size_t r = 0; r < ranks; ++r)
   {
     for (std::size_t offset = 0; offset < in[r].size();)
@@ -332,7 +427,7 @@ void SubdomainStepper<Real>::receiveGhosts()
   // Kept for sortByCell, which maps both lists to sorted indices.
   for (std::size_t r = 0; r < ranks; ++r)
   {
-    sendIndex_[r] = std::move(sendOriginal[r]);
+    sendIndex_[r].assign(sendOriginal[r].begin(), sendOriginal[r].end()); // keeps the planned room
     ghostIndex_[r].clear();
   }
   ghostFrom_ = std::move(from);

@@ -64,6 +64,8 @@ public:
   virtual int ranks() const = 0;
   // Device memory this rank's stepper holds (0 on the CPU).
   virtual std::size_t deviceBytes() const { return 0; }
+  // Host memory this rank's particle arrays hold (their capacities; 0 where they are on a device).
+  virtual std::size_t hostBytes() const { return 0; }
 };
 
 template <class Real>
@@ -116,6 +118,7 @@ public:
   const ExchangeReport& lastExchange() const override { return exchange_; }
   int rank() const override { return communicator_.rank(); }
   int ranks() const override { return communicator_.size(); }
+  std::size_t hostBytes() const override;
 
 private:
   void stepAlone();
@@ -140,6 +143,12 @@ private:
   // The particles of `fluid` in this rank's slab behind those held (each checked when `check`:
   // a part of a fluid that no one checked whole).
   void keepOwn(const FluidSource& fluid, bool check);
+  // The memory plan: room for `count` particles in every per-particle array, made only where the
+  // host has the bytes available (InvalidInput naming the count otherwise, the arrays as they
+  // were); roomFor(n) before an append grows by at least a sixteenth, never to twice the share.
+  void reserveParticles(std::size_t count);
+  void roomFor(std::size_t n);
+  std::size_t bytesPerParticle() const;
   void cut();                          // balanced slabs from the global column counts
   void migrate(bool byPrediction);     // to the owners of their columns
   void receiveGhosts();                // border particles of the neighbours, appended
@@ -166,6 +175,7 @@ private:
   std::vector<std::int32_t> gatherFrom_;
 
   ExchangeReport exchange_;
+  std::size_t capacity_ = 0; // particles the arrays have room for (reserveParticles)
 };
 
 } // namespace pbf::distributed

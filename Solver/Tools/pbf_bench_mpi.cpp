@@ -142,6 +142,11 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
     gatherToRankZero(static_cast<double>(stepper.deviceBytes()) /
         static_cast<double>(std::max<std::size_t>(stepper.size(), 1)),
       ranks);
+  // Host bytes per particle on each rank: the particle arrays of a CPU rank (their capacities).
+  const std::vector<double> hostBytesPerRank =
+    gatherToRankZero(static_cast<double>(stepper.hostBytes()) /
+        static_cast<double>(std::max<std::size_t>(stepper.size(), 1)),
+      ranks);
   if (communicator.rank() != 0)
   {
     return 0;
@@ -156,8 +161,8 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
     listed(ownPerRank).c_str(), listed(deviceWaitPerRank).c_str(),
     listed(refreshWaitPerRank).c_str(), listed(beforePerRank).c_str());
   std::fprintf(stderr, "peak host memory per rank [MB]: [%s]\n", listed(peakHostPerRank).c_str());
-  std::fprintf(stderr, "device bytes per particle per rank: [%s]\n",
-    listed(deviceBytesPerRank).c_str());
+  std::fprintf(stderr, "device bytes per particle per rank: [%s]; host (particle arrays): [%s]\n",
+    listed(deviceBytesPerRank).c_str(), listed(hostBytesPerRank).c_str());
   std::printf("| ranks | backend | precision | particles | ms/step median (p10-p90) | steps/s | "
               "ghost ms | migration ms | particles per rank (min-max) | ghosts (max) | finite |\n");
   std::printf("| %d | %s | %s | %zu | %.2f (%.2f-%.2f) | %.1f | %.2f | %.2f | %llu-%llu | %.0f | "
@@ -183,6 +188,7 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
         << "], \"before_passes_ms_per_rank\": [" << listed(beforePerRank)
         << "], \"peak_host_mb_per_rank\": [" << listed(peakHostPerRank)
         << "], \"device_bytes_per_particle_per_rank\": [" << listed(deviceBytesPerRank)
+        << "], \"host_bytes_per_particle_per_rank\": [" << listed(hostBytesPerRank)
         << "], \"particles_per_rank\": [";
     for (std::size_t r = 0; r < perRank.size(); ++r)
     {
