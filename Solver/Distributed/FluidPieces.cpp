@@ -1,5 +1,6 @@
 #include "FluidPieces.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -13,9 +14,11 @@ constexpr std::size_t kRecord = 6 * sizeof(double) + sizeof(std::int64_t) + size
 
 } // namespace
 
-FluidPieces::FluidPieces(const ParticleBatch& piece, Communicator& communicator)
+FluidPieces::FluidPieces(const ParticleBatch& piece, Communicator& communicator,
+  std::size_t perMessage)
   : piece_(piece)
   , communicator_(communicator)
+  , perMessage_(perMessage > 0 ? perMessage : 1)
 {
   // A piece with no points carries no liquid array: the others say whether the fluid has one.
   for (const std::vector<double>& part : allGather(communicator_, { piece_.liquid.empty() ? 0.0 : 1.0 }))
@@ -57,23 +60,54 @@ void FluidPieces::forEachOwned(const Owner& owner, int rank, const Visit& visit)
       " asked on rank " + std::to_string(communicator_.rank()) + ": a rank receives its own slab");
   }
   const auto ranks = static_cast<std::size_t>(communicator_.size());
-  std::vector<Bytes> outgoing(ranks);
+  // Each destination's particles, in the piece's order.
+  std::vector<std::vector<std::size_t>> to(ranks);
   for (std::size_t i = 0; i < piece_.position.size(); ++i)
   {
-    const int to = owner(piece_.position[i]);
-    if (to < 0 || static_cast<std::size_t>(to) >= ranks)
+    const int r = owner(piece_.position[i]);
+    if (r < 0 || static_cast<std::size_t>(r) >= ranks)
     {
-      throw std::logic_error("FluidPieces::forEachOwned: owner " + std::to_string(to) + " of " +
+      throw std::logic_error("FluidPieces::forEachOwned: owner " + std::to_string(r) + " of " +
         std::to_string(ranks) + " ranks");
     }
-    Bytes& out = outgoing[static_cast<std::size_t>(to)];
-    put(out, piece_.position[i]);
-    put(out, piece_.velocity[i]);
-    put(out, piece_.id[i]);
-    put(out, piece_.liquid.empty() ? std::uint8_t(0) : piece_.liquid[i]);
+    to[static_cast<std::size_t>(r)].push_back(i);
   }
-  const std::vector<Bytes> incoming = communicator_.exchange(outgoing);
-  outgoing.clear();
+  std::size_t most = 0;
+  for (const std::vector<std::size_t>& list : to)
+  {
+    most = std::max(most, list.size());
+  }
+  std::size_t rounds = 0;
+  const double mine = static_cast<double>((most + perMessage_ - 1) / perMessage_);
+  for (const std::vector<double>& part : allGather(communicator_, { mine }))
+  {
+    rounds = std::max(rounds, static_cast<std::size_t>(part[0]));
+  }
+  std::vector<Bytes> incoming(ranks);
+  for (std::size_t round = 0; round < rounds; ++round)
+  {
+    std::vector<Bytes> outgoing(ranks);
+    for (std::size_t r = 0; r < ranks; ++r)
+    {
+      const std::size_t from = std::min(to[r].size(), round * perMessage_);
+      const std::size_t end = std::min(to[r].size(), from + perMessage_);
+      Bytes& out = outgoing[r];
+      out.reserve((end - from) * kRecord);
+      for (std::size_t k = from; k < end; ++k)
+      {
+        const std::size_t i = to[r][k];
+        put(out, piece_.position[i]);
+        put(out, piece_.velocity[i]);
+        put(out, piece_.id[i]);
+        put(out, piece_.liquid.empty() ? std::uint8_t(0) : piece_.liquid[i]);
+      }
+    }
+    std::vector<Bytes> arrived = communicator_.exchange(outgoing);
+    for (std::size_t r = 0; r < ranks; ++r)
+    {
+      incoming[r].insert(incoming[r].end(), arrived[r].begin(), arrived[r].end());
+    }
+  }
   for (const Bytes& from : incoming)
   {
     if (from.size() % kRecord != 0)
