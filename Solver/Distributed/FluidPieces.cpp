@@ -60,8 +60,8 @@ void FluidPieces::forEachOwned(const Owner& owner, int rank, const Visit& visit)
       " asked on rank " + std::to_string(communicator_.rank()) + ": a rank receives its own slab");
   }
   const auto ranks = static_cast<std::size_t>(communicator_.size());
-  // Each destination's particles, in the piece's order.
-  std::vector<std::vector<std::size_t>> to(ranks);
+  // Each destination's particles, in the piece's order (a piece holds fewer than 2^32: checkBatch).
+  std::vector<std::vector<std::uint32_t>> to(ranks);
   for (std::size_t i = 0; i < piece_.position.size(); ++i)
   {
     const int r = owner(piece_.position[i]);
@@ -70,10 +70,10 @@ void FluidPieces::forEachOwned(const Owner& owner, int rank, const Visit& visit)
       throw std::logic_error("FluidPieces::forEachOwned: owner " + std::to_string(r) + " of " +
         std::to_string(ranks) + " ranks");
     }
-    to[static_cast<std::size_t>(r)].push_back(i);
+    to[static_cast<std::size_t>(r)].push_back(static_cast<std::uint32_t>(i));
   }
   std::size_t most = 0;
-  for (const std::vector<std::size_t>& list : to)
+  for (const std::vector<std::uint32_t>& list : to)
   {
     most = std::max(most, list.size());
   }
@@ -102,10 +102,18 @@ void FluidPieces::forEachOwned(const Owner& owner, int rank, const Visit& visit)
         put(out, piece_.liquid.empty() ? std::uint8_t(0) : piece_.liquid[i]);
       }
     }
-    std::vector<Bytes> arrived = communicator_.exchange(outgoing);
+    outgoing = communicator_.exchange(outgoing);
     for (std::size_t r = 0; r < ranks; ++r)
     {
-      incoming[r].insert(incoming[r].end(), arrived[r].begin(), arrived[r].end());
+      // One round (the usual case) keeps what arrived as it is: no second copy of the slab.
+      if (incoming[r].empty())
+      {
+        incoming[r].swap(outgoing[r]);
+      }
+      else
+      {
+        incoming[r].insert(incoming[r].end(), outgoing[r].begin(), outgoing[r].end());
+      }
     }
   }
   for (const Bytes& from : incoming)

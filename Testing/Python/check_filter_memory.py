@@ -9,7 +9,8 @@ n_r / N. A rank that held the whole fluid, or the whole input beside its slab, e
 several times over.
 
 Measured on the development machine at about 1M particles (s = 5.2 mm): a scene 1.10 on 2
-ranks and 1.16-1.25 on 4; points in pieces 1.17 on 2 and 1.18-1.22 on 4. What is above 1 is the
+ranks and 1.16-1.25 on 4; points in pieces 1.10-1.11 on 2 and 1.17-1.22 on 4 (1.32-1.37 while
+the exchange kept a second copy of what arrived). What is above 1 is the
 ghosts (two border columns of an inner rank: 14 % of its share on 4 ranks), the capacity planned
 for the migration, and the grid's cell offsets, which span the whole domain on every rank.
 
