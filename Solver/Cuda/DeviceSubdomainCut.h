@@ -22,16 +22,15 @@ template <class Real, class Device>
 void DeviceSubdomainStepper<Real, Device>::cut(int from, int predicted)
 {
   const auto start = Clock::now();
-  const auto nx = static_cast<std::size_t>(constants_.geometry.nx);
+  const auto nx = static_cast<std::size_t>(columns_.nx);
   const std::size_t histograms = predicted >= 0 ? 2 : 1;
   auto exec = device_->executor();
   const std::size_t copies = nx * subdomain::kCounterCopies; // one histogram's counters
   exec.fillZero(columnCounts_, histograms * copies * sizeof(std::uint32_t));
-  subdomain::countColumns(exec, constants_.geometry, count(n_), vec_[from], columnCounts_);
+  subdomain::countColumns(exec, columns_, count(n_), vec_[from], columnCounts_);
   if (predicted >= 0)
   {
-    subdomain::countColumns(
-      exec, constants_.geometry, count(n_), vec_[predicted], columnCounts_ + copies);
+    subdomain::countColumns(exec, columns_, count(n_), vec_[predicted], columnCounts_ + copies);
   }
   device_->download(hostCounts_.data(), columnCounts_, histograms * copies * sizeof(std::uint32_t));
   device_->synchronize();
@@ -64,6 +63,7 @@ void DeviceSubdomainStepper<Real, Device>::cut(int from, int predicted)
   exchange_.cutMoved = balanced.first != slabs_.first;
   slabs_ = balanced;
   uploadSlabs();
+  setWindow();
   // How many particles each rank sends this one in the migration: its predicted positions in
   // this rank's columns (every rank's own counts came with the allGather).
   const int me = communicator_.rank();
@@ -145,7 +145,7 @@ typename DeviceSubdomainStepper<Real, Device>::Roles4 DeviceSubdomainStepper<Rea
   exec.fillZero(ownerCounts_, (ranks + 1) * subdomain::kCounterCopies * sizeof(std::uint32_t));
   auto* order = reinterpret_cast<std::uint32_t*>(lambda_); // unused identity
   subdomain::ownerKeys(
-    exec, constants_.geometry, slabView(), n, vec_[r.p], keys_[0], order, ownerCounts_);
+    exec, columns_, slabView(), n, vec_[r.p], keys_[0], order, ownerCounts_);
   // The counts per destination from this rank's predicted column counts (the cut's); the
   // device's own come back without a wait and are checked at the wait below.
   std::vector<std::uint32_t>& owners = ownerExpected_;

@@ -27,7 +27,7 @@ DeviceSubdomainStepper<Real, Device>::receiveGhostsAs(Roles4 r)
   const int last = communicator_.size() - 1;
   const std::uint32_t n = count(n_);
   auto exec = device_->executor();
-  const GridGeometry<Real>& g = constants_.geometry;
+  const GridGeometry<Real>& g = columns_;
   // No column is -1 or nx: a side without a neighbour selects nothing.
   const int leftColumn = me > 0 ? slabs_.first[static_cast<std::size_t>(me)] : -1;
   const int rightColumn = me < last ? slabs_.first[static_cast<std::size_t>(me) + 1] - 1 : -1;
@@ -167,9 +167,11 @@ const CellKey* DeviceSubdomainStepper<Real, Device>::sortByCell(Roles4& r)
 
   const int me = communicator_.rank();
   const int last = communicator_.size() - 1;
+  // The keys are the window's: its columns from its first on.
   const int nx = constants_.geometry.nx;
-  const int begin = slabs_.first[static_cast<std::size_t>(me)];
-  const int end = slabs_.first[static_cast<std::size_t>(me) + 1];
+  const int lo = constants_.geometry.firstColumn;
+  const int begin = slabs_.first[static_cast<std::size_t>(me)] - lo;
+  const int end = slabs_.first[static_cast<std::size_t>(me) + 1] - lo;
   // Empty ranges where there is no neighbour.
   const int sendL0 = me > 0 ? begin : 0, sendL1 = me > 0 ? begin + 1 : 0;
   const int sendR0 = me < last ? end - 1 : 0, sendR1 = me < last ? end : 0;

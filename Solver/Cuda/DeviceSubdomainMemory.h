@@ -12,13 +12,13 @@ template <class Real, class Device>
 void DeviceSubdomainStepper<Real, Device>::allocateFixed()
 {
   const auto ranks = static_cast<std::size_t>(communicator_.size());
-  cellOffsets_ = allocateFixed<std::uint32_t>(std::size_t(constants_.cellCount) + 1);
+
   maxMoved_ = allocateFixed<unsigned long long>(
     static_cast<std::size_t>(std::max(constants_.iterations, 1)));
   maskBuilds_ = allocateFixed<unsigned long long>(1);
   borderMaskBuilds_ = allocateFixed<unsigned long long>(1);
   columnCounts_ = allocateFixed<std::uint32_t>(
-    2 * static_cast<std::size_t>(constants_.geometry.nx) * subdomain::kCounterCopies);
+    2 * static_cast<std::size_t>(columns_.nx) * subdomain::kCounterCopies);
   ownerCounts_ = allocateFixed<std::uint32_t>((ranks + 1) * subdomain::kCounterCopies);
   slabFirst_ = allocateFixed<int>(ranks + 1);
   selected_ = allocateFixed<std::uint32_t>(8);
@@ -211,6 +211,49 @@ void DeviceSubdomainStepper<Real, Device>::reserve(std::size_t needed, std::size
   }
   store_->reserve(needed, keep);
   adoptStore();
+}
+
+template <class Real, class Device>
+void DeviceSubdomainStepper<Real, Device>::setWindow()
+{
+  const int me = communicator_.rank();
+  const int last = communicator_.size() - 1;
+  const int first = slabs_.first[static_cast<std::size_t>(me)];
+  const int end = slabs_.first[static_cast<std::size_t>(me) + 1];
+  // The slab's columns and the ghosts' (one beyond each border with a neighbour), less the
+  // empty ones at either end: every particle sorted this step lies in one that holds a
+  // predicted position (the cut's counts), so a key never clamps.
+  int lo = me > 0 ? first - 1 : first;
+  int hi = me < last ? end + 1 : end;
+  while (lo < hi - 1 && predictedAll_[static_cast<std::size_t>(lo)] == 0)
+  {
+    ++lo;
+  }
+  while (hi - 1 > lo && predictedAll_[static_cast<std::size_t>(hi - 1)] == 0)
+  {
+    --hi;
+  }
+  GridGeometry<Real>& g = constants_.geometry;
+  g.firstColumn = lo;
+  g.nx = hi - lo;
+  constants_.cellCount = g.cellCount();
+  const std::size_t cells = std::size_t(constants_.cellCount) + 1;
+  if (cells > cellCapacity_)
+  {
+    // A sixteenth more than asked: the window widens by a column or so as the fluid spreads.
+    const std::size_t room = std::min<std::size_t>(
+      cells + cells / 16, std::size_t(columns_.cellCount()) + 1);
+    auto* grown = static_cast<std::uint32_t*>(device_->allocate(room * sizeof(std::uint32_t)));
+    if (cellOffsets_)
+    {
+      device_->synchronize(); // the last step's launches may still read them
+      device_->release(cellOffsets_);
+      fixedBytes_ -= cellCapacity_ * sizeof(std::uint32_t);
+    }
+    cellOffsets_ = grown;
+    cellCapacity_ = room;
+    fixedBytes_ += room * sizeof(std::uint32_t);
+  }
 }
 
 template <class Real, class Device>

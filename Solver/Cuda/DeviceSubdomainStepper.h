@@ -128,6 +128,7 @@ public:
   {
     parameters_.validate();
     constants_ = makeStepConstants<Real>(parameters_, skin, masks);
+    columns_ = constants_.geometry;
     lattice_ = calibrateLattice(parameters_);
     inPlace_ = communicator_.exchangesInPlace();
     // The masks are rebuilt at every pass: a ghost moves by its owner's corrections, which this
@@ -140,7 +141,7 @@ public:
     out_.resize(ranks);
     hostFirst_.resize(ranks + 1);
     hostCounts_.resize(
-      2 * static_cast<std::size_t>(constants_.geometry.nx) * subdomain::kCounterCopies);
+      2 * static_cast<std::size_t>(columns_.nx) * subdomain::kCounterCopies);
     ownerExpected_.resize(ranks + 1);
     in_.resize(ranks);
     inSizes_.resize(ranks);
@@ -154,7 +155,7 @@ public:
     // follows from the counts on every rank alike, so each keeps its share at once and nothing migrates (a cut
     // from uniform slabs would first gather most of a dam break on one rank and then move it:
     // gigabytes at 64M).
-    const GridGeometry<Real> g = constants_.geometry;
+    const GridGeometry<Real> g = columns_;
     const std::vector<std::uint64_t> perColumn = fluid.countPerColumn(
       [&](const Vec3d& q) {
         return static_cast<std::size_t>(subdomain::columnOf(g, Vec3<Real>::from(q)));
@@ -192,6 +193,10 @@ public:
     if (solids_)
     {
       device_->release(solids_);
+    }
+    if (cellOffsets_)
+    {
+      device_->release(cellOffsets_);
     }
     for (HostBuffer* b : { &hostPack_, &hostRecv_ })
     {
@@ -263,6 +268,9 @@ public:
     return (store_ ? store_->bytes() : 0) + fixedBytes_ + packBytes_ + recvBytes_ +
       3 * borderCapacity_ * sizeof(std::uint32_t);
   }
+  // The cells of the window this rank sorts its particles in (setWindow), and of the domain.
+  std::uint32_t windowCells() const { return constants_.cellCount; }
+  std::uint32_t domainCells() const { return columns_.cellCount(); }
   void load(const Snapshot<float>& state) override
   {
     distributed::together(communicator_, [&] { loadState(state); });
@@ -389,7 +397,7 @@ private:
   Owned ownedOf(const FluidSource& fluid, bool check) const
   {
     Owned o;
-    const GridGeometry<Real> g = constants_.geometry;
+    const GridGeometry<Real> g = columns_;
     const int me = communicator_.rank();
     fluid.forEachOwned(
       [&](const Vec3d& q) { return slabs_.owner(subdomain::columnOf(g, Vec3<Real>::from(q))); }, me,
@@ -517,6 +525,10 @@ private:
   // beside the old), keeping the first `keep` entries of the four Vec3 buffers, density, lambda,
   // id and liquid. Never shrinks: once grown, steps allocate nothing.
   void reserve(std::size_t needed, std::size_t keep);
+  // The window of the domain's columns this rank sorts its particles in: its slab's and its
+  // ghosts' columns that hold a predicted position (predictedAll_), so that its cells are its
+  // share of the domain's; cellOffsets_ grows to hold them.
+  void setWindow();
   // Room for `count` entries in each of the border lists (their contents are not kept: every
   // use writes them first); the host knows every count before the device selects.
   void reserveBorderLists(std::size_t count);
@@ -570,7 +582,7 @@ private:
   }
   std::uint32_t columnHeldBy(int c, int s) const
   {
-    if (c < 0 || c >= constants_.geometry.nx || ownerOf(c) != s)
+    if (c < 0 || c >= columns_.nx || ownerOf(c) != s)
     {
       return 0u;
     }
@@ -677,6 +689,10 @@ private:
   Parameters parameters_;
   std::unique_ptr<Device> device_;
   StepConstants<Real> constants_{};
+  // The domain's whole grid: its columns along x are the cut's, the owners' and the seeds'.
+  // constants_.geometry is this rank's window of it (setWindow), where its particles are sorted.
+  GridGeometry<Real> columns_{};
+  std::size_t cellCapacity_ = 0; // cells cellOffsets_ has room for
   LatticeCalibration lattice_;
   double dt_ = 0;
   StepTime<Real>* deviceTime_ = nullptr; // constants_.time

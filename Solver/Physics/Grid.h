@@ -21,6 +21,11 @@ struct GridGeometry
   Vec3<Real> origin;
   Real inverseCellSize;
   int nx, ny, nz;
+  // The first of the domain's columns along x that the grid holds: a rank's window of its slab
+  // and ghosts (DeviceSubdomainStepper), so that its cells are its share of the domain's. A
+  // column is found from the domain's origin as with the whole grid and then offset, so the
+  // window sorts its particles in the same order, bit for bit; 0: the whole domain.
+  int firstColumn = 0;
 
   std::uint32_t cellCount() const { return static_cast<std::uint32_t>(nx) * ny * nz; }
 
@@ -39,7 +44,8 @@ struct GridGeometry
 
   PBF_HD PBF_INLINE CellKey keyOf(const Vec3<Real>& p) const
   {
-    const int cx = clampedCell(p.x, origin.x, nx);
+    const int column = clampedCell(p.x, origin.x, nx + firstColumn) - firstColumn;
+    const int cx = column > 0 ? column : 0;
     const int cy = clampedCell(p.y, origin.y, ny);
     const int cz = clampedCell(p.z, origin.z, nz);
     return (static_cast<CellKey>(cz) * ny + cy) * nx + cx;
