@@ -167,7 +167,7 @@ Statistics CpuStepper<Real>::statistics() const
   {
     keys[i] = fluid_.geometry.keyOf(fluid_.x[i]);
   }
-  std::vector<std::uint32_t> offsets(fluid_.cellOffsets.size()), order, cursor;
+  std::vector<std::uint32_t> offsets(std::size_t(fluid_.geometry.cellCount()) + 1), order, cursor;
   countingSortByCell(keys, offsets, order, cursor);
   std::vector<Vec3d> sorted(fluid_.x.size());
   std::vector<CellKey> sortedKeys(fluid_.x.size());

@@ -31,7 +31,6 @@ struct HostFluid
     lattice = calibrateLattice(parameters);
     setTimeStep(parameters.timeStep);
     geometry = makeGridGeometry<Real>(parameters.domain, parameters.smoothingLength());
-    cellOffsets.assign(std::size_t(geometry.cellCount()) + 1, 0);
   }
 
   void setTimeStep(double step)
@@ -103,6 +102,9 @@ struct HostFluid
   {
     const std::size_t n = x.size();
     forEach([&](std::uint32_t i) { keys[i] = geometry.keyOf(p[i]); });
+    // The grid's cells (a rank's window of the domain's: GridGeometry::firstColumn), made at the
+    // first sort and kept while the window does not grow.
+    cellOffsets.resize(std::size_t(geometry.cellCount()) + 1);
     countingSortByCell(keys, cellOffsets, order, cursor);
     // Into scratch kept from step to step: nothing is allocated once the arrays have their size.
     auto gather = [&](auto& array, auto& scratch) {

@@ -71,13 +71,14 @@ SubdomainStepper<Real>::SubdomainStepper(Communicator& communicator, bool parall
   const Parameters& parameters, const FluidSource& fluid)
   : HostStepper<DecomposedStepper, Real>(parallel, parameters)
   , communicator_(communicator)
+  , columns_(fluid_.geometry)
 {
   const auto ranks = static_cast<std::size_t>(communicator_.size());
   sendIndex_.resize(ranks);
   ghostIndex_.resize(ranks);
   const std::vector<std::uint64_t> perColumn = fluid.countPerColumn(
     [&](const Vec3d& q) { return static_cast<std::size_t>(column(Vec3<Real>::from(q))); },
-    static_cast<std::size_t>(fluid_.geometry.nx));
+    static_cast<std::size_t>(columns_.nx));
   slabs_ = Slabs::balanced(perColumn, communicator_.size());
   // A particle that fails its check, or a share that the host cannot hold, fails every rank
   // alike, before the collectives that follow.
@@ -189,6 +190,22 @@ void SubdomainStepper<Real>::reserveParticles(std::size_t count)
 }
 
 template <class Real>
+void SubdomainStepper<Real>::roomForCells(int columns)
+{
+  const std::size_t perColumn = static_cast<std::size_t>(columns_.ny) * columns_.nz;
+  const std::size_t cells = static_cast<std::size_t>(columns) * perColumn + 1;
+  if (cells > fluid_.cellOffsets.capacity())
+  {
+    // An eighth more, four columns at least: the window follows the fluid and the cut a column
+    // or so at a time, and a column's cells cost a tenth of its particles' arrays.
+    const std::size_t room =
+      std::min(cells + std::max(4 * perColumn, cells / 8), std::size_t(columns_.cellCount()) + 1);
+    fluid_.cellOffsets.reserve(room);
+    fluid_.cursor.reserve(room);
+  }
+}
+
+template <class Real>
 void SubdomainStepper<Real>::roomFor(std::size_t n)
 {
   if (n > capacity_)
@@ -255,7 +272,7 @@ void SubdomainStepper<Real>::evaluateAtRest()
 template <class Real>
 int SubdomainStepper<Real>::column(const Vec3<Real>& q) const
 {
-  return fluid_.geometry.clampedCell(q.x, fluid_.geometry.origin.x, fluid_.geometry.nx);
+  return columns_.clampedCell(q.x, columns_.origin.x, columns_.nx);
 }
 
 template <class Real>
@@ -438,6 +455,18 @@ template <class Real>
 void SubdomainStepper<Real>::sortByCell()
 {
   const std::size_t n = fluid_.x.size();
+  // The window: the columns of the particles sorted (owned and ghosts), so that the cells are
+  // this rank's share of the domain's; a key is the domain's column offset, the same order.
+  int lo = columns_.nx, hi = 0;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const int c = column(fluid_.p[i]);
+    lo = std::min(lo, c);
+    hi = std::max(hi, c + 1);
+  }
+  fluid_.geometry.firstColumn = lo < hi ? lo : 0;
+  fluid_.geometry.nx = lo < hi ? hi - lo : 1;
+  roomForCells(fluid_.geometry.nx);
   // Serially over owned particles and ghosts, as before this rank knows which are which.
   fluid_.sortByCell(
     [n](auto&& f) {
@@ -662,7 +691,7 @@ template <class Real>
 void SubdomainStepper<Real>::cut()
 {
   const auto start = std::chrono::steady_clock::now();
-  std::vector<double> mine(static_cast<std::size_t>(fluid_.geometry.nx), 0.0);
+  std::vector<double> mine(static_cast<std::size_t>(columns_.nx), 0.0);
   for (const Vec3<Real>& q : fluid_.x)
   {
     mine[static_cast<std::size_t>(column(q))] += 1.0;

@@ -148,6 +148,8 @@ private:
   // were); roomFor(n) before an append grows by at least a sixteenth, never to twice the share.
   void reserveParticles(std::size_t count);
   void roomFor(std::size_t n);
+  // Room for a window of `columns` columns in the grid's cell arrays (sortByCell).
+  void roomForCells(int columns);
   std::size_t bytesPerParticle() const;
   void cut();                          // balanced slabs from the global column counts
   void migrate(bool byPrediction);     // to the owners of their columns
@@ -165,6 +167,9 @@ private:
   using HostStepper<DecomposedStepper, Real>::report_;
   Communicator& communicator_;
   Slabs slabs_;
+  // The domain's whole grid: its columns along x are the cut's and the owners'. fluid_.geometry
+  // is this rank's window of it (sortByCell): the columns of the particles it sorts.
+  GridGeometry<Real> columns_;
   std::vector<std::int32_t> ghostFrom_;        // the rank a ghost mirrors; -1 for owned
   std::vector<std::uint32_t> tag_;            // index before the sort
   std::vector<std::uint32_t> owned_;          // sorted indices of owned particles

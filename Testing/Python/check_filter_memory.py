@@ -8,11 +8,11 @@ before it took the plugin's and MPI's first costs). On 2 and 4 ranks each rank m
 n_r / N. A rank that held the whole fluid, or the whole input beside its slab, exceeds that
 several times over.
 
-Measured on the development machine at about 1M particles (s = 5.2 mm): a scene 1.10 on 2
-ranks and 1.16-1.25 on 4; points in pieces 1.10-1.11 on 2 and 1.17-1.22 on 4 (1.32-1.37 while
-the exchange kept a second copy of what arrived). What is above 1 is the
-ghosts (two border columns of an inner rank: 14 % of its share on 4 ranks), the capacity planned
-for the migration, and the grid's cell offsets, which span the whole domain on every rank.
+Measured on the development machine at about 1M particles (s = 5.2 mm): a scene 1.06 on 2
+ranks and 1.08-1.16 on 4; points in pieces 1.10-1.11 on 2 and 1.11-1.14 on 4 (1.32-1.37 while
+the exchange kept a second copy of what arrived; 1.16-1.25 on 4 while every rank's grid spanned
+the whole domain). What is above 1 is the ghosts (two border columns of an inner rank: 14 % of
+its share on 4 ranks) and the capacity planned for the migration.
 
 Run with: check_filter_memory.py --mpiexec PATH --pvbatch PATH --plugin PATH"""
 import argparse

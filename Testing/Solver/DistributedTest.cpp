@@ -305,7 +305,7 @@ TEST(Distributed, CudaWithoutAGpuFailsOnEveryRankAndAutoFallsBackToTheCpu)
 // swing once, from the fluid's count per column (Slabs::plannedCapacity), and the first steps of
 // a sloshing channel grow nothing. Its arrays hold about what one rank's hold a particle, the
 // ghosts and the swing more: a channel 75 columns long, 25 a rank, gives each rank 2 columns of
-// ghosts at most and 2 of swing, within 1.3 times one rank's (measured 1.18-1.22). A coarse dam
+// ghosts at most and 2 of swing, within 1.3 times one rank's (measured 1.10-1.14). A coarse dam
 // break of 10 columns would give 3 ranks 1.7-2.4 times: the plan's swing is whole columns.
 TEST(Distributed, EachRankPlansItsArraysOnceAndTheStepsGrowNothing)
 {

@@ -7,9 +7,9 @@ libraries, MPI's buffers), each rank of 2 and 4 must hold at most 1.3 times its 
 one rank's: (peak_r - base_R) <= 1.3 (peak_1 - base_1) n_r / N. A rank that held the whole
 fluid, or a batch of it in double beside its own arrays, exceeds that several times over.
 
-Measured on the development machine at 2M particles: 1.06 on 2 ranks, 1.15-1.20 on 4 (the
-ghosts, 7.5 % of a rank's particles on 4 ranks, the capacity planned for the migration and the
-grid's cell offsets, which span the whole domain on every rank, make the rest).
+Measured on the development machine at 2M particles: 1.02 on 2 ranks, 1.04-1.09 on 4 (the
+ghosts, 7.5 % of a rank's particles on 4 ranks, and the capacity planned for the migration; each
+rank's grid is the window of its own columns).
 """
 import argparse
 import json
