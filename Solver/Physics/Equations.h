@@ -234,26 +234,36 @@ PBF_HD PBF_INLINE Real solidTensile(std::uint32_t i, const FluidView<Real, Neigh
   return Liquids && f.liquid ? tensile * f.time->liquidDensityRatio[f.liquid[i]] : tensile;
 }
 
-// Calls visit(n, b, solid) for each solid within h of q: n its outward unit normal there (the
-// field's gradient), b the table's sums at q's distance from it, solid its view (for its velocity).
+// Calls visit(o, d, gradient, g) for each solid o whose grid holds q (DistanceGridView::within):
+// d the field there, gradient its gradient and g that gradient's length. A particle beyond a
+// solid's grid skips it, so a solid costs the particles near it.
 template <class Real, class Neighbors, class Visit>
-PBF_HD PBF_INLINE void forEachNearSolid(
+PBF_HD PBF_INLINE void forEachSolidField(
   const Vec3<Real>& q, const FluidView<Real, Neighbors>& f, Visit&& visit)
 {
   for (int o = 0; o < f.obstacleCount; ++o)
   {
     Vec3<Real> gradient;
     Real d;
-    if (!f.obstacles[o].within(q, &d, &gradient))
+    if (f.obstacles[o].within(q, &d, &gradient))
     {
-      continue;
+      visit(o, d, gradient, length(gradient));
     }
-    const Real g = length(gradient);
+  }
+}
+
+// Calls visit(n, b, solid) for each solid within h of q: n its outward unit normal there (the
+// field's gradient), b the table's sums at q's distance from it, solid its view (for its velocity).
+template <class Real, class Neighbors, class Visit>
+PBF_HD PBF_INLINE void forEachNearSolid(
+  const Vec3<Real>& q, const FluidView<Real, Neighbors>& f, Visit&& visit)
+{
+  forEachSolidField(q, f, [&](int o, Real d, const Vec3<Real>& gradient, Real g) {
     if (d < f.c.kernels.h && g > Real(0))
     {
       visit(gradient * (Real(1) / g), sampleBoundary(f.boundary, d), f.obstacles[o]);
     }
-  }
+  });
 }
 
 // The solid nearest to a particle within h, as surface tension sees it: a mirror at the solid's
@@ -291,15 +301,7 @@ PBF_HD PBF_INLINE SolidMirror<Real> nearestSolid(
   const Vec3<Real>& q, const FluidView<Real, Neighbors>& f)
 {
   SolidMirror<Real> m{ -1, Vec3<Real>{ Real(0), Real(0), Real(0) }, Real(0), f.c.kernels.h };
-  for (int o = 0; o < f.obstacleCount; ++o)
-  {
-    Vec3<Real> gradient;
-    Real d;
-    if (!f.obstacles[o].within(q, &d, &gradient))
-    {
-      continue;
-    }
-    const Real g = length(gradient);
+  forEachSolidField(q, f, [&](int o, Real d, const Vec3<Real>& gradient, Real g) {
     d = d < Real(0) ? Real(0) : d; // inside: on its surface, where the collision puts it
     if (d < m.distance && g > Real(0))
     {
@@ -308,7 +310,7 @@ PBF_HD PBF_INLINE SolidMirror<Real> nearestSolid(
       m.distance = d;
       m.offset = dot(m.n, q) - d;
     }
-  }
+  });
   return m;
 }
 
@@ -322,24 +324,17 @@ PBF_HD PBF_INLINE Vec3<Real> solidShare(
   return n * (b.spiky * (lambdaI + lambdaI) + tensile * b.tensile);
 }
 
-// A particle inside an obstacle goes to its surface, along the field's gradient.
+// A particle inside an obstacle goes to its surface, along the field's gradient. Solid by solid:
+// each is asked where the particle is after the ones before it moved it.
 template <class Real, class Neighbors>
 PBF_HD PBF_INLINE Vec3<Real> collideWithObstacles(Vec3<Real> q, const FluidView<Real, Neighbors>& f)
 {
-  for (int o = 0; o < f.obstacleCount; ++o)
-  {
-    Vec3<Real> gradient;
-    Real d;
-    if (!f.obstacles[o].within(q, &d, &gradient))
-    {
-      continue; // beyond the grid, outside the solid
-    }
-    const Real g = length(gradient);
+  forEachSolidField(q, f, [&](int, Real d, const Vec3<Real>& gradient, Real g) {
     if (d < Real(0) && g > Real(0))
     {
       q -= gradient * (d / g);
     }
-  }
+  });
   return q;
 }
 
