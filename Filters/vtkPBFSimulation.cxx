@@ -13,6 +13,7 @@
 #include "vtkTable.h"
 
 #include "vtkPBFOutput.h"
+#include "vtkPBFPortDemand.h"
 #include "vtkPBFProbes.h"
 
 #include "ParameterTable.h"
@@ -36,6 +37,12 @@ const char* const PresetNames[] = { "dam_break", "double_dam_break", "blob", "st
 } // namespace
 
 vtkStandardNewMacro(vtkPBFSimulation);
+
+namespace
+{
+// The Surface output's port (the XML's OutputPort "Surface").
+constexpr int SurfacePort = 3;
+} // namespace
 
 //------------------------------------------------------------------------------
 vtkPBFSimulation::vtkPBFSimulation()
@@ -273,13 +280,35 @@ int vtkPBFSimulation::RequestUpdateExtent(
 }
 
 //------------------------------------------------------------------------------
+vtkTypeBool vtkPBFSimulation::ProcessRequest(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  if (request->Has(vtkDemandDrivenPipeline::REQUEST_DATA_NOT_GENERATED()))
+  {
+    vtkPBFSimulationInternals& internals = *this->Internals;
+    const FrameRequest r = internals.ParseRequest(this->Settings(), request, outputVector);
+    internals.Demand = vtkPBFPortDemand::Of(this, request, outputVector, SurfacePort,
+      this->GenerateSurface, internals.LastFrame == r.Frame, r.Time);
+    internals.Demand.MarkNotGenerated(outputVector, SurfacePort);
+    return 1;
+  }
+  return this->Superclass::ProcessRequest(request, inputVector, outputVector);
+}
+
+//------------------------------------------------------------------------------
 int vtkPBFSimulation::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  const int result = this->RequestFrame(request, inputVector, outputVector);
-  this->RequestDomain(outputVector);
-  const int surface = this->RequestSurface(outputVector);
-  this->RequestProbes(inputVector, outputVector);
+  const vtkPBFPortDemand demand = this->Internals->Demand;
+  this->Internals->Demand = vtkPBFPortDemand();
+  int result = 1;
+  if (demand.Frame)
+  {
+    result = this->RequestFrame(request, inputVector, outputVector);
+    this->RequestDomain(outputVector);
+    this->RequestProbes(inputVector, outputVector);
+  }
+  const int surface = demand.Surface ? this->RequestSurface(outputVector) : 1;
   return result && surface;
 }
 
@@ -414,7 +443,7 @@ int vtkPBFSimulation::RequestSurface(vtkInformationVector* outputVector)
   vtkPolyData* surface = vtkPolyData::GetData(outputVector, 3);
   vtkPolyData* particles = vtkPolyData::GetData(outputVector, 0);
   vtkInformation* shown = particles->GetInformation();
-  if (!this->GenerateSurface || !shown->Has(vtkDataObject::DATA_TIME_STEP()))
+  if (!shown->Has(vtkDataObject::DATA_TIME_STEP()))
   {
     surface->Initialize();
     if (shown->Has(vtkDataObject::DATA_TIME_STEP()))

@@ -197,9 +197,12 @@ public:
    * then SurfaceSmoothing Laplacian passes, default 0; SurfaceAnisotropic: Yu & Turk's
    * anisotropic kernels, flatter water, default off), from the same frame as the particles. A
    * CUDA run makes it on its GPU (the same mesh).
-   * Computed only when GenerateSurface is on (default off; port 3 is then empty): ParaView
-   * updates every output port of a source together (Apply, UpdatePipeline), so port 3 cannot
-   * tell whether a view shows it. Changing a surface property recomputes only the surface.
+   * Computed when something downstream asks for port 3 (its eye in the GUI, a Show of
+   * OutputPort 3, a filter, a writer or a Fetch), for the frame asked, and not otherwise: a run
+   * that never shows the surface spends nothing on it, and a proxy's UpdatePipeline (Apply)
+   * alone does not make it (vtkPBFPortDemand.h). GenerateSurface (default off) makes it with
+   * every frame all the same, for scripts that read the algorithm's port 3 directly. Changing a
+   * surface property recomputes only the surface.
    */
   vtkSetMacro(GenerateSurface, bool);
   vtkGetMacro(GenerateSurface, bool);
@@ -322,12 +325,14 @@ protected:
   int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  // Answers REQUEST_DATA_NOT_GENERATED with the outputs this execution leaves as they are.
+  vtkTypeBool ProcessRequest(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   // The particles and diagnostics of the requested frame (ports 0 and 1).
   int RequestFrame(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
   // The domain's outline (port 2), from the simulation just run.
   void RequestDomain(vtkInformationVector* outputVector);
-  // The surface of the particles on port 0 (port 3) when GenerateSurface is on. Returns 0 after
-  // an error (the previous surface stays).
+  // The surface of the particles on port 0 (port 3). Returns 0 after an error (the previous
+  // surface stays).
   int RequestSurface(vtkInformationVector* outputVector);
   // The Probes table (port 4) of the Probes input's points (port 2), read from port 0's particles.
   void RequestProbes(vtkInformationVector** inputVector, vtkInformationVector* outputVector);

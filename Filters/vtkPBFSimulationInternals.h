@@ -7,6 +7,7 @@
 #define vtkPBFSimulationInternals_h
 
 #include "vtkPBFObstacleMotion.h"
+#include "vtkPBFPortDemand.h"
 
 #include "vtkCellArray.h"
 #include "vtkPolyData.h"
@@ -30,6 +31,10 @@ class vtkInformation;
 class vtkInformationVector;
 class vtkObject;
 class vtkPointSet;
+namespace pbf::distributed
+{
+class DecomposedStepper;
+}
 
 // What a request needs of the filter's own properties (the physics parameters are kept here, in
 // vtkPBFSimulationInternals::Physics): the filter makes one at each request.
@@ -81,6 +86,8 @@ public:
   // and, when it is a frame of the playback's key, which one (-1 otherwise).
   vtkSmartPointer<vtkPolyData> LastOutput = vtkSmartPointer<vtkPolyData>::New();
   int LastFrame = -1;
+  // The outputs the current execution makes (ProcessRequest's REQUEST_DATA_NOT_GENERATED).
+  vtkPBFPortDemand Demand;
   // The outline of the domain last simulated (port 2), kept when a request fails.
   vtkSmartPointer<vtkPolyData> Domain = vtkSmartPointer<vtkPolyData>::New();
   // The run Domain was built for: the tank and the scene's obstacles change only with it.
@@ -164,6 +171,13 @@ public:
   // for bad options.
   void DeliverSurface(
     const pbf::SurfaceOptions& options, vtkPolyData* particles, vtkPolyData* surface);
+  // The surface mesh of the particles' arrays (one closed surface per liquid when liquids > 0,
+  // meshLiquid saying whose each vertex is), made on the run's ranks, its GPU or the CPU.
+  template <class Real>
+  void ExtractMesh(vtkPolyData* particles, const pbf::Parameters& p,
+    const pbf::SurfaceOptions& options, const pbf::SurfaceSolids& solids,
+    const pbf::distributed::DecomposedStepper* decomposed, int liquids, pbf::SurfaceMesh& mesh,
+    std::vector<unsigned char>& meshLiquid, std::string& device);
   // A CUDA run's surface on its GPU (Cuda/CudaSurface.h) into mesh, with the device's name; false
   // when the run is not on CUDA or the GPU failed (said once): the CPU makes it then.
   template <class Real>

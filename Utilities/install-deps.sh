@@ -6,6 +6,8 @@ set -euo pipefail
 packages=(
   # compilers and test tools
   build-essential cmake libgtest-dev nlohmann-json3-dev
+  # the house rules' check (Testing/Layers/check_house.py): functions and their extents
+  universal-ctags
   # the sanitizer and fuzzing builds (Utilities/sanitize.sh, fuzz.sh): clang, its runtimes
   # (ASan, UBSan, libFuzzer) and its OpenMP
   clang libclang-rt-14-dev libomp-dev

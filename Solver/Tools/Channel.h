@@ -1,4 +1,4 @@
-// An open channel, the check of the open boundaries (Documentation/Validation.md, "Channel"): an
+// An open channel, the check of the open boundaries (Documentation/ValidationBoundaries.md, "Channel"): an
 // inflow released by volume rate and an outflow that removes what reaches it. Once the stream
 // has reached the outflow, the particles in the domain must hold steady and what leaves must
 // balance what comes in.

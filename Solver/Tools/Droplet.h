@@ -1,8 +1,8 @@
-// A droplet without gravity, the check of surface tension (Documentation/Validation.md, "Surface
+// A droplet without gravity, the check of surface tension (Documentation/ValidationInterfaces.md, "Surface
 // tension"): a spheroid of liquid, longer along x than across, pulls itself towards a sphere and
 // oscillates about it in Rayleigh's l = 2 mode, whose period for a sphere of radius R is
 // T = 2 pi sqrt(rho R^3 / (8 sigma)) (Rayleigh 1879; Lamb, Hydrodynamics, section 275). A
-// spheroid starts that mode alone; a block (the issue's cube) starts l = 4 and more as well, and
+// spheroid starts that mode alone; a block (a cube) starts l = 4 and more as well, and
 // the crossings of its deformation wander by a quarter of a period between runs.
 #pragma once
 

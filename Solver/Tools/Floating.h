@@ -1,4 +1,4 @@
-// Bodies in still water, the checks of a floating or sinking body (Documentation/Validation.md,
+// Bodies in still water, the checks of a floating or sinking body (Documentation/ValidationBoundaries.md,
 // "Loads and floating bodies"): a 0.2 x 0.16 x 0.2 m box of relative density r (to the water's)
 // let go in the middle of a 0.6 x 0.7 x 0.6 m tank of water 0.4 m deep, and its heave over time
 // against the free surface away from it.

@@ -1,4 +1,4 @@
-// Two liquids in a tank, the checks of several liquids (Documentation/Validation.md, "Several
+// Two liquids in a tank, the checks of several liquids (Documentation/ValidationInterfaces.md, "Several
 // liquids"): water under oil at rest, whose interface must stay flat and whose liquids must stay
 // apart, and the same layers turned over (heavy on light), which must change places.
 #pragma once

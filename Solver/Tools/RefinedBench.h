@@ -2,7 +2,7 @@
 // given spacings, simulated frame by frame to a time as the filter does (Simulation::advanceTo),
 // in three modes side by side:
 //   fixed     TimeStepping Fixed: every step is MaxTimeStep (1/240 s), 4 projections per step
-//             (the scheme before the resolution issue; at fine spacings it is expected to
+//             (the paper's scheme; at fine spacings it is expected to
 //             diverge, and the row says when);
 //   fixed4    automatic steps, the paper's 4 projections per step;
 //   defaults  automatic steps and adaptive projections (what a user gets).

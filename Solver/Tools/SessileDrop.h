@@ -1,5 +1,5 @@
 // A drop resting on a flat solid without gravity, the check of adhesion (Documentation/
-// Validation.md, "Adhesion"): a hemisphere of liquid on the domain's floor (y = 0) under surface
+// ValidationInterfaces.md, "Adhesion"): a hemisphere of liquid on the domain's floor (y = 0) under surface
 // tension spreads or beads up until its surface meets the floor at the contact angle
 // (Parameters::contactAngle), and rests as a spherical cap. The angle is read from the cap's
 // volume and the height of its centroid, sums over every particle rather than the few at its

@@ -1,6 +1,6 @@
 // pbf_channel: an open channel (Channel.h; the "channel" preset unless --scene names another
 // scene with an outflow) run to --until: the particle count sampled as it goes, then how steady it
-// held from --start on and what came in and went out. Documentation/Validation.md has the figures.
+// held from --start on and what came in and went out. Documentation/ValidationBoundaries.md has the figures.
 #include "Channel.h"
 
 #include "ToolOptions.h"

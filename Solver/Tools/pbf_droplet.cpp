@@ -2,7 +2,7 @@
 // --elongation longer than the sphere of --radius along x, of its volume, pulls itself round
 // under --surface-tension and oscillates; the l = 2 period fitted to its deformation (a damped
 // cosine) against Rayleigh's. --series 1 prints the deformation every --sample seconds as well.
-// Documentation/Validation.md has the figures.
+// Documentation/ValidationInterfaces.md has the figures.
 #include "Droplet.h"
 
 #include "ToolOptions.h"

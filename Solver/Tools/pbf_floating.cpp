@@ -1,7 +1,7 @@
 // pbf_floating: a box of each relative density in still water (Floating.h) at one or more
 // spacings, to --until seconds. Prints per run the draft against Archimedes' (r < 1), its drift,
 // how far a neutral box (r = 1) strayed, where a dense one (r > 1) came to rest, and, with
-// --kick, how the system's energy decays after the box is pushed. Documentation/Validation.md has the
+// --kick, how the system's energy decays after the box is pushed. Documentation/ValidationBoundaries.md has the
 // figures.
 #include "Floating.h"
 

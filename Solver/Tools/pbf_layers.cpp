@@ -6,7 +6,7 @@
 // thin slab (--thickness) with the interface perturbed by --amplitude cos(k x): the mode's
 // amplitude every --sample seconds and the growth rate fitted to it, against the inviscid
 // sqrt(A k g) and the rate with the model's XSPH viscosity. The layers at rest run on --ranks
-// decomposed ranks (as threads) too. Documentation/Validation.md has the figures.
+// decomposed ranks (as threads) too. Documentation/ValidationInterfaces.md has the figures.
 #include "Layers.h"
 
 #include "Distributed/RankReductions.h"

@@ -1,7 +1,7 @@
 // pbf_sessile: a drop resting on the floor without gravity (SessileDrop.h), at one or more
 // contact angles (--angles) and spacings: the angle its surface makes with the floor, read from
 // the cap's volume and centroid, against the one set (Parameters::contactAngle).
-// Documentation/Validation.md has the figures.
+// Documentation/ValidationInterfaces.md has the figures.
 #include "SessileDrop.h"
 
 #include "ToolOptions.h"

@@ -16,7 +16,7 @@ import pbf_testing as T  # noqa: E402
 T.load_plugin(globals())
 expect = T.expect
 
-# PBF_LOADS_SPACING: another spacing for a study (Documentation/Validation.md gives 2.5 cm).
+# PBF_LOADS_SPACING: another spacing for a study (Documentation/ValidationBoundaries.md: 2.5 cm).
 S = float(os.environ.get("PBF_LOADS_SPACING", 0.05))
 INNER, FLOOR, LO, HIGH = 12 * S, 0.3, 0.5, 8 * S
 TOP = FLOOR + 2 * HIGH + 1

@@ -73,7 +73,7 @@ for k, (x, y, z) in enumerate(PROBES[:3]):
 # floor, -5.4 % and -9.4 % at 0.2 and 0.4 m). An 8 x 8 column of particles settles with pressures
 # that differ by several % from layer to layer (Pressure.WaterAtRestIsHydrostatic bounds the
 # layers' means over 12 x 12 columns by 6 %); at 2.5 cm the probes read -1 % to -7 % once settled
-# (Documentation/Validation.md). A lost factor (dt, rho_0) is far outside.
+# (Documentation/ValidationBoundaries.md). A lost factor (dt, rho_0) is far outside.
 for k in (0, 1, 2):
     d = DEPTH - PROBES[k][1]
     expect(abs(pressure[k] / (RHO_G * d) - 1) < 0.12,

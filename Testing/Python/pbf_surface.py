@@ -1,7 +1,7 @@
 """The Surface output (port 3): the fluid's surface as closed triangles with Normals, velocity and
-density, computed only when GenerateSurface is on, from the same frame as the particles.
+density, from the same frame as the particles (what asks for it: pbf_surface_demand.py).
 
-The dam break at 4 cm: without GenerateSurface port 3 is empty; with it, a filter on port 3 gives a
+The dam break at 4 cm: the source's UpdatePipeline alone leaves port 3 empty; a filter on it gives a
 surface that has no boundary edge, encloses at least 98 % of the particles
 (vtkSelectEnclosedPoints) in every frame asked, carries the frame's time, and changes with the
 frame. A bad SurfaceResolution is an error naming it, and the particles stay. An obstacle (a
@@ -40,7 +40,7 @@ fluid = PositionBasedFluids(ParticleSpacing=0.04, NumberOfFrames=12,  # noqa: F8
                             FrameInterval=INTERVAL)
 algorithm = fluid.GetClientSideObject()
 
-# Off by default: port 3 is empty.
+# Nothing downstream of port 3: it stays empty.
 fluid.UpdatePipeline(0.0)
 expect(algorithm.GetOutputDataObject(3).GetNumberOfCells() == 0,
        "the surface was computed though GenerateSurface is off")

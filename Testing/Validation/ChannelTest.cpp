@@ -14,7 +14,8 @@ using namespace pbf::validation;
 // Measured (serial, single): from 5 s, 640 particles, -1.5 % to +2.1 %; inflow 0.009954 and
 // outflow 0.009987 m^3/s. The bounds: a layer of the nozzle is 21 of the ~640 particles (3.3 %),
 // and a sample may fall just before or after one is released, so the count holds within 3 % of
-// its mean (the 2 % is the 60 s run at 0.02 m, where a layer is 2.3 %: Validation.md).
+// its mean (the 2 % criterion is for the 60 s run at 0.02 m, where a layer is 2.3 %:
+// Documentation/ValidationBoundaries.md).
 // Over the 9 s window the released volume is the rate's to within the one layer a window may cut
 // (21 s^3 / 9 s = 0.63 %), and what leaves balances what comes in within 3 % (a stream still
 // filling or draining would not). Without the outflow the count grows by 330 a second.

@@ -1,7 +1,7 @@
 // Bodies in still water (Solver/Tools/Floating.h), fast versions at 4 cm (4 spacings of the
 // box's height) over 2 s on the CPU; pbf_floating runs them at 2 and 1 cm over 5 s on a GPU
-// (Documentation/Validation.md). The bounds hold what 4 cm gives with a margin, and fail for a
-// body the fluid does not hold up or whose coupling feeds it energy.
+// (Documentation/ValidationBoundaries.md). The bounds hold what 4 cm gives with a margin, and
+// fail for a body the fluid does not hold up or whose coupling feeds it energy.
 #include "Floating.h"
 
 #include <gtest/gtest.h>

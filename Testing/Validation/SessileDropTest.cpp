@@ -14,15 +14,15 @@ using namespace pbf::validation;
 
 // sigma = 1 N/m, R = 0.05 m at 10 spacings per radius, 3 s (about 4 capillary periods), the
 // angle averaged over the last second. Measured (double): 90 -> 90.1, 105 -> 106.0, 120 -> 119.9
-// degrees; 80 -> 73.4 (the wetting side settles below the angle set, Validation.md). The bounds:
-// the angle moves monotonically with the one set, within 5 degrees of it where the surface beads
-// up (theta >= 90), and on the wetting side below 90 and above 60.
+// degrees; 80 -> 73.4 (the wetting side settles below the angle set, ValidationInterfaces.md).
+// The bounds: the angle moves monotonically with the one set, within 5 degrees of it where the
+// surface beads up (theta >= 90), and on the wetting side below 90 and above 60.
 TEST(SessileDrop, TheContactAngleFollowsTheAdhesion)
 {
   Parameters p;
   p.particleSpacing = 0.005;
   p.surfaceTension = 1.0;
-  // 105 (106.0) is in Validation.md's table; CI runs the ends and the neutral angle.
+  // 105 (106.0) is in ValidationInterfaces.md's table; CI runs the ends and the neutral angle.
   const std::vector<double> set = { 80, 90, 120 };
   std::vector<double> measured;
   for (double theta : set)
