@@ -8,53 +8,89 @@
 #include "vtkInformationVector.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 
+#include <algorithm>
+
 namespace
 {
 
-// True when nobody downstream of the port will look at its data: its only consumers are
-// ParaView's per-port post filters (vtkPVPostFilter, which every source proxy puts after each
-// of its output ports) with no consumer of their own. A proxy's UpdatePipeline(), which Apply
-// calls, updates every port through them; a view, a filter, a writer or a Fetch hangs below
-// them. A port with no consumer at all is asked directly (Update(port) in C++) and is wanted.
-bool OnlyUnwatchedPostFilters(vtkAlgorithm* algorithm, int port)
+// ParaView's plumbing below every output port of a source proxy: the post filter
+// (vtkPVPostFilter, through which the proxy's UpdatePipeline, and so Apply, updates each port)
+// and the selection extractor that a shown representation hangs beside it (vtkPVExtractSelection).
+// Neither looks at the data unless something hangs below it in turn.
+bool IsPlumbing(vtkAlgorithm* algorithm)
+{
+  return algorithm->IsA("vtkPVPostFilter") || algorithm->IsA("vtkPVExtractSelection");
+}
+
+// The consumers of an algorithm's output port.
+int ConsumersOf(vtkAlgorithm* algorithm, int port, vtkExecutive**& executives)
 {
   vtkInformation* info = algorithm->GetExecutive()->GetOutputInformation(port);
   vtkInformationExecutivePortVectorKey* consumers = vtkExecutive::CONSUMERS();
   const int count = info && info->Has(consumers) ? consumers->Length(info) : 0;
-  vtkExecutive** executives = count > 0 ? consumers->GetExecutives(info) : nullptr;
+  executives = count > 0 ? consumers->GetExecutives(info) : nullptr;
+  return count;
+}
+
+// True when something below the port looks at its data: a view's representation, a filter, a
+// writer, a Fetch, found through ParaView's plumbing.
+bool Watched(vtkAlgorithm* algorithm, int port)
+{
+  vtkExecutive** executives = nullptr;
+  const int count = ConsumersOf(algorithm, port, executives);
   for (int c = 0; c < count; ++c)
   {
     vtkAlgorithm* consumer = executives[c] ? executives[c]->GetAlgorithm() : nullptr;
-    if (!consumer || !consumer->IsA("vtkPVPostFilter"))
+    if (!consumer)
     {
-      return false;
+      continue;
+    }
+    if (!IsPlumbing(consumer))
+    {
+      return true;
     }
     for (int p = 0; p < consumer->GetNumberOfOutputPorts(); ++p)
     {
-      vtkInformation* below = consumer->GetExecutive()->GetOutputInformation(p);
-      if (below && below->Has(consumers) && consumers->Length(below) > 0)
+      if (Watched(consumer, p))
       {
-        return false;
+        return true;
       }
     }
   }
-  return count > 0;
+  return false;
 }
 
-// True when port 0 already holds the frame at frameTime and nothing upstream or in the algorithm
-// changed since it was made (the executive's own test of an output's age).
+// True when a request through the port comes from someone who wants its data: the port is
+// watched, or it has no consumer at all (asked directly, Update(port) in C++).
+bool Wanted(vtkAlgorithm* algorithm, int port)
+{
+  vtkExecutive** executives = nullptr;
+  return ConsumersOf(algorithm, port, executives) == 0 || Watched(algorithm, port);
+}
+
+// True when port 0 already holds the frame at frameTime and neither the algorithm nor anything
+// upstream changed since it was made (the executive's own test of an output's age, without the
+// surface's stamp, which ComputePipelineMTime may have moved for port 3 alone).
 bool ParticlesCurrent(vtkAlgorithm* algorithm, vtkInformationVector* outputVector, double frameTime)
 {
-  auto* executive = vtkStreamingDemandDrivenPipeline::SafeDownCast(algorithm->GetExecutive());
   vtkDataObject* particles = outputVector->GetInformationObject(0)->Get(vtkDataObject::DATA_OBJECT());
-  if (!executive || !particles)
+  if (!particles)
   {
     return false;
   }
+  vtkMTimeType upstream = algorithm->GetMTime();
+  for (int port = 0; port < algorithm->GetNumberOfInputPorts(); ++port)
+  {
+    for (int c = 0; c < algorithm->GetNumberOfInputConnections(port); ++c)
+    {
+      vtkAlgorithm* input = algorithm->GetInputAlgorithm(port, c);
+      auto* executive = input ? vtkDemandDrivenPipeline::SafeDownCast(input->GetExecutive()) : nullptr;
+      upstream = executive ? std::max(upstream, executive->GetPipelineMTime()) : upstream;
+    }
+  }
   vtkInformation* info = particles->GetInformation();
   return info->Has(vtkDataObject::DATA_TIME_STEP()) &&
-    info->Get(vtkDataObject::DATA_TIME_STEP()) == frameTime &&
-    particles->GetUpdateTime() > executive->GetPipelineMTime();
+    info->Get(vtkDataObject::DATA_TIME_STEP()) == frameTime && particles->GetUpdateTime() > upstream;
 }
 
 } // namespace
@@ -68,8 +104,9 @@ vtkPBFPortDemand vtkPBFPortDemand::Of(vtkAlgorithm* algorithm, vtkInformation* r
     ? request->Get(vtkDemandDrivenPipeline::FROM_OUTPUT_PORT())
     : 0;
   vtkPBFPortDemand demand;
-  const bool surfaceAsked = from == surfacePort && !OnlyUnwatchedPostFilters(algorithm, surfacePort);
+  const bool surfaceAsked = from == surfacePort && Wanted(algorithm, surfacePort);
   demand.Surface = keepSurface || surfaceAsked;
+  demand.LeftStale = from == surfacePort && !demand.Surface;
   // A request through the surface's port for the frame already on port 0 makes the surface
   // alone: the particles' consumers see no new data and do not execute again.
   if (from == surfacePort && frameHeld && ParticlesCurrent(algorithm, outputVector, frameTime))

@@ -17,6 +17,10 @@ struct vtkPBFPortDemand
   bool Frame = true;
   // The surface of the particles on port 0 (port 3).
   bool Surface = false;
+  // A request through the surface's port that leaves it unmade (nobody below the port looks at
+  // it): what the port's consumers then hold is not the frame's surface, so the next request
+  // through that port must reach the algorithm again (vtkPBFSimulation::ComputePipelineMTime).
+  bool LeftStale = false;
 
   // What the request needs. surfacePort: the surface's port; keepSurface: GenerateSurface;
   // frameHeld: the internals hold the requested frame (its time frameTime) as port 0's data.

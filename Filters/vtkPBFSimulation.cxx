@@ -21,6 +21,7 @@
 #include "Playback.h"
 #include "SurfaceExtraction.h"
 
+#include <algorithm>
 #include <cmath>
 #include <new>
 #include <stdexcept>
@@ -290,9 +291,26 @@ vtkTypeBool vtkPBFSimulation::ProcessRequest(
     internals.Demand = vtkPBFPortDemand::Of(this, request, outputVector, SurfacePort,
       this->GenerateSurface, internals.LastFrame == r.Frame, r.Time);
     internals.Demand.MarkNotGenerated(outputVector, SurfacePort);
+    internals.SurfaceStale =
+      !internals.Demand.Surface && (internals.SurfaceStale || internals.Demand.LeftStale);
     return 1;
   }
   return this->Superclass::ProcessRequest(request, inputVector, outputVector);
+}
+
+//------------------------------------------------------------------------------
+int vtkPBFSimulation::ComputePipelineMTime(vtkInformation* request,
+  vtkInformationVector** inInfoVec, vtkInformationVector* outInfoVec, int requestFromOutputPort,
+  vtkMTimeType* mtime)
+{
+  const int result = this->Superclass::ComputePipelineMTime(
+    request, inInfoVec, outInfoVec, requestFromOutputPort, mtime);
+  if (requestFromOutputPort == SurfacePort && this->Internals->SurfaceStale)
+  {
+    this->Internals->SurfaceStamp.Modified();
+    *mtime = std::max(*mtime, this->Internals->SurfaceStamp.GetMTime());
+  }
+  return result;
 }
 
 //------------------------------------------------------------------------------

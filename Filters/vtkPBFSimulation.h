@@ -327,6 +327,10 @@ protected:
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   // Answers REQUEST_DATA_NOT_GENERATED with the outputs this execution leaves as they are.
   vtkTypeBool ProcessRequest(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  // The surface's port is newer than anything while its consumers hold a stale surface, so that
+  // the next request through it executes this algorithm again.
+  int ComputePipelineMTime(vtkInformation* request, vtkInformationVector** inInfoVec,
+    vtkInformationVector* outInfoVec, int requestFromOutputPort, vtkMTimeType* mtime) override;
   // The particles and diagnostics of the requested frame (ports 0 and 1).
   int RequestFrame(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
   // The domain's outline (port 2), from the simulation just run.

@@ -13,6 +13,7 @@
 #include "vtkPolyData.h"
 #include "vtkSmartPointer.h"
 #include "vtkTable.h"
+#include "vtkTimeStamp.h"
 
 #include "BackendChoice.h"
 #include "Backends.h"
@@ -88,6 +89,10 @@ public:
   int LastFrame = -1;
   // The outputs the current execution makes (ProcessRequest's REQUEST_DATA_NOT_GENERATED).
   vtkPBFPortDemand Demand;
+  // The surface's consumers hold no surface of their frame (vtkPBFPortDemand::LeftStale), and the
+  // stamp that makes them ask again.
+  bool SurfaceStale = false;
+  vtkTimeStamp SurfaceStamp;
   // The outline of the domain last simulated (port 2), kept when a request fails.
   vtkSmartPointer<vtkPolyData> Domain = vtkSmartPointer<vtkPolyData>::New();
   // The run Domain was built for: the tank and the scene's obstacles change only with it.

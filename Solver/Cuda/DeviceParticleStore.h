@@ -208,7 +208,7 @@ public:
     float* moved = nullptr;
     std::uint32_t* list[kMaxParticleLists] = {};
     // Per block of kCompressionBlock: sums, then maxima (with several liquids, per liquid a sum
-    // and a count, then maxima: CudaRuntime.cuh's compressionByLiquid).
+    // and a count, then maxima: CudaStepReductions.cuh's compressionByLiquid).
     double* blockSums = nullptr;
   };
   Pointers p;

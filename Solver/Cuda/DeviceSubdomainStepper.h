@@ -121,99 +121,9 @@ public:
   // (FluidSource.h): no rank holds the whole fluid.
   DeviceSubdomainStepper(distributed::Communicator& communicator, const Parameters& parameters,
     const FluidSource& fluid, std::unique_ptr<Device> device, double skin = 0.02,
-    bool masks = true)
-  try : communicator_(communicator)
-    , parameters_(parameters)
-    , device_(std::move(device))
-  {
-    parameters_.validate();
-    constants_ = makeStepConstants<Real>(parameters_, skin, masks);
-    columns_ = constants_.geometry;
-    lattice_ = calibrateLattice(parameters_);
-    inPlace_ = communicator_.exchangesInPlace();
-    // The masks are rebuilt at every pass: a ghost moves by its owner's corrections, which this
-    // rank learns only with the positions, and a pass runs its border particles before the
-    // interior ones have their max |delta p|. The single-GPU schedule rebuilds at every pass of
-    // the dam break anyway at these sizes (pbf_bench: 5.00 builds per step of 4 iterations), so
-    // the bound buys nothing here. A zero skin makes MaskSchedule::stillValid false at once.
-    constants_.schedule.skin = 0.0;
-    const auto ranks = static_cast<std::size_t>(communicator_.size());
-    out_.resize(ranks);
-    hostFirst_.resize(ranks + 1);
-    hostCounts_.resize(
-      2 * static_cast<std::size_t>(columns_.nx) * subdomain::kCounterCopies);
-    ownerExpected_.resize(ranks + 1);
-    in_.resize(ranks);
-    inSizes_.resize(ranks);
-    sendAt_.resize(ranks);
-    sendSizes_.resize(ranks);
-    receiveAt_.resize(ranks);
-    device_->activate();
-    allocateFixed();
-    setTimeStep(parameters_.timeStep);
-    // The whole initial fluid's count per column (FluidSource::countPerColumn): the balanced cut
-    // follows from the counts on every rank alike, so each keeps its share at once and nothing migrates (a cut
-    // from uniform slabs would first gather most of a dam break on one rank and then move it:
-    // gigabytes at 64M).
-    const GridGeometry<Real> g = columns_;
-    const std::vector<std::uint64_t> perColumn = fluid.countPerColumn(
-      [&](const Vec3d& q) {
-        return static_cast<std::size_t>(subdomain::columnOf(g, Vec3<Real>::from(q)));
-      },
-      static_cast<std::size_t>(g.nx));
-    slabs_ = distributed::Slabs::balanced(perColumn, communicator_.size());
-    uploadSlabs();
-    distributed::together(communicator_, [&] {
-      // Slabs::plannedCapacity: the first evaluation grows nothing.
-      reserve(slabs_.plannedCapacity(perColumn, communicator_.rank()), 0);
-      appendOwned(ownedOf(fluid, true));
-    });
-  }
-  catch (...)
-  {
-    // A rank that cannot hold its share (its device's memory, say) stops every rank.
-    distributed::failTogether(communicator, std::current_exception());
-  }
+    bool masks = true);
 
-  ~DeviceSubdomainStepper() override
-  {
-    try
-    {
-      device_->activate();
-      device_->synchronize();
-    }
-    catch (...)
-    {
-    }
-    releaseParticles();
-    for (void* p : fixed_)
-    {
-      device_->release(p);
-    }
-    if (solids_)
-    {
-      device_->release(solids_);
-    }
-    if (cellOffsets_)
-    {
-      device_->release(cellOffsets_);
-    }
-    for (HostBuffer* b : { &hostPack_, &hostRecv_ })
-    {
-      if (b->data)
-      {
-        device_->releaseHost(b->data);
-      }
-    }
-    if (listCounts_)
-    {
-      device_->releaseHost(listCounts_);
-    }
-    if (setupCounts_)
-    {
-      device_->releaseHost(setupCounts_);
-    }
-  }
+  ~DeviceSubdomainStepper() override;
 
   static const ParticleBatch& checkedBatch(const Parameters& parameters, const ParticleBatch& batch)
   {
@@ -337,27 +247,7 @@ private:
   // non-finite value), 24 bytes back, then reduced over the ranks so that every rank reaches the
   // same verdict (distributed::reduceHealth's rule). nonFinite counts the ranks with one; outside
   // is 0: the collision step keeps finite positions in the box.
-  Health healthAlone() const
-  {
-    device_->activate();
-    auto exec = device_->executor();
-    enqueueHealth(exec, vec_[xBuffer_], vec_[vBuffer_], density_, count(n_),
-      1.0 / parameters_.restDensity, healthBits_);
-    unsigned long long bits[3] = { 0, 0, 0 };
-    device_->download(bits, healthBits_, sizeof bits);
-    device_->synchronize();
-    double mine[3];
-    decodeHealth(bits, mine);
-    Health all;
-    for (const std::vector<double>& r :
-      distributed::allGather(communicator_, { mine[0], mine[1], mine[2] }))
-    {
-      all.maxSpeed = std::max(all.maxSpeed, std::sqrt(r[0]));
-      all.maxDensityError = std::max(all.maxDensityError, r[1]);
-      all.nonFinite += r[2] > 0.0 ? 1 : 0;
-    }
-    return all;
-  }
+  Health healthAlone() const;
 
   void stepAlone()
   {
@@ -369,22 +259,10 @@ private:
   }
 
   // Every rank sets the same dt (Simulation chooses it from reduced maxima).
-  void setTimeStepAlone(double dt)
-  {
-    checkTimeStep(dt);
-    device_->activate();
-    const StepTime<Real> time = StepTime<Real>::make(parameters_, lattice_, dt);
-    device_->upload(deviceTime_, &time, sizeof time);
-    device_->synchronize(); // `time` dies here
-    dt_ = dt;
-  }
+  void setTimeStepAlone(double dt);
 
   // Every rank passes the whole batch; each keeps the particles of its slab.
-  void appendAlone(const ParticleBatch& batch)
-  {
-    checkBatch(parameters_, batch);
-    appendOwned(ownedOf(BatchSource(batch), false));
-  }
+  void appendAlone(const ParticleBatch& batch);
 
   // The particles of this rank's slab, in the stepper's precision, each checked (checkParticle)
   // when `check`: a part of a fluid that no one checked whole.
@@ -394,49 +272,10 @@ private:
     std::vector<std::int64_t> id;
     std::vector<std::uint8_t> liquid; // 0 for a fluid without liquids
   };
-  Owned ownedOf(const FluidSource& fluid, bool check) const
-  {
-    Owned o;
-    const GridGeometry<Real> g = columns_;
-    const int me = communicator_.rank();
-    fluid.forEachOwned(
-      [&](const Vec3d& q) { return slabs_.owner(subdomain::columnOf(g, Vec3<Real>::from(q))); }, me,
-      [&](const Vec3d& x, const Vec3d& v, std::int64_t id, std::uint8_t liquid) {
-        if (check)
-        {
-          checkParticle(parameters_, id, x, v);
-          checkLiquid(parameters_, id, liquid);
-        }
-        o.x.push_back(Vec3<Real>::from(x));
-        o.v.push_back(Vec3<Real>::from(v));
-        o.id.push_back(id);
-        o.liquid.push_back(liquid);
-      });
-    return o;
-  }
+  Owned ownedOf(const FluidSource& fluid, bool check) const;
 
   // Uploads them behind the particles held, then cuts and evaluates density and lambda at rest.
-  void appendOwned(Owned&& o)
-  {
-    device_->activate();
-    const std::size_t n = n_ + o.x.size();
-    reserve(n, n_);
-    if (!o.x.empty())
-    {
-      device_->upload(vec_[xBuffer_] + n_, o.x.data(), o.x.size() * sizeof(Vec3<Real>));
-      device_->upload(vec_[vBuffer_] + n_, o.v.data(), o.v.size() * sizeof(Vec3<Real>));
-      device_->upload(id_ + n_, o.id.data(), o.id.size() * sizeof(std::int64_t));
-      if (liquid_)
-      {
-        device_->upload(liquid_ + n_, o.liquid.data(), o.liquid.size());
-      }
-      device_->synchronize(); // the host vectors die with `o`
-    }
-    o = Owned{};
-    n_ = n;
-    cut(xBuffer_, -1); // evaluateAtRest predicts nothing: p = x
-    evaluateAtRest();
-  }
+  void appendOwned(Owned&& o);
 
   // Which of the four Vec3 buffers hold what during a step.
   struct Roles4
@@ -782,6 +621,7 @@ private:
 } // namespace pbf
 
 // The member functions of each part of the step, by concern.
+#include "DeviceSubdomainSetup.h"
 #include "DeviceSubdomainCut.h"
 #include "DeviceSubdomainGhosts.h"
 #include "DeviceSubdomainExchange.h"

@@ -139,7 +139,11 @@ private:
   std::vector<double> sumOverRanks(const std::vector<double>& mine);
   template <class Stage>
   void forOwned(Stage&& stage);
-  int column(const Vec3<Real>& q) const;
+  // Inline: the exchanges (SubdomainExchange.cpp) ask it of every particle.
+  int column(const Vec3<Real>& q) const
+  {
+    return columns_.clampedCell(q.x, columns_.origin.x, columns_.nx);
+  }
   // The particles of `fluid` in this rank's slab behind those held (each checked when `check`:
   // a part of a fluid that no one checked whole).
   void keepOwn(const FluidSource& fluid, bool check);

@@ -20,7 +20,7 @@
 // The particles carry only part of c's drop from 1 to 0 (the rest lies outside the fluid), so
 // the force is divided by that share on the lattice (LatticeCalibration::surfaceColour).
 //
-// What was measured on the way (Documentation/Validation.md, "Surface tension"): the normals of
+// What was measured on the way (Documentation/ValidationInterfaces.md, "Surface tension"): the normals of
 // the particles themselves read a surface rough on the particles' scale as curved, an extra
 // pressure of order sigma / s that stiffened the drop's skin (its l = 2 period came out 45 % long
 // at 20 spacings per radius); c's Hessian at the particle reads the lattice's ripple, about 1 / s;
@@ -36,7 +36,7 @@
 // from the liquid (youngForce): the line rests where the two balance, at theta' = theta. It is a
 // force per unit length of the line, spread over the surface particles within h of the wall, so
 // theta means the same at any spacing and step. A solid obstacle acts the same way: the nearest
-// one within h is a mirror at its tangent plane (Equations.h's SolidMirror), whose images join the
+// one within h is a mirror at its tangent plane (SolidTerms.h's SolidMirror), whose images join the
 // walls' in the colour, the smoothed normals and the curvature, and whose angle for the
 // particle's liquid (DistanceGridView::contactCos) takes the line where it is nearer than every
 // wall.

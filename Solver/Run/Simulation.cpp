@@ -1,3 +1,6 @@
+// Simulation's construction: the solids, the initial fluid (whole, in parts or in pieces), the
+// checks of the scene against the run's spacing, the stepper, and the limits of the steps and of
+// the divergence check.
 #include "Simulation.h"
 
 #include "MassProperties.h"
@@ -6,16 +9,15 @@
 #include "Backends.h"
 #include "ParticleChecks.h"
 #include "SceneFluid.h"
+#include "SimulationText.h"
 
 #include "Distributed/FluidPieces.h"
 #include "Distributed/SubdomainStepper.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 
 namespace pbf
@@ -23,13 +25,7 @@ namespace pbf
 namespace
 {
 
-std::string number(double value)
-{
-  std::ostringstream out;
-  out.precision(3);
-  out << value;
-  return out.str();
-}
+using simulationtext::number;
 
 bool inside(const Vec3d& lo, const Vec3d& hi, const Box& box, double slack)
 {
@@ -43,6 +39,155 @@ double extentAlong(const Box& box, const Vec3d& u)
 {
   return std::abs(u.x) * (box.max.x - box.min.x) + std::abs(u.y) * (box.max.y - box.min.y) +
     std::abs(u.z) * (box.max.z - box.min.z);
+}
+
+// The fluid at t = 0 as this run holds it: the given particles (whole, or this rank's piece of
+// them), or the scene's regions: whole on one process, and on each rank of a decomposed run only
+// that rank's slab (SceneFluid), so that no rank holds the whole fluid. All leave out what the
+// solids hold at t = 0 (seeded inside, it would be thrown out at once) and number the rest
+// 0..N-1. It stays where it is made: its sources refer to `whole`.
+class InitialFluid
+{
+public:
+  InitialFluid(const Scene& scene, const Parameters& parameters, const ParticleBatch* given,
+    bool givenInPieces, distributed::Communicator* communicator,
+    const std::vector<DistanceGrid>& solids, const std::vector<SolidPose>& poses)
+    : inParts(!given && communicator)
+  {
+    if (given)
+    {
+      whole = solids.empty() ? *given : outsideSolids(*given, solids, poses, insideSolids);
+    }
+    else if (!inParts)
+    {
+      whole = outsideSolids(fillScene(scene, parameters), solids, poses, insideSolids);
+    }
+    if (inParts)
+    {
+      checkSceneSize(scene, parameters);
+      parts.emplace(scene, parameters, solids, poses);
+      insideSolids = parts->insideSolids();
+    }
+    count = parts ? parts->size() : whole.position.size();
+    if (given && givenInPieces)
+    {
+      numberPieces(*communicator);
+    }
+  }
+  InitialFluid(const InitialFluid&) = delete;
+  InitialFluid& operator=(const InitialFluid&) = delete;
+
+  // What the stepper starts from.
+  const FluidSource& source() const
+  {
+    return parts ? static_cast<const FluidSource&>(*parts)
+                 : (pieces ? static_cast<const FluidSource&>(*pieces) : held_);
+  }
+
+  const bool inParts; // the scene's regions, this rank's slab of them
+  ParticleBatch whole; // the particles held, whole or this rank's given piece
+  std::optional<SceneFluid> parts;
+  std::optional<distributed::FluidPieces> pieces;
+  std::size_t count = 0;        // over every rank
+  std::size_t insideSolids = 0; // left out, over every rank
+
+private:
+  void numberPieces(distributed::Communicator& communicator)
+  {
+    // The ids count across the pieces in rank order; the removed are added up.
+    double before = 0, total = 0, removed = 0;
+    const auto counts = distributed::allGather(communicator,
+      { static_cast<double>(whole.position.size()), static_cast<double>(insideSolids) });
+    for (std::size_t r = 0; r < counts.size(); ++r)
+    {
+      before += r < static_cast<std::size_t>(communicator.rank()) ? counts[r][0] : 0.0;
+      total += counts[r][0];
+      removed += counts[r][1];
+    }
+    for (std::size_t i = 0; i < whole.id.size(); ++i)
+    {
+      whole.id[i] = static_cast<std::int64_t>(before) + static_cast<std::int64_t>(i);
+    }
+    count = static_cast<std::size_t>(total);
+    insideSolids = static_cast<std::size_t>(removed);
+    pieces.emplace(whole, communicator);
+  }
+
+  const BatchSource held_{ whole };
+};
+
+// InvalidInput for a run without fluid: no initial particle and no emitter.
+void requireFluid(const Scene& scene, const Parameters& parameters, std::size_t count)
+{
+  if (count == 0 && scene.emitters.empty())
+  {
+    if (!scene.boxes.empty() || !scene.spheres.empty())
+    {
+      throw InvalidInput("particleSpacing = " + number(parameters.particleSpacing) +
+        ": the scene's fluid regions hold no lattice site at this spacing (a box needs sides of at "
+        "least one spacing); lower particleSpacing");
+    }
+    throw InvalidInput("particle count = 0: the fluid is empty");
+  }
+}
+
+// The initial particles' packing (checkPacking); a decomposed run's scene, a lattice by
+// construction, against the walls alone.
+void checkInitialPacking(
+  const Parameters& parameters, const Scene& scene, const InitialFluid& fluid)
+{
+  const std::string where = "the domain of scene \"" + scene.name + "\"";
+  if (fluid.inParts)
+  {
+    checkOffWalls(parameters, fluid.source(), where);
+  }
+  else
+  {
+    checkPacking(parameters, fluid.source(), where);
+  }
+}
+
+// The fastest initial or emitted speed v0: of the regions' velocities where this rank holds a
+// slab of them, of the particles held, of every rank's pieces, and of the emitters.
+double fastestInitialSpeed(const Scene& scene, const InitialFluid& fluid)
+{
+  double v0 = 0.0;
+  if (fluid.inParts)
+  {
+    for (const FluidBox& box : scene.boxes)
+    {
+      v0 = std::max(v0, length(box.velocity));
+    }
+    for (const FluidSphere& sphere : scene.spheres)
+    {
+      v0 = std::max(v0, length(sphere.velocity));
+    }
+  }
+  for (const Vec3d& v : fluid.whole.velocity)
+  {
+    v0 = std::max(v0, length(v)); // a NaN velocity is rejected by the stepper (startStepper)
+  }
+  if (fluid.pieces)
+  {
+    for (const std::vector<double>& part : fluid.pieces->allParts({ v0 }))
+    {
+      v0 = std::max(v0, part[0]);
+    }
+  }
+  for (const Emitter& e : scene.emitters)
+  {
+    v0 = std::max(v0, e.speed);
+  }
+  return v0;
+}
+
+// v_scene = sqrt(v0^2 + 2 |g| L): the speed of a fall across the domain's extent L along gravity
+// from v0 (DivergenceLimits).
+double sceneSpeedOf(const Scene& scene, const Parameters& parameters, double v0)
+{
+  const double g = length(parameters.gravity);
+  const double fall = g > 0 ? extentAlong(scene.domain, parameters.gravity * (1.0 / g)) : 0.0;
+  return std::sqrt(v0 * v0 + 2.0 * g * fall);
 }
 
 } // namespace
@@ -65,10 +210,6 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
 {
 }
 
-// The fluid is the given particles (whole, or this rank's piece of them), or the scene's regions:
-// whole on one process, and on each rank of a decomposed run only that rank's slab (SceneFluid),
-// so that no rank holds the whole fluid. All leave out what the solids hold at t = 0 (seeded
-// inside, it would be thrown out at once) and number the rest 0..N-1.
 Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
   Precision precision, const ParticleBatch* given, bool givenInPieces,
   distributed::Communicator* communicator)
@@ -82,60 +223,27 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   solidReach_ = solidReaches(scene_.solids, motions_);
   makeBodies();
   const std::vector<SolidPose> poses = solidPoses(0.0);
-  const bool inParts = !given && communicator;
-  ParticleBatch whole;
-  if (given)
+  const InitialFluid fluid(scene_, parameters_, given, givenInPieces, communicator, solids, poses);
+  seededInsideSolids_ = fluid.insideSolids;
+  requireFluid(scene_, parameters_, fluid.count);
+  setUpFlows(fluid.source(), fluid.count);
+  checkInitialPacking(parameters_, scene_, fluid);
+  // The scene's speed scale, from the initial velocities and the emitters: the floor of the
+  // automatic step and the scale of XSPH's viscosity (Parameters::sceneSpeedHint).
+  const double v0 = fastestInitialSpeed(scene_, fluid);
+  const double sceneSpeed = sceneSpeedOf(scene_, parameters_, v0);
+  if (parameters_.sceneSpeedHint == 0.0 && std::isfinite(sceneSpeed))
   {
-    whole = solids.empty() ? *given : outsideSolids(*given, solids, poses, seededInsideSolids_);
+    parameters_.sceneSpeedHint = sceneSpeed;
   }
-  else if (!inParts)
-  {
-    whole = outsideSolids(
-      fillScene(scene_, parameters_), solids, poses, seededInsideSolids_);
-  }
-  std::optional<SceneFluid> parts;
-  if (inParts)
-  {
-    checkSceneSize(scene_, parameters_);
-    parts.emplace(scene_, parameters_, solids, poses);
-    seededInsideSolids_ = parts->insideSolids();
-  }
-  std::optional<distributed::FluidPieces> pieces;
-  std::size_t count = parts ? parts->size() : whole.position.size();
-  if (given && givenInPieces)
-  {
-    // The ids count across the pieces in rank order; the removed are added up.
-    double before = 0, total = 0, removed = 0;
-    const auto counts = distributed::allGather(*communicator,
-      { static_cast<double>(whole.position.size()), static_cast<double>(seededInsideSolids_) });
-    for (std::size_t r = 0; r < counts.size(); ++r)
-    {
-      before += r < static_cast<std::size_t>(communicator->rank()) ? counts[r][0] : 0.0;
-      total += counts[r][0];
-      removed += counts[r][1];
-    }
-    for (std::size_t i = 0; i < whole.id.size(); ++i)
-    {
-      whole.id[i] = static_cast<std::int64_t>(before) + static_cast<std::int64_t>(i);
-    }
-    count = static_cast<std::size_t>(total);
-    seededInsideSolids_ = static_cast<std::size_t>(removed);
-    pieces.emplace(whole, *communicator);
-  }
-  const BatchSource held(whole);
-  const FluidSource& initial = parts
-    ? static_cast<const FluidSource&>(*parts)
-    : (pieces ? static_cast<const FluidSource&>(*pieces) : held);
-  if (count == 0 && scene_.emitters.empty())
-  {
-    if (!scene_.boxes.empty() || !scene_.spheres.empty())
-    {
-      throw InvalidInput("particleSpacing = " + number(parameters_.particleSpacing) +
-        ": the scene's fluid regions hold no lattice site at this spacing (a box needs sides of at "
-        "least one spacing); lower particleSpacing");
-    }
-    throw InvalidInput("particle count = 0: the fluid is empty");
-  }
+  startStepper(backend, precision, communicator, fluid.source(), fluid.whole, solids, poses);
+  nextId_ = static_cast<std::int64_t>(fluid.count);
+  setLimits(backend, sceneSpeed, v0);
+  emit();
+}
+
+void Simulation::setUpFlows(const FluidSource& initial, std::size_t count)
+{
   // An inflow's rate becomes the speed that releases it as whole layers at this spacing.
   for (Emitter& e : scene_.emitters)
   {
@@ -144,51 +252,12 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   checkEmitters(count);
   outflowZones_ = pbf::outflowZones(scene_, parameters_);
   checkOutflows(initial, count);
-  const std::string where = "the domain of scene \"" + scene_.name + "\"";
-  if (inParts)
-  {
-    checkOffWalls(parameters_, initial, where);
-  }
-  else
-  {
-    checkPacking(parameters_, initial, where);
-  }
-  // The scene's speed scale, from the initial velocities and the emitters: the floor of the
-  // automatic step and the scale of XSPH's viscosity (Parameters::sceneSpeedHint).
-  double v0 = 0.0;
-  if (inParts)
-  {
-    for (const FluidBox& box : scene_.boxes)
-    {
-      v0 = std::max(v0, length(box.velocity));
-    }
-    for (const FluidSphere& sphere : scene_.spheres)
-    {
-      v0 = std::max(v0, length(sphere.velocity));
-    }
-  }
-  for (const Vec3d& v : whole.velocity)
-  {
-    v0 = std::max(v0, length(v)); // a NaN velocity is rejected by the stepper below
-  }
-  if (pieces)
-  {
-    for (const std::vector<double>& part : pieces->allParts({ v0 }))
-    {
-      v0 = std::max(v0, part[0]);
-    }
-  }
-  for (const Emitter& e : scene_.emitters)
-  {
-    v0 = std::max(v0, e.speed);
-  }
-  const double g = length(parameters_.gravity);
-  const double fall = g > 0 ? extentAlong(scene_.domain, parameters_.gravity * (1.0 / g)) : 0.0;
-  const double sceneSpeed = std::sqrt(v0 * v0 + 2.0 * g * fall);
-  if (parameters_.sceneSpeedHint == 0.0 && std::isfinite(sceneSpeed))
-  {
-    parameters_.sceneSpeedHint = sceneSpeed;
-  }
+}
+
+void Simulation::startStepper(Backend backend, Precision precision,
+  distributed::Communicator* communicator, const FluidSource& initial, const ParticleBatch& whole,
+  const std::vector<DistanceGrid>& solids, const std::vector<SolidPose>& poses)
+{
   stepper_ = communicator
     ? distributed::makeSubdomainStepper(*communicator, backend, precision, parameters_, initial)
     : makeStepper(backend, precision, parameters_, whole);
@@ -202,9 +271,11 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
     solidCentres_.push_back(solidCentre(solid));
   }
   checkBodiesStartApart();
-  nextId_ = static_cast<std::int64_t>(count);
+}
 
-  // The divergence limits, from the initial state and the scene.
+// The divergence limits, from the initial state and the scene.
+void Simulation::setLimits(Backend backend, double sceneSpeed, double v0)
+{
   const bool automatic = parameters_.timeStepping == TimeStepping::Automatic;
   checkInterval_ = backend == Backend::CUDA && !automatic ? 0 : 1;
   const LatticeCalibration lattice = calibrateLattice(parameters_);
@@ -225,7 +296,6 @@ Simulation::Simulation(const Scene& scene, const Parameters& parameters, Backend
   {
     checkAutomaticStep(sceneSpeed, v0);
   }
-  emit();
 }
 
 // The capillary waves' bound (Brackbill et al. 1992): a wave of the spacing's length travels a
@@ -361,423 +431,6 @@ void Simulation::checkOutflows(const FluidSource& initial, std::size_t count) co
   }
   throw InvalidInput("scene " + which + " covers all " + std::to_string(inside) +
     " particles of the fluid and no emitter adds any: the first step would remove them all");
-}
-
-void Simulation::checkDivergence()
-{
-  const Health health = stepper_->health();
-  health_ = health;
-  healthValid_ = true;
-  std::vector<std::string> found;
-  const auto which = [&](std::size_t count, const std::string& what) {
-    std::string text = std::to_string(count) + (count == 1 ? " particle " : " particles ") + what;
-    if (health.firstBadId >= 0)
-    {
-      text += " (particle id " + std::to_string(health.firstBadId) + " among them)";
-    }
-    found.push_back(text);
-  };
-  if (health.nonFinite > 0)
-  {
-    which(health.nonFinite, "with a non-finite position or velocity");
-  }
-  if (health.outside > 0)
-  {
-    which(health.outside, "farther than one spacing outside the domain");
-  }
-  if (health.maxSpeed > limits_.maxSpeed)
-  {
-    found.push_back("the fastest particle moves at " + number(health.maxSpeed) +
-      " m/s, beyond the limit of " + number(limits_.maxSpeed) +
-      " m/s (20 x the scene's speed sqrt(v0^2 + 2 |g| L) = " + number(limits_.sceneSpeed) +
-      " m/s, or 2 h / dt)");
-  }
-  if (health.maxDensityError > limits_.maxDensityError)
-  {
-    found.push_back("the densest particle reads " +
-      number((1.0 + health.maxDensityError) * parameters_.restDensity) + " kg/m^3, " +
-      number(1.0 + health.maxDensityError) + " x restDensity (the limit is " +
-      number(1.0 + limits_.maxDensityError) + " x): particles are piling up");
-  }
-  if (found.empty())
-  {
-    lastGoodStep_ = steps_;
-    lastGoodSpeed_ = health.maxSpeed;
-    return;
-  }
-  std::string text;
-  for (const std::string& f : found)
-  {
-    text += (text.empty() ? "" : "; ") + f;
-  }
-  const std::string cause = likelyCause();
-  throw SimulationDiverged("simulation diverged at step " + std::to_string(steps_) + " (t = " +
-      number(time()) + " s; last good check at step " + std::to_string(lastGoodStep_) + "): " +
-      text + ". Likely cause: " + cause,
-    steps_, time(), lastGoodStep_, cause);
-}
-
-// Rules of thumb, from runs that blew up (dam break at s = 0.05 m): dt = 0.05 s (12 x the
-// default); gravity 1e4 m/s^2; one iteration at dt = 1/60 s; Unilateral off. A tiny relaxation
-// alone did not blow up, but it removes the damping the others need.
-std::string Simulation::likelyCause() const
-{
-  const Parameters& p = parameters_;
-  const double h = p.smoothingLength();
-  const double dt = stepper_->timeStep();
-  const double cfl = lastGoodSpeed_ * dt / h;
-  const double fall = length(p.gravity) * dt * dt / p.particleSpacing;
-  std::vector<std::string> causes;
-  if (!p.unilateral)
-  {
-    causes.push_back("Unilateral is off: C_i < 0 at the free surface pulls particles together; "
-                     "turn it on");
-  }
-  if (cfl > 1.0 || fall > 0.1)
-  {
-    std::string why;
-    if (cfl > 1.0)
-    {
-      why = "at the last good check (step " + std::to_string(lastGoodStep_) +
-        ") the fastest particle moved " + number(cfl) +
-        " smoothing lengths in a step (CFL dt v_max / h; PBF needs well under 1)";
-    }
-    if (fall > 0.1)
-    {
-      why += (why.empty() ? "" : ", and ") + std::string("gravity alone moves a particle ") +
-        number(fall) + " spacings per step (|g| dt^2 / s)";
-    }
-    causes.push_back("the time step dt = " + number(dt) + " s is too large: " + why +
-      (p.timeStepping == TimeStepping::Fixed
-          ? "; lower timeStep (more substeps per frame) or use automatic time stepping"
-          : "; lower cflNumber or the largest time step"));
-  }
-  if (p.solverIterations < 3)
-  {
-    causes.push_back("too few solver iterations (solverIterations = " +
-      std::to_string(p.solverIterations) +
-      "): the density constraint is not enforced; raise it (paper: 2-4, default 4)");
-  }
-  if (p.relaxation < 1e-3)
-  {
-    causes.push_back("the relaxation epsilon = " + number(p.relaxation) +
-      " is too small: lambda is left undamped where neighbours are few; raise relaxation "
-      "(default 0.01)");
-  }
-  if (causes.empty())
-  {
-    causes.push_back("no parameter stands out: lower timeStep first, then check the initial "
-                     "velocities, gravity and emitters against the spacing");
-  }
-  std::string text;
-  for (const std::string& c : causes)
-  {
-    text += (text.empty() ? "" : "; ") + c;
-  }
-  return text;
-}
-
-void AdvanceReport::add(const AdvanceReport& more)
-{
-  if (more.steps == 0)
-  {
-    return;
-  }
-  minTimeStep = steps == 0 ? more.minTimeStep : std::min(minTimeStep, more.minTimeStep);
-  maxTimeStep = std::max(maxTimeStep, more.maxTimeStep);
-  steps += more.steps;
-  iterations += more.iterations;
-  removed += more.removed;
-  densityError = more.densityError;
-  milliseconds += more.milliseconds;
-  seconds += more.seconds;
-  impulses.resize(std::max(impulses.size(), more.impulses.size()));
-  for (std::size_t k = 0; k < more.impulses.size(); ++k)
-  {
-    impulses[k].force += more.impulses[k].force;
-    impulses[k].torque += more.impulses[k].torque;
-  }
-}
-
-double Simulation::nextTimeStep() const
-{
-  const Parameters& p = parameters_;
-  if (p.timeStepping == TimeStepping::Fixed)
-  {
-    return p.timeStep;
-  }
-  const double s = p.particleSpacing;
-  const double v = std::max(
-    { healthValid_ ? health_.maxSpeed : 0.0, limits_.sceneSpeed, fastestSolidPoint() });
-  double dt = std::min({ p.timeStep, xsphStepLimit_, capillaryStepLimit_ });
-  if (v > 0)
-  {
-    dt = std::min(dt, p.cflNumber * s / v);
-  }
-  const double g = length(p.gravity);
-  if (g > 0)
-  {
-    dt = std::min(dt, p.cflNumber * std::sqrt(s / g));
-  }
-  return dt;
-}
-
-double Simulation::checkedTimeStep() const
-{
-  const double dt = nextTimeStep();
-  // A largest step below the bound is the caller's own choice (validatePrecision checked it).
-  if (!(dt >= std::min(kSmallestTimeStep, parameters_.timeStep)))
-  {
-    const std::string cause = "a particle moves at " + number(health_.maxSpeed) +
-      " m/s; lower the initial speeds or gravity";
-    throw SimulationDiverged("simulation diverged at step " + std::to_string(steps_) + " (t = " +
-        number(time()) + " s): the automatic time step fell to " + number(dt) + " s, below " +
-        number(kSmallestTimeStep) + " s. Likely cause: " + cause,
-      steps_, time(), lastGoodStep_, cause);
-  }
-  return dt;
-}
-
-void Simulation::stepOnce(double dt, double end, AdvanceReport& report)
-{
-  if (dt != stepper_->timeStep())
-  {
-    stepper_->setTimeStep(dt);
-  }
-  moveBodies(dt, end);
-  // The constraints hold at the step's end, with the solids where they are then.
-  const std::vector<SolidPose> poses = solidPoses(end);
-  if (!poses.empty())
-  {
-    stepper_->setObstaclePoses(poses);
-  }
-  stepper_->step();
-  ++steps_;
-  healthValid_ = false;
-  const StepReport step = stepper_->lastStep();
-  report.iterations += step.iterations;
-  report.densityError = step.densityError;
-  report.minTimeStep = report.steps == 0 ? dt : std::min(report.minTimeStep, dt);
-  report.maxTimeStep = std::max(report.maxTimeStep, dt);
-  report.seconds += dt;
-  ++report.steps;
-  addLoads(step.loads, poses, dt, report);
-  if (!outflowZones_.empty())
-  {
-    const std::size_t gone = stepper_->removeOutflow(outflowZones_);
-    removed_ += gone;
-    report.removed += gone;
-  }
-}
-
-AdvanceReport Simulation::advance(std::uint64_t steps)
-{
-  AdvanceReport report;
-  const auto start = std::chrono::steady_clock::now();
-  const bool automatic = parameters_.timeStepping == TimeStepping::Automatic;
-  for (std::uint64_t k = 0; k < steps; ++k)
-  {
-    if (automatic && !healthValid_)
-    {
-      checkDivergence(); // the fastest particle, and the check for free
-    }
-    const double dt = checkedTimeStep();
-    stepOnce(dt, time_ + dt, report);
-    time_ += dt;
-    if (automatic || (checkInterval_ > 0 && steps_ % checkInterval_ == 0))
-    {
-      checkDivergence();
-    }
-    emit();
-  }
-  stepper_->synchronize();
-  report.milliseconds =
-    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  return report;
-}
-
-bool Simulation::stepToward(double until, AdvanceReport& report)
-{
-  if (!(time_ < until))
-  {
-    return true;
-  }
-  const auto start = std::chrono::steady_clock::now();
-  const bool automatic = parameters_.timeStepping == TimeStepping::Automatic;
-  if (automatic && !healthValid_)
-  {
-    checkDivergence();
-  }
-  // A whole number of steps of at most nextTimeStep() to `until`; the relative slack keeps a
-  // remaining time that is a multiple of a fixed step in rounding from costing one more step.
-  const double remaining = until - time_;
-  const double largest = checkedTimeStep();
-  const double count = std::max(1.0, std::ceil(remaining / largest * (1.0 - 1e-9)));
-  const bool fixedFits = !automatic && count * largest <= remaining * (1.0 + 1e-9);
-  // Fixed steps stay exactly timeStep; only a remainder that is no multiple of it is shortened.
-  const double dt = fixedFits || count == 1.0 ? (count == 1.0 ? remaining : largest)
-                                              : remaining / count;
-  const bool landed = count == 1.0;
-  stepOnce(dt, landed ? until : time_ + dt, report);
-  time_ = landed ? until : time_ + dt;
-  if (automatic || landed || (checkInterval_ > 0 && steps_ % checkInterval_ == 0))
-  {
-    checkDivergence();
-  }
-  emit();
-  report.milliseconds +=
-    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  return landed;
-}
-
-AdvanceReport Simulation::advanceTo(double until)
-{
-  AdvanceReport report;
-  while (!stepToward(until, report))
-  {
-  }
-  stepper_->synchronize();
-  return report;
-}
-
-std::size_t SimulationCheckpoint::bytes() const
-{
-  return std::visit(
-    [this](const auto& s) {
-      return s.position.size() * sizeof(s.position[0]) + s.velocity.size() * sizeof(s.velocity[0]) +
-        s.density.size() * sizeof(s.density[0]) + s.lambda.size() * sizeof(s.lambda[0]) +
-        s.pressure.size() * sizeof(s.pressure[0]) +
-        s.id.size() * sizeof(s.id[0]) + s.liquid.size() + layersEmitted.size() * sizeof(std::int64_t) +
-        bodyStates.size() * sizeof(RigidState) + bodyLoads.size() * sizeof(SolidLoad);
-    },
-    state);
-}
-
-SimulationCheckpoint Simulation::checkpoint() const
-{
-  SimulationCheckpoint c;
-  c.steps = steps_;
-  c.time = time_;
-  c.nextId = nextId_;
-  c.removed = removed_;
-  c.layersEmitted = layersEmitted_;
-  for (const Body& body : bodies_)
-  {
-    c.bodyStates.push_back(body.state);
-    c.bodyLoads.push_back(body.load);
-  }
-  if (stepper_->precision() == Precision::Single)
-  {
-    Snapshot<float> s;
-    stepper_->read(s);
-    c.state = std::move(s);
-  }
-  else
-  {
-    Snapshot<double> s;
-    stepper_->read(s);
-    c.state = std::move(s);
-  }
-  return c;
-}
-
-void Simulation::restore(const SimulationCheckpoint& c)
-{
-  if (c.layersEmitted.size() != layersEmitted_.size())
-  {
-    throw InvalidInput("checkpoint emitters = " + std::to_string(c.layersEmitted.size()) +
-      ": the scene has " + std::to_string(layersEmitted_.size()));
-  }
-  if (c.bodyStates.size() != bodies_.size())
-  {
-    throw InvalidInput("checkpoint bodies = " + std::to_string(c.bodyStates.size()) +
-      ": the scene has " + std::to_string(bodies_.size()));
-  }
-  for (std::size_t k = 0; k < bodies_.size(); ++k)
-  {
-    bodies_[k].state = c.bodyStates[k];
-    bodies_[k].load = c.bodyLoads[k];
-  }
-  if (!bodies_.empty())
-  {
-    stepper_->setObstaclePoses(solidPoses(c.time));
-  }
-  std::visit([this](const auto& s) { stepper_->load(s); }, c.state);
-  steps_ = c.steps;
-  time_ = c.time;
-  nextId_ = c.nextId;
-  removed_ = c.removed;
-  layersEmitted_ = c.layersEmitted;
-  lastGoodStep_ = steps_;
-  // The next automatic step needs the fastest particle, which a fresh scan gives exactly as the
-  // straight run had it (the scan reads only the restored state).
-  healthValid_ = false;
-  if (checkInterval_ > 0 || parameters_.timeStepping == TimeStepping::Automatic)
-  {
-    health_ = stepper_->health();
-    healthValid_ = true;
-    lastGoodSpeed_ = health_.maxSpeed;
-  }
-  else
-  {
-    lastGoodSpeed_ = std::numeric_limits<double>::quiet_NaN();
-  }
-}
-
-// Each emitter releases one disk of lattice sites every s / speed seconds. A layer released
-// between steps is advanced along the jet by the time it has already travelled, so layers stay
-// one spacing apart whatever the time step.
-void Simulation::emit()
-{
-  const double s = parameters_.particleSpacing;
-  const double t = time();
-  ParticleBatch batch;
-  for (std::size_t e = 0; e < scene_.emitters.size(); ++e)
-  {
-    const Emitter& emitter = scene_.emitters[e];
-    if (t < emitter.start)
-    {
-      continue;
-    }
-    const double interval = s / emitter.speed;
-    const double until = std::min(t, emitter.stop - 1e-12);
-    const auto due = static_cast<std::int64_t>(std::floor((until - emitter.start) / interval)) + 1;
-    // Two unit vectors across the jet.
-    const Vec3d d = emitter.direction;
-    const Vec3d helper = std::abs(d.x) < 0.9 ? Vec3d{ 1, 0, 0 } : Vec3d{ 0, 1, 0 };
-    Vec3d u = cross(d, helper);
-    u *= 1.0 / length(u);
-    const Vec3d w = cross(d, u);
-    const long n = static_cast<long>(std::floor(emitter.radius / s));
-    for (; layersEmitted_[e] < due; ++layersEmitted_[e])
-    {
-      const double released = emitter.start + static_cast<double>(layersEmitted_[e]) * interval;
-      const Vec3d origin = emitter.center + d * (emitter.speed * (t - released));
-      for (long a = -n; a <= n; ++a)
-      {
-        for (long b = -n; b <= n; ++b)
-        {
-          if ((a * a + b * b) * s * s <= emitter.radius * emitter.radius)
-          {
-            batch.position.push_back(origin + u * (s * a) + w * (s * b));
-            batch.velocity.push_back(d * emitter.speed);
-            batch.id.push_back(nextId_++);
-            if (!scene_.liquids.empty())
-            {
-              batch.liquid.push_back(static_cast<std::uint8_t>(emitter.liquid));
-            }
-          }
-        }
-      }
-    }
-  }
-  if (!batch.position.empty())
-  {
-    stepper_->append(batch);
-    // The new particles (and the densities evaluated again at rest) are not in the last scan; a
-    // run resumed from a checkpoint taken now scans them too, so the straight run does the same.
-    healthValid_ = false;
-  }
 }
 
 } // namespace pbf

@@ -255,6 +255,15 @@ private:
   Simulation(const Scene& scene, const Parameters& parameters, Backend backend,
     Precision precision, const ParticleBatch* given, bool givenInPieces,
     distributed::Communicator* communicator);
+  // The constructor's steps after the initial fluid, in their order: the emitters' speeds at the
+  // spacing and the outflow zones, checked against the fluid (`count` particles over every
+  // rank); the stepper on it (`whole`: the particles this process holds), with the solids where
+  // they stand at t = 0; the limits of the steps and of the divergence check.
+  void setUpFlows(const FluidSource& initial, std::size_t count);
+  void startStepper(Backend backend, Precision precision, distributed::Communicator* communicator,
+    const FluidSource& initial, const ParticleBatch& whole,
+    const std::vector<DistanceGrid>& solids, const std::vector<SolidPose>& poses);
+  void setLimits(Backend backend, double sceneSpeed, double v0);
   // Throws InvalidInput when the scene's speed, gravity or XSPH force an automatic step below
   // the smallest one (the constructor's check).
   void checkAutomaticStep(double sceneSpeed, double v0) const;

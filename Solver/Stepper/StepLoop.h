@@ -20,7 +20,7 @@
 //                             density pass; with mayStop, a compression within the tolerance ends
 //                             the solve: nothing more of this projection or a later one runs
 //   sumLoads(p)               what the fluid pushes each solid with in projection p (the solid's
-//                             share of delta p, Equations.h's solidLoads), added to the step's
+//                             share of delta p, SolidTerms.h's solidLoads), added to the step's
 //                             loads; nothing once the solve has stopped
 //   correct(p)                lines 12-18: delta p (eq. 12 with s_corr when p.tensile) and the
 //                             Jacobi update, blended when p.accelerate; a Loop may also run line 21

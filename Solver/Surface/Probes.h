@@ -36,7 +36,7 @@ public:
 
   // The pressure on the solids' surfaces [Pa], one value per point appended to `out`: points[k]
   // lies on solid solidOf[k] (an index into solids.views, where the solids stand now; -1: on
-  // none, 0). It is what the boundary model pushes the solid with (Equations.h's solidLoads),
+  // none, 0). It is what the boundary model pushes the solid with (SolidTerms.h's solidLoads),
   // spread over its surface: particle i presses solid o along its normal with
   // F_i = (m / rho_0)^2 2 b_spiky(d_i) p_i / G (the step's load written with the particle's
   // pressure, recordPressure; s_corr's small push aside), d_i its distance to the solid, and

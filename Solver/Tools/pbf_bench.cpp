@@ -126,11 +126,122 @@ SolidMotion setBenchmarkSolid(Stepper& stepperRef, const Parameters& parameters,
   return rolling;
 }
 
-Result benchmark(const ToolOptions& options, double particles, int warmup, int steps,
-  const std::string& neighbors, double skin, bool graphs, int block, int solid, int liquids)
+// The widened dam break's settings from the command line, each checked as it is read.
+struct BenchSettings
 {
+  std::vector<double> counts; // particle counts, one run each
+  int steps = 0;
+  int warmup = 0;
+  std::string neighbors; // CUDA: masks | walk
+  double skin = 0;
+  bool graphs = true;
+  int block = 0;
+  int solid = 0;      // setBenchmarkSolid
+  double outflowY = 0; // > 0: an outflow strip at this height (bodiesBenchmark)
+  int bodies = -1;    // >= 0: through Simulation with this many bodies (bodiesBenchmark)
+  int liquids = 1;
+};
+
+// The stepper a run times, and the same stepper where it runs on the GPU (its events time it).
+struct TimedStepper
+{
+  std::unique_ptr<Stepper> stepper;
+#ifdef PBF_WITH_CUDA
+  cuda::CudaStepperInterface* gpu = nullptr;
+#endif
+};
+
+// The stepper on the batch: for CUDA with the settings' neighbour search, skin, graphs and block
+// (recorded in the result), otherwise the backend's own (its neighbours "walk").
+TimedStepper makeTimedStepper(const ToolOptions& options, const Parameters& parameters,
+  const ParticleBatch& batch, const BenchSettings& settings, Result& r)
+{
+  TimedStepper timed;
+#ifdef PBF_WITH_CUDA
+  if (options.backend == Backend::CUDA)
+  {
+    cuda::Options o;
+    o.search = settings.neighbors == "walk" ? cuda::NeighborSearch::CellWalk
+                                            : cuda::NeighborSearch::RowMasks;
+    o.skin = settings.skin;
+    o.graphs = settings.graphs;
+    o.block = settings.block;
+    auto made = cuda::makeCudaStepper(options.precision, parameters, batch, o);
+    timed.gpu = made.get();
+    timed.stepper = std::move(made);
+    r.neighbors = settings.neighbors;
+    r.skin = settings.skin;
+    r.graphs = settings.graphs;
+    r.block = settings.block;
+  }
+  else
+#else
+  (void)settings;
+#endif
+  {
+    timed.stepper = makeStepper(options.backend, options.precision, parameters, batch);
+    r.neighbors = "walk";
+  }
+  return timed;
+}
+
+#ifdef PBF_WITH_CUDA
+// The timed steps on the GPU after the warm-up: CUDA events on the stepper's stream, one before
+// the first and one after each step. The setup time ends when the warm-up's work is done.
+template <class Place>
+std::vector<double> timeGpuSteps(cuda::CudaStepperInterface& gpu, int warmup, int steps,
+  Place&& place, std::chrono::steady_clock::time_point setup0, Result& r)
+{
+  gpu.synchronize();
+  r.setupSeconds =
+    std::chrono::duration<double>(std::chrono::steady_clock::now() - setup0).count();
+  const std::uint64_t builds0 = gpu.diagnostics().maskBuilds;
+  cuda::EventTimer timer(static_cast<std::size_t>(steps) + 1);
+  timer.mark(gpu);
+  for (int s = 0; s < steps; ++s)
+  {
+    place(warmup + s);
+    gpu.step();
+    timer.mark(gpu);
+  }
+  std::vector<double> ms = timer.intervalsMs();
+  const cuda::Diagnostics d = gpu.diagnostics();
+  r.bytesPerParticle = d.bytesPerParticle;
+  r.deviceBytes = d.deviceBytes;
+  // In builds of every particle's masks: 1 is the least a step does.
+  r.maskBuildsPerStep = steps > 0 && r.particles > 0
+    ? double(d.maskBuilds - builds0) / steps / double(r.particles)
+    : 0.0;
+  return ms;
+}
+#endif
+
+// The timed steps on the CPU after the warm-up, each on the host's steady clock.
+template <class Place>
+std::vector<double> timeHostSteps(Stepper& stepper, int warmup, int steps, Place&& place,
+  std::chrono::steady_clock::time_point setup0, Result& r)
+{
+  r.setupSeconds =
+    std::chrono::duration<double>(std::chrono::steady_clock::now() - setup0).count();
+  std::vector<double> ms;
+  for (int s = 0; s < steps; ++s)
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    place(warmup + s);
+    stepper.step();
+    const auto t1 = std::chrono::steady_clock::now();
+    ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+  }
+  return ms;
+}
+
+Result benchmark(const ToolOptions& options, double particles, const BenchSettings& settings)
+{
+  const int warmup = settings.warmup;
+  const int steps = settings.steps;
+  const int solid = settings.solid;
   Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
-  if (liquids == 2)
+  if (settings.liquids == 2)
   {
     splitIntoTwoLiquids(scene);
   }
@@ -144,32 +255,9 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
   r.iterations = parameters.solverIterations;
   r.particles = batch.position.size();
   r.steps = steps;
-  std::vector<double> ms;
 
-  std::unique_ptr<Stepper> stepper;
-#ifdef PBF_WITH_CUDA
-  cuda::CudaStepperInterface* gpu = nullptr;
-  if (options.backend == Backend::CUDA)
-  {
-    cuda::Options o;
-    o.search = neighbors == "walk" ? cuda::NeighborSearch::CellWalk : cuda::NeighborSearch::RowMasks;
-    o.skin = skin;
-    o.graphs = graphs;
-    o.block = block;
-    auto made = cuda::makeCudaStepper(options.precision, parameters, batch, o);
-    gpu = made.get();
-    stepper = std::move(made);
-    r.neighbors = neighbors;
-    r.skin = skin;
-    r.graphs = graphs;
-    r.block = block;
-  }
-  else
-#endif
-  {
-    stepper = makeStepper(options.backend, options.precision, parameters, batch);
-    r.neighbors = "walk";
-  }
+  TimedStepper timed = makeTimedStepper(options, parameters, batch, settings, r);
+  std::unique_ptr<Stepper>& stepper = timed.stepper;
   batch = ParticleBatch{}; // the host copy is not needed any more
   r.device = stepper->description();
   // Solid 3: where the rolling sphere is at the end of step s (its pose uploaded before each
@@ -187,43 +275,16 @@ Result benchmark(const ToolOptions& options, double particles, int warmup, int s
     place(s);
     stepper->step();
   }
+  std::vector<double> ms;
 #ifdef PBF_WITH_CUDA
-  if (gpu)
+  if (timed.gpu)
   {
-    gpu->synchronize();
-    r.setupSeconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - setup0).count();
-    const std::uint64_t builds0 = gpu->diagnostics().maskBuilds;
-    cuda::EventTimer timer(static_cast<std::size_t>(steps) + 1);
-    timer.mark(*gpu);
-    for (int s = 0; s < steps; ++s)
-    {
-      place(warmup + s);
-      gpu->step();
-      timer.mark(*gpu);
-    }
-    ms = timer.intervalsMs();
-    const cuda::Diagnostics d = gpu->diagnostics();
-    r.bytesPerParticle = d.bytesPerParticle;
-    r.deviceBytes = d.deviceBytes;
-    // In builds of every particle's masks: 1 is the least a step does.
-    r.maskBuildsPerStep = steps > 0 && r.particles > 0
-      ? double(d.maskBuilds - builds0) / steps / double(r.particles)
-      : 0.0;
+    ms = timeGpuSteps(*timed.gpu, warmup, steps, place, setup0, r);
   }
   else
 #endif
   {
-    r.setupSeconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - setup0).count();
-    for (int s = 0; s < steps; ++s)
-    {
-      const auto t0 = std::chrono::steady_clock::now();
-      place(warmup + s);
-      stepper->step();
-      const auto t1 = std::chrono::steady_clock::now();
-      ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
-    }
+    ms = timeHostSteps(*stepper, warmup, steps, place, setup0, r);
   }
   summarize(ms, *stepper, r);
   return r;
@@ -404,9 +465,13 @@ int runRefinedTable(const ToolOptions& options)
   return printRefinedTable(runs, settings.frameInterval) ? 0 : 1;
 }
 
-int main(int argc, char** argv)
+namespace
 {
-  const std::map<std::string, std::string> keys = {
+
+// The tool's own keys, beside the Parameters fields and --backend, --precision, --scene.
+std::map<std::string, std::string> benchKeys()
+{
+  return {
     { "particles", "particle count of the scaled dam break (default 1e6)" },
     { "sweep", "comma-separated particle counts, or \"default\" (16k to 16M)" },
     { "steps", "timed steps per run (default 100)" },
@@ -431,6 +496,88 @@ int main(int argc, char** argv)
     { "solid", "1: a sphere solid in the surge's way, 2: the MARIN box, 3: the sphere rolling "
                "at 1 m/s (what a solid costs; default 0: none)" },
   };
+}
+
+BenchSettings benchSettings(ToolOptions& options)
+{
+  auto extra = [&](const std::string& key, const std::string& fallback) {
+    return options.extra.count(key) ? options.extra[key] : fallback;
+  };
+  BenchSettings b;
+  b.counts = options.extra.count("sweep")
+    ? parseCounts(options.extra["sweep"])
+    : parseCounts(extra("particles", "1000000"));
+  b.steps = std::stoi(extra("steps", "100"));
+  b.warmup = std::stoi(extra("warmup", "20"));
+  b.neighbors = extra("neighbors", "masks");
+  if (b.neighbors != "masks" && b.neighbors != "walk")
+  {
+    throw InvalidInput("--neighbors = \"" + b.neighbors + "\": must be masks or walk");
+  }
+#ifdef PBF_WITH_CUDA
+  const double defaultSkin = cuda::Options{}.skin; // the stepper's own default, not a copy
+#else
+  const double defaultSkin = 0; // no CUDA stepper to use it
+#endif
+  b.skin = options.extra.count("skin") ? std::stod(options.extra["skin"]) : defaultSkin;
+  b.graphs = extra("graphs", "1") != "0";
+  b.block = std::stoi(extra("block", "128"));
+  const std::string solid = extra("solid", "0");
+  if (solid != "0" && solid != "1" && solid != "2" && solid != "3")
+  {
+    throw InvalidInput("--solid = " + solid + ": must be 0 (none), 1 (a sphere), 2 (a box) or 3 (a rolling sphere)");
+  }
+  if (b.steps < 1 || b.warmup < 0)
+  {
+    throw InvalidInput("--steps must be >= 1 and --warmup >= 0");
+  }
+  b.outflowY = std::stod(extra("outflow", "0"));
+  if (options.extra.count("outflow") && !(b.outflowY > 0))
+  {
+    throw InvalidInput("--outflow = " + options.extra["outflow"] + ": must be a height > 0 [m]");
+  }
+  b.bodies = std::stoi(extra("bodies", b.outflowY > 0 ? "0" : "-1"));
+  if (options.extra.count("bodies") && (b.bodies < 0 || solid != "0"))
+  {
+    throw InvalidInput("--bodies = " + options.extra["bodies"] +
+      ": must be a count >= 0, and not with --solid");
+  }
+
+  b.liquids = std::stoi(extra("liquids", "1"));
+  if (b.liquids != 1 && b.liquids != 2)
+  {
+    throw InvalidInput("--liquids = " + options.extra["liquids"] + ": must be 1 or 2");
+  }
+  b.solid = std::stoi(solid);
+  return b;
+}
+
+void printHeader(const ToolOptions& options, const BenchSettings& settings)
+{
+  std::printf("pbf_bench: dam break widened to N particles, %d warm-up + %d timed steps; %s\n",
+    settings.warmup, settings.steps, describe(options.parameters).c_str());
+  std::printf("%-7s %-6s %-5s %10s %6s %10s %10s %10s %9s %7s %8s %8s %7s %6s\n", "backend",
+    "prec", "nbrs", "particles", "steps", "median_ms", "p10_ms", "p90_ms", "steps/s",
+    "nbrs", "avgErr%", "maxErr%", "B/part", "builds");
+  std::fflush(stdout);
+}
+
+// --json FILE: the runs, with --label's text.
+void writeJson(ToolOptions& options, const std::vector<Result>& results)
+{
+  std::ofstream out(options.extra["json"]);
+  out << toJson(results, options.extra.count("label") ? options.extra["label"] : "");
+  if (!out)
+  {
+    throw std::runtime_error("cannot write " + options.extra["json"]);
+  }
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+  const std::map<std::string, std::string> keys = benchKeys();
   try
   {
     ToolOptions options = parseToolOptions(argc, argv, keys);
@@ -441,67 +588,15 @@ int main(int argc, char** argv)
       return runRefinedTable(options);
     }
     usePaperIterationsUnlessGiven(options);
-    auto extra = [&](const std::string& key, const std::string& fallback) {
-      return options.extra.count(key) ? options.extra[key] : fallback;
-    };
-    const std::vector<double> counts = options.extra.count("sweep")
-      ? parseCounts(options.extra["sweep"])
-      : parseCounts(extra("particles", "1000000"));
-    const int steps = std::stoi(extra("steps", "100"));
-    const int warmup = std::stoi(extra("warmup", "20"));
-    const std::string neighbors = extra("neighbors", "masks");
-    if (neighbors != "masks" && neighbors != "walk")
-    {
-      throw InvalidInput("--neighbors = \"" + neighbors + "\": must be masks or walk");
-    }
-#ifdef PBF_WITH_CUDA
-    const double defaultSkin = cuda::Options{}.skin; // the stepper's own default, not a copy
-#else
-    const double defaultSkin = 0; // no CUDA stepper to use it
-#endif
-    const double skin = options.extra.count("skin") ? std::stod(options.extra["skin"]) : defaultSkin;
-    const bool graphs = extra("graphs", "1") != "0";
-    const int block = std::stoi(extra("block", "128"));
-    const std::string solid = extra("solid", "0");
-    if (solid != "0" && solid != "1" && solid != "2" && solid != "3")
-    {
-      throw InvalidInput("--solid = " + solid + ": must be 0 (none), 1 (a sphere), 2 (a box) or 3 (a rolling sphere)");
-    }
-    if (steps < 1 || warmup < 0)
-    {
-      throw InvalidInput("--steps must be >= 1 and --warmup >= 0");
-    }
-    const double outflowY = std::stod(extra("outflow", "0"));
-    if (options.extra.count("outflow") && !(outflowY > 0))
-    {
-      throw InvalidInput("--outflow = " + options.extra["outflow"] + ": must be a height > 0 [m]");
-    }
-    const int bodies = std::stoi(extra("bodies", outflowY > 0 ? "0" : "-1"));
-    if (options.extra.count("bodies") && (bodies < 0 || solid != "0"))
-    {
-      throw InvalidInput("--bodies = " + options.extra["bodies"] +
-        ": must be a count >= 0, and not with --solid");
-    }
-
-    const int liquids = std::stoi(extra("liquids", "1"));
-    if (liquids != 1 && liquids != 2)
-    {
-      throw InvalidInput("--liquids = " + options.extra["liquids"] + ": must be 1 or 2");
-    }
-    std::printf("pbf_bench: dam break widened to N particles, %d warm-up + %d timed steps; %s\n",
-      warmup, steps, describe(options.parameters).c_str());
-    std::printf("%-7s %-6s %-5s %10s %6s %10s %10s %10s %9s %7s %8s %8s %7s %6s\n", "backend",
-      "prec", "nbrs", "particles", "steps", "median_ms", "p10_ms", "p90_ms", "steps/s",
-      "nbrs", "avgErr%", "maxErr%", "B/part", "builds");
-    std::fflush(stdout);
+    const BenchSettings settings = benchSettings(options);
+    printHeader(options, settings);
     std::vector<Result> results;
-    for (double count : counts)
+    for (double count : settings.counts)
     {
-      results.push_back(bodies >= 0
-          ? bodiesBenchmark(options, count, warmup, steps, bodies, outflowY)
-          : benchmark(
-              options, count, warmup, steps, neighbors, skin, graphs, block, std::stoi(solid),
-              liquids));
+      results.push_back(settings.bodies >= 0
+          ? bodiesBenchmark(options, count, settings.warmup, settings.steps, settings.bodies,
+              settings.outflowY)
+          : benchmark(options, count, settings));
       printRow(results.back());
     }
     if (!results.empty())
@@ -510,12 +605,7 @@ int main(int argc, char** argv)
     }
     if (options.extra.count("json"))
     {
-      std::ofstream out(options.extra["json"]);
-      out << toJson(results, extra("label", ""));
-      if (!out)
-      {
-        throw std::runtime_error("cannot write " + options.extra["json"]);
-      }
+      writeJson(options, results);
     }
   }
   catch (const std::exception& error)

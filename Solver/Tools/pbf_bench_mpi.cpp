@@ -75,29 +75,16 @@ double largestOverRanks(double mine)
   return largest;
 }
 
-template <class Real>
-int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
+// The step times of the timed steps, warm-up excluded [ms]: from barrier to barrier (the slowest
+// rank's), the ghost exchange's and the migration's (largest over the ranks), and this rank's own.
+struct StepTimes
 {
-  const int ranks = communicator.size();
-  const long steps = toolInteger(options, "steps", 20, 1);
-  const long warmup = toolInteger(options, "warmup", 3, 0);
-  const double particles = options.extra.count("per-rank")
-    ? static_cast<double>(toolInteger(options, "per-rank", 100000, 1)) * ranks
-    : static_cast<double>(toolInteger(options, "particles", 200000, 1));
-  const Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
-  const Parameters parameters = withSceneDomain(options.parameters, scene);
-  checkSceneSize(scene, parameters);
-  // Each rank generates only its slab of the scene (SceneFluid.h); the setup time includes it.
-  const auto setupStart = std::chrono::steady_clock::now();
-  const SceneFluid fluid(scene, parameters);
-  const std::unique_ptr<Stepper> owner = distributed::makeSubdomainStepper(
-    communicator, options.backend, options.precision, parameters, fluid);
-  auto& stepper = dynamic_cast<distributed::DecomposedStepper&>(*owner);
-  stepper.synchronize();
-  const double setupSeconds = largestOverRanks(
-    std::chrono::duration<double>(std::chrono::steady_clock::now() - setupStart).count());
-
   std::vector<double> ms, ghostMs, migrationMs, ownMs, deviceWaitMs, refreshWaitMs, beforeMs;
+};
+
+StepTimes timeSteps(distributed::DecomposedStepper& stepper, long warmup, long steps)
+{
+  StepTimes t;
   for (long s = 0; s < warmup + steps; ++s)
   {
     MPI_Barrier(MPI_COMM_WORLD);
@@ -113,90 +100,156 @@ int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
     const double migration = largestOverRanks(stepper.lastExchange().migrationMilliseconds);
     if (s >= warmup)
     {
-      ms.push_back(elapsed);
-      ghostMs.push_back(ghost);
-      migrationMs.push_back(migration);
-      ownMs.push_back(own);
-      deviceWaitMs.push_back(stepper.lastExchange().deviceWaitMilliseconds);
-      refreshWaitMs.push_back(stepper.lastExchange().refreshWaitMilliseconds);
-      beforeMs.push_back(stepper.lastExchange().beforePassesMilliseconds);
+      t.ms.push_back(elapsed);
+      t.ghostMs.push_back(ghost);
+      t.migrationMs.push_back(migration);
+      t.ownMs.push_back(own);
+      t.deviceWaitMs.push_back(stepper.lastExchange().deviceWaitMilliseconds);
+      t.refreshWaitMs.push_back(stepper.lastExchange().refreshWaitMilliseconds);
+      t.beforeMs.push_back(stepper.lastExchange().beforePassesMilliseconds);
     }
   }
-  const std::vector<std::uint64_t> perRank = stepper.particlesPerRank();
-  const Statistics statistics = stepper.statistics();
-  const double ghosts = largestOverRanks(static_cast<double>(stepper.lastExchange().ghosts));
-  const std::vector<double> ownPerRank = gatherToRankZero(percentile(ownMs, 0.5), ranks);
-  const std::vector<double> deviceWaitPerRank =
-    gatherToRankZero(percentile(deviceWaitMs, 0.5), ranks);
-  const std::vector<double> refreshWaitPerRank =
-    gatherToRankZero(percentile(refreshWaitMs, 0.5), ranks);
-  const std::vector<double> beforePerRank = gatherToRankZero(percentile(beforeMs, 0.5), ranks);
+  return t;
+}
+
+// Every rank's medians and memory, on rank 0 (elsewhere empty).
+struct RankMeasures
+{
+  std::vector<double> own, deviceWait, refreshWait, before, peakHost, deviceBytes, hostBytes;
+};
+
+RankMeasures gatherPerRank(
+  const distributed::DecomposedStepper& stepper, const StepTimes& t, int ranks)
+{
+  RankMeasures p;
+  p.own = gatherToRankZero(percentile(t.ownMs, 0.5), ranks);
+  p.deviceWait = gatherToRankZero(percentile(t.deviceWaitMs, 0.5), ranks);
+  p.refreshWait = gatherToRankZero(percentile(t.refreshWaitMs, 0.5), ranks);
+  p.before = gatherToRankZero(percentile(t.beforeMs, 0.5), ranks);
   // The host memory each rank's process has held at its peak (setup included) [MB].
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
-  const std::vector<double> peakHostPerRank =
-    gatherToRankZero(static_cast<double>(usage.ru_maxrss) / 1024.0, ranks);
-  const std::size_t particleCount = fluid.size();
+  p.peakHost = gatherToRankZero(static_cast<double>(usage.ru_maxrss) / 1024.0, ranks);
   // Device bytes per particle on each rank: all it holds on its GPU over the particles it owns.
-  const std::vector<double> deviceBytesPerRank =
-    gatherToRankZero(static_cast<double>(stepper.deviceBytes()) /
-        static_cast<double>(std::max<std::size_t>(stepper.size(), 1)),
-      ranks);
+  p.deviceBytes = gatherToRankZero(static_cast<double>(stepper.deviceBytes()) /
+      static_cast<double>(std::max<std::size_t>(stepper.size(), 1)),
+    ranks);
   // Host bytes per particle on each rank: the particle arrays of a CPU rank (their capacities).
-  const std::vector<double> hostBytesPerRank =
-    gatherToRankZero(static_cast<double>(stepper.hostBytes()) /
-        static_cast<double>(std::max<std::size_t>(stepper.size(), 1)),
-      ranks);
-  if (communicator.rank() != 0)
-  {
-    return 0;
-  }
-  const auto [fewest, most] = std::minmax_element(perRank.begin(), perRank.end());
-  const double median = percentile(ms, 0.5);
+  p.hostBytes = gatherToRankZero(static_cast<double>(stepper.hostBytes()) /
+      static_cast<double>(std::max<std::size_t>(stepper.size(), 1)),
+    ranks);
+  return p;
+}
+
+// What rank 0 reports of the run.
+struct RunSummary
+{
+  int ranks = 0;
+  long steps = 0;
+  std::size_t particles = 0;
+  double setupSeconds = 0;
+  double ghosts = 0; // the most ghosts of a rank in the last step
+  std::vector<std::uint64_t> particlesPerRank;
+  bool finite = true;
+};
+
+// The per-rank lines on stderr, and the table's row on stdout.
+void printRun(const ToolOptions& options, const distributed::DecomposedStepper& stepper,
+  const RunSummary& run, const StepTimes& t, const RankMeasures& p)
+{
+  const auto [fewest, most] =
+    std::minmax_element(run.particlesPerRank.begin(), run.particlesPerRank.end());
+  const double median = percentile(t.ms, 0.5);
   std::fprintf(stderr, "setup (scene, constructor, first evaluation) %.1f s on the slowest rank; "
-    "%s\n", setupSeconds, stepper.description().c_str());
+    "%s\n", run.setupSeconds, stepper.description().c_str());
   std::fprintf(stderr, "per rank, medians in ms: own step (to its device's end) [%s]; waiting for "
     "its device's border fields [%s]; in the refreshes' exchanges [%s]; from the step's start to "
     "the passes [%s]\n",
-    listed(ownPerRank).c_str(), listed(deviceWaitPerRank).c_str(),
-    listed(refreshWaitPerRank).c_str(), listed(beforePerRank).c_str());
-  std::fprintf(stderr, "peak host memory per rank [MB]: [%s]\n", listed(peakHostPerRank).c_str());
+    listed(p.own).c_str(), listed(p.deviceWait).c_str(),
+    listed(p.refreshWait).c_str(), listed(p.before).c_str());
+  std::fprintf(stderr, "peak host memory per rank [MB]: [%s]\n", listed(p.peakHost).c_str());
   std::fprintf(stderr, "device bytes per particle per rank: [%s]; host (particle arrays): [%s]\n",
-    listed(deviceBytesPerRank).c_str(), listed(hostBytesPerRank).c_str());
+    listed(p.deviceBytes).c_str(), listed(p.hostBytes).c_str());
   std::printf("| ranks | backend | precision | particles | ms/step median (p10-p90) | steps/s | "
               "ghost ms | migration ms | particles per rank (min-max) | ghosts (max) | finite |\n");
   std::printf("| %d | %s | %s | %zu | %.2f (%.2f-%.2f) | %.1f | %.2f | %.2f | %llu-%llu | %.0f | "
               "%s |\n",
-    ranks, toString(options.backend), toString(options.precision), particleCount,
-    median, percentile(ms, 0.1), percentile(ms, 0.9), 1000.0 / median, percentile(ghostMs, 0.5),
-    percentile(migrationMs, 0.5), static_cast<unsigned long long>(*fewest),
-    static_cast<unsigned long long>(*most), ghosts, statistics.finite ? "yes" : "NO");
+    run.ranks, toString(options.backend), toString(options.precision), run.particles,
+    median, percentile(t.ms, 0.1), percentile(t.ms, 0.9), 1000.0 / median,
+    percentile(t.ghostMs, 0.5), percentile(t.migrationMs, 0.5),
+    static_cast<unsigned long long>(*fewest), static_cast<unsigned long long>(*most), run.ghosts,
+    run.finite ? "yes" : "NO");
   std::fflush(stdout);
+}
+
+// --json FILE: the run as one JSON object.
+void writeRunJson(const std::string& path, const ToolOptions& options, const RunSummary& run,
+  const StepTimes& t, const RankMeasures& p)
+{
+  std::ofstream out(path);
+  out << "{ \"ranks\": " << run.ranks << ", \"backend\": \"" << toString(options.backend)
+      << "\", \"precision\": \"" << toString(options.precision)
+      << "\", \"particles\": " << run.particles << ", \"steps\": " << run.steps
+      << ", \"median_ms\": " << percentile(t.ms, 0.5) << ", \"p10_ms\": " << percentile(t.ms, 0.1)
+      << ", \"p90_ms\": " << percentile(t.ms, 0.9)
+      << ", \"ghost_ms\": " << percentile(t.ghostMs, 0.5)
+      << ", \"migration_ms\": " << percentile(t.migrationMs, 0.5)
+      << ", \"ghosts_max\": " << run.ghosts
+      << ", \"setup_s\": " << run.setupSeconds << ", \"own_ms_per_rank\": [" << listed(p.own)
+      << "], \"device_wait_ms_per_rank\": [" << listed(p.deviceWait)
+      << "], \"refresh_wait_ms_per_rank\": [" << listed(p.refreshWait)
+      << "], \"before_passes_ms_per_rank\": [" << listed(p.before)
+      << "], \"peak_host_mb_per_rank\": [" << listed(p.peakHost)
+      << "], \"device_bytes_per_particle_per_rank\": [" << listed(p.deviceBytes)
+      << "], \"host_bytes_per_particle_per_rank\": [" << listed(p.hostBytes)
+      << "], \"particles_per_rank\": [";
+  for (std::size_t r = 0; r < run.particlesPerRank.size(); ++r)
+  {
+    out << (r ? ", " : "") << run.particlesPerRank[r];
+  }
+  out << "] }\n";
+}
+
+template <class Real>
+int run(const ToolOptions& options, distributed::MpiCommunicator& communicator)
+{
+  RunSummary summary;
+  summary.ranks = communicator.size();
+  summary.steps = toolInteger(options, "steps", 20, 1);
+  const long warmup = toolInteger(options, "warmup", 3, 0);
+  const double particles = options.extra.count("per-rank")
+    ? static_cast<double>(toolInteger(options, "per-rank", 100000, 1)) * summary.ranks
+    : static_cast<double>(toolInteger(options, "particles", 200000, 1));
+  const Scene scene = scaledDamBreak(particles, options.parameters.particleSpacing);
+  const Parameters parameters = withSceneDomain(options.parameters, scene);
+  checkSceneSize(scene, parameters);
+  // Each rank generates only its slab of the scene (SceneFluid.h); the setup time includes it.
+  const auto setupStart = std::chrono::steady_clock::now();
+  const SceneFluid fluid(scene, parameters);
+  const std::unique_ptr<Stepper> owner = distributed::makeSubdomainStepper(
+    communicator, options.backend, options.precision, parameters, fluid);
+  auto& stepper = dynamic_cast<distributed::DecomposedStepper&>(*owner);
+  stepper.synchronize();
+  summary.setupSeconds = largestOverRanks(
+    std::chrono::duration<double>(std::chrono::steady_clock::now() - setupStart).count());
+
+  const StepTimes times = timeSteps(stepper, warmup, summary.steps);
+  summary.particlesPerRank = stepper.particlesPerRank();
+  const Statistics statistics = stepper.statistics();
+  summary.finite = statistics.finite;
+  summary.ghosts = largestOverRanks(static_cast<double>(stepper.lastExchange().ghosts));
+  const RankMeasures measures = gatherPerRank(stepper, times, summary.ranks);
+  summary.particles = fluid.size();
+  if (communicator.rank() != 0)
+  {
+    return 0;
+  }
+  printRun(options, stepper, summary, times, measures);
   if (options.extra.count("json"))
   {
-    std::ofstream out(options.extra.at("json"));
-    out << "{ \"ranks\": " << ranks << ", \"backend\": \"" << toString(options.backend)
-        << "\", \"precision\": \"" << toString(options.precision)
-        << "\", \"particles\": " << particleCount << ", \"steps\": " << steps
-        << ", \"median_ms\": " << median << ", \"p10_ms\": " << percentile(ms, 0.1)
-        << ", \"p90_ms\": " << percentile(ms, 0.9)
-        << ", \"ghost_ms\": " << percentile(ghostMs, 0.5)
-        << ", \"migration_ms\": " << percentile(migrationMs, 0.5) << ", \"ghosts_max\": " << ghosts
-        << ", \"setup_s\": " << setupSeconds << ", \"own_ms_per_rank\": [" << listed(ownPerRank)
-        << "], \"device_wait_ms_per_rank\": [" << listed(deviceWaitPerRank)
-        << "], \"refresh_wait_ms_per_rank\": [" << listed(refreshWaitPerRank)
-        << "], \"before_passes_ms_per_rank\": [" << listed(beforePerRank)
-        << "], \"peak_host_mb_per_rank\": [" << listed(peakHostPerRank)
-        << "], \"device_bytes_per_particle_per_rank\": [" << listed(deviceBytesPerRank)
-        << "], \"host_bytes_per_particle_per_rank\": [" << listed(hostBytesPerRank)
-        << "], \"particles_per_rank\": [";
-    for (std::size_t r = 0; r < perRank.size(); ++r)
-    {
-      out << (r ? ", " : "") << perRank[r];
-    }
-    out << "] }\n";
+    writeRunJson(options.extra.at("json"), options, summary, times, measures);
   }
-  return statistics.finite ? 0 : 1;
+  return summary.finite ? 0 : 1;
 }
 
 } // namespace

@@ -36,7 +36,7 @@ def check(when):
     if source is None or view is None:
         fail("%s: no Position Based Fluids source or no active view" % when)
         return
-    if source.GenerateSurface[0] != 0:
+    if source.SMProxy.GetProperty("GenerateSurface").GetElement(0) != 0:
         fail("%s: GenerateSurface is on; the test shows the surface without it" % when)
         return
     port = simple.OutputPort(source, 3)

@@ -23,8 +23,8 @@ expect = T.expect
 INTERVAL = 1.0 / 30.0
 fluid = PositionBasedFluids(ParticleSpacing=0.04, NumberOfFrames=12,  # noqa: F821
                             FrameInterval=INTERVAL)
-expect(fluid.GenerateSurface[0] == 0 if hasattr(fluid.GenerateSurface, "__getitem__")
-       else fluid.GenerateSurface == 0, "GenerateSurface is on by default")
+expect(fluid.SMProxy.GetProperty("GenerateSurface").GetElement(0) == 0,
+       "GenerateSurface is on by default")
 algorithm = fluid.GetClientSideObject()
 view = simple.CreateRenderView()
 view.ViewSize = [400, 300]

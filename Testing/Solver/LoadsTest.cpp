@@ -155,7 +155,7 @@ TEST(Loads, TheSumsAreTheSameOnEveryHostBackend)
   }
 }
 
-// The domain's mirror walls carry the water as solids do (Equations.h's wallLoads: the images'
+// The domain's mirror walls carry the water as solids do (WallMirrors.h's wallShares: the images'
 // terms of the correction as forces): a 12 x 12 x 16 column on the floor of a domain as wide as
 // it. The floor (-y) carries the weight within 1 % (measured below), the side walls
 // rho g H^2 W / 2 within 5 %, the lid nothing, and each wall's torque about its middle vanishes by

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <set>
 #include <string>
 
@@ -200,4 +201,99 @@ TEST(Outflow, BadOutflowsAndInflowsAreNamed)
     ".emitters[0].speed is missing (or give rate");
   // A face and a box that leave some of the fluid are fine.
   EXPECT_EQ(errorOf(tankWith(R"("outflows": [{"face": "+x"}, {"min": [0,0,0], "max": [0.1,0.1,0.1]}])")), "");
+}
+
+namespace
+{
+
+// Points on the faces, edges and corners of zone 0 (its own rounded bounds, so exactly on them),
+// each in turn: every one lies in the zone.
+template <class Real>
+void expectFacesInside(const Box& box)
+{
+  const OutflowZones<Real> zones = OutflowZones<Real>::make({ box });
+  const Vec3<Real> lo = zones.min[0], hi = zones.max[0];
+  const Vec3<Real> mid{ (lo.x + hi.x) / 2, (lo.y + hi.y) / 2, (lo.z + hi.z) / 2 };
+  const Real xs[3] = { lo.x, mid.x, hi.x }, ys[3] = { lo.y, mid.y, hi.y }, zs[3] = { lo.z, mid.z, hi.z };
+  int onFaces = 0;
+  for (int i = 0; i < 3; ++i)
+  {
+    for (int j = 0; j < 3; ++j)
+    {
+      for (int k = 0; k < 3; ++k)
+      {
+        const Vec3<Real> x{ xs[i], ys[j], zs[k] };
+        EXPECT_TRUE(zones.contains(x)) << "(" << x.x << ", " << x.y << ", " << x.z << ")";
+        onFaces += i != 1 || j != 1 || k != 1;
+      }
+    }
+  }
+  EXPECT_EQ(onFaces, 26);
+  // Just outside each face (one rounding step beyond): out.
+  const Real big = std::numeric_limits<Real>::max();
+  EXPECT_FALSE(zones.contains({ std::nextafter(lo.x, -big), mid.y, mid.z }));
+  EXPECT_FALSE(zones.contains({ std::nextafter(hi.x, big), mid.y, mid.z }));
+  EXPECT_FALSE(zones.contains({ mid.x, std::nextafter(lo.y, -big), mid.z }));
+  EXPECT_FALSE(zones.contains({ mid.x, std::nextafter(hi.y, big), mid.z }));
+  EXPECT_FALSE(zones.contains({ mid.x, mid.y, std::nextafter(lo.z, -big) }));
+  EXPECT_FALSE(zones.contains({ mid.x, mid.y, std::nextafter(hi.z, big) }));
+}
+
+double component(const Vec3d& v, int axis)
+{
+  return axis == 0 ? v.x : (axis == 1 ? v.y : v.z);
+}
+
+const char* const kFaceNames[6] = { "-x", "+x", "-y", "+y", "-z", "+z" };
+
+} // namespace
+
+// Closed zones (Outflow.h): a particle clamped onto a face of an outflow, or on its edges and
+// corners, is in it and leaves, in both precisions; a rounding step beyond a face, it stays.
+TEST(Outflow, PointsExactlyOnAZonesFacesAreInside)
+{
+  const Box box{ { 0.1, -0.25, 0.3 }, { 0.7, 0.35, 0.45 } };
+  expectFacesInside<float>(box);
+  expectFacesInside<double>(box);
+}
+
+// A face's outflow (depth 0) is the slab one smoothing length h deep inside that wall, reaching a
+// spacing beyond the domain on its other sides. The inner face is wall -+ h computed once in
+// double, so it is h from the wall to the rounding of that sum: 2 ulps of the largest coordinate
+// (|x| <= 2: 4.4e-16 each; bound 1e-15), where a depth of h + s would be 4 cm off.
+TEST(Outflow, AFacesOutflowStartsOneSmoothingLengthInsideTheWall)
+{
+  Scene scene;
+  scene.domain = { { -0.3, 0.1, 0.2 }, { 1.7, 0.9, 0.65 } };
+  for (int face = 0; face < 6; ++face)
+  {
+    Outflow outflow;
+    outflow.face = face;
+    scene.outflows.push_back(outflow);
+  }
+  const Parameters p = coarse();
+  const double h = p.smoothingLength(), s = p.particleSpacing;
+  ASSERT_GT(h, s);
+  const std::vector<Box> zones = outflowZones(scene, p);
+  ASSERT_EQ(zones.size(), 6u);
+  const double tolerance = 1e-15;
+  for (int face = 0; face < 6; ++face)
+  {
+    const int axis = face / 2;
+    const Box& zone = zones[static_cast<std::size_t>(face)];
+    const double low = component(scene.domain.min, axis), high = component(scene.domain.max, axis);
+    if (face % 2 == 0)
+    {
+      EXPECT_NEAR(component(zone.max, axis) - low, h, tolerance) << kFaceNames[face];
+      EXPECT_NEAR(component(zone.min, axis), low - s, tolerance) << kFaceNames[face];
+    }
+    else
+    {
+      EXPECT_NEAR(high - component(zone.min, axis), h, tolerance) << kFaceNames[face];
+      EXPECT_NEAR(component(zone.max, axis), high + s, tolerance) << kFaceNames[face];
+    }
+    const int other = (axis + 1) % 3;
+    EXPECT_NEAR(component(zone.min, other), component(scene.domain.min, other) - s, tolerance);
+    EXPECT_NEAR(component(zone.max, other), component(scene.domain.max, other) + s, tolerance);
+  }
 }

@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 using namespace pbf;
 
@@ -122,5 +124,49 @@ TEST(Probes, TheSumsOfTwoHalvesAreTheSumsOfTheWhole)
   for (std::size_t k = 0; k < all.size(); ++k)
   {
     ASSERT_NEAR(a[k] + c[k], all[k], 1e-12 * scale) << k;
+  }
+}
+
+// The wet threshold itself: readProbe given the sums directly, a column of 8 samples (2 spacings)
+// all at one fluid fraction F. Above the floor's band, F just above 1/2 (the documented
+// threshold, Probes.h) is wet along the whole column and F = 1/2 or just below is dry, as is any
+// 0 < F < 1/2 (1/3 + 0.01 among them); within s/2 of the floor the threshold is 1/4. "Just": 1e-9
+// of F, which places the threshold to a billionth of the fraction rather than to a sample of the
+// height (the lattice test above). The probe reads its own F and pressure as max(F, 1/2) weighs it.
+TEST(Probes, TheWetThresholdIsAHalfAndAQuarterOnTheFloor)
+{
+  Parameters p;
+  p.particleSpacing = kSpacing;
+  p.domain = { { 0, 0, 0 }, { 1, 1, 1 } };
+  const std::size_t samples = 8;
+  const double dy = 0.25 * kSpacing;
+  const auto height = [&](double y, double fraction, bool defaulted) {
+    std::vector<double> sums((samples + 1) * kProbeSums, 0.0);
+    for (std::size_t k = 0; k <= samples; ++k)
+    {
+      sums[k * kProbeSums] = fraction;
+      sums[k * kProbeSums + 1] = 100 * fraction; // a pressure of 100 Pa
+    }
+    const Vec3d probe{ 0.5, y, 0.5 };
+    const ProbeReading r = defaulted
+      ? readProbe(p, probe, sums.data(), sums.data() + kProbeSums, samples)
+      : readProbe(p, probe, sums.data(), sums.data() + kProbeSums, samples, 0.5);
+    EXPECT_EQ(r.fraction, fraction);
+    EXPECT_NEAR(r.pressure, 100 * fraction / std::max(fraction, 0.5), 1e-12);
+    return r.waterHeight;
+  };
+  const double eps = 1e-9;
+  for (bool defaulted : { true, false })
+  {
+    const double y = 0.5; // far above the floor's band
+    // Wet: dy added 8 times, to rounding (1e-15 m).
+    EXPECT_NEAR(height(y, 0.5 + eps, defaulted), samples * dy, 1e-15) << "just above 1/2: wet";
+    for (double dry : { 0.5, 0.5 - eps, 1.0 / 3.0 + 0.01, 0.1, 1e-6 })
+    {
+      EXPECT_EQ(height(y, dry, defaulted), 0.0) << "F = " << dry << ": dry";
+    }
+    // On the floor: the two samples below s/2 (at s/8 and 3 s/8) count from F > 1/4.
+    EXPECT_EQ(height(0.0, 0.25 + eps, defaulted), 2 * dy);
+    EXPECT_EQ(height(0.0, 0.25 - eps, defaulted), 0.0);
   }
 }

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -270,4 +271,49 @@ TEST(RigidBody, ABodyStaysInsideTheTank)
   }
   EXPECT_NEAR(b.centre.y, 0.9, 1e-12);
   EXPECT_NEAR(b.velocity.y, 0, 1e-12);
+}
+
+// The angular velocity of a turned body is I_world^-1 L with I_world = R I R^T: for a box of
+// unequal sides turned by (30, 45, 60) degrees, omega against R I^-1 R^T L built here from the
+// box's principal moments m (b^2 + c^2) / 12, and I_world omega against L. The body-frame
+// I^-1 L differs by order one (the moments differ 5:1); the tolerance is rounding, 1e-12
+// relative to |omega| (a few dozen products of numbers of order one).
+TEST(RigidBody, TheAngularVelocityIsTheWorldInverseInertiaTimesTheMomentum)
+{
+  const Vec3d side{ 0.2, 0.5, 1.0 };
+  const MassProperties m = boxMassProperties({ { 0, 0, 0 }, side }, 700, "box");
+  const double mass = 700 * side.x * side.y * side.z;
+  const double principal[3] = { mass * (side.y * side.y + side.z * side.z) / 12,
+    mass * (side.x * side.x + side.z * side.z) / 12, mass * (side.x * side.x + side.y * side.y) / 12 };
+  RigidState s = restingState(m);
+  s.orientation = Rotation::fromDegrees({ 30, 45, 60 });
+  s.angularMomentum = { 0.3, -0.7, 1.1 };
+  const std::array<double, 9> r = s.orientation.matrix();
+  const double l[3] = { s.angularMomentum.x, s.angularMomentum.y, s.angularMomentum.z };
+  double expected[3] = {}, inertiaTimes[3] = {};
+  const Vec3d w = angularVelocity(s, m);
+  const double got[3] = { w.x, w.y, w.z };
+  for (int i = 0; i < 3; ++i)
+  {
+    for (int j = 0; j < 3; ++j)
+    {
+      double inverse = 0, inertia = 0; // (R I^-1 R^T)_ij, (R I R^T)_ij
+      for (int k = 0; k < 3; ++k)
+      {
+        inverse += r[3 * i + k] * r[3 * j + k] / principal[k];
+        inertia += r[3 * i + k] * r[3 * j + k] * principal[k];
+      }
+      expected[i] += inverse * l[j];
+      inertiaTimes[i] += inertia * got[j];
+    }
+  }
+  const double scale = length(w);
+  for (int i = 0; i < 3; ++i)
+  {
+    EXPECT_NEAR(got[i], expected[i], 1e-12 * scale) << "component " << i;
+    EXPECT_NEAR(inertiaTimes[i], l[i], 1e-12 * length(s.angularMomentum)) << "component " << i;
+  }
+  // The body frame's I^-1 L is not it: the test tells the two apart.
+  EXPECT_GT(std::abs(l[0] / principal[0] - got[0]) + std::abs(l[2] / principal[2] - got[2]),
+    0.1 * scale);
 }

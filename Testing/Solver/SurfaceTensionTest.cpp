@@ -5,6 +5,7 @@
 #include "Backends.h"
 #include "Distributed/SubdomainStepper.h"
 #include "Distributed/ThreadCluster.h"
+#include "Equations.h"
 #include "TestScenes.h"
 
 #include <gtest/gtest.h>
@@ -274,5 +275,48 @@ TEST(SurfaceTension, EveryCpuBackendAgrees)
     });
     EXPECT_LE(test::maxRelativePositionError(test::joined(parts), serial), ranks == 1 ? 0.0 : 1e-9)
       << ranks << " ranks";
+  }
+}
+
+// Young's force at a wall for the walls' contact angle theta, from the parameters through the
+// step's wallCos (StepTime) into wallYoungForce: a surface particle h/4 above the floor whose
+// normal n = (-0.6, 0.8, 0) (into the liquid, which lies towards -x) gets sigma cos(theta) per
+// unit length of the line, along the floor away from the liquid (+x) for theta < 90, towards it
+// for theta > 90, none at 90: F = (n.nw nw - n) cos(theta) |grad c| 2 (1 - d / h) / h. The
+// tolerance is rounding: 1e-15 relative on cos(theta) (cos of the rounded pi / 2 is 6e-17) and
+// on the force's few products (1e-13 of its scale); sin(theta) in place of cos(theta) is off by
+// 0.37 at 60 degrees and by 1 at 90.
+TEST(SurfaceTension, YoungsForceAtAWallIsAlongTheWallByTheContactAnglesCosine)
+{
+  Parameters p;
+  p.domain = { { 0, 0, 0 }, { 1, 1, 1 } };
+  p.particleSpacing = 0.02;
+  p.surfaceTension = 0.072;
+  const double h = p.smoothingLength();
+  const Vec3d n{ -0.6, 0.8, 0 };        // unit, into the liquid: the liquid lies towards -x
+  const Vec3d gradC = n * (1.06 / h);   // a flat surface's |grad c| h (SurfaceTension.h)
+  const double d = 0.25 * h;            // above the floor, the nearest wall
+  const Vec3d at{ 0.5, d, 0.5 };
+  const double line = length(gradC) * 2 * (1 - d / h) / h;
+  for (double theta : { 60.0, 90.0, 120.0 })
+  {
+    p.contactAngle = theta;
+    const double cosTheta = std::cos(theta * kPi / 180);
+    const StepTime<double> time = StepTime<double>::make(p, calibrateLattice(p), 1e-3);
+    EXPECT_NEAR(time.wallCos[0], cosTheta, 1e-15) << theta << " degrees";
+    const Coefficients<double> c = Coefficients<double>::make(p);
+    EXPECT_EQ(c.wallAdhesion, theta != 90.0);
+    const Vec3d f = wallYoungForce(at, n, gradC, c, time.wallCos[0]);
+    // Along the floor, +x (0.6, the outward normal's part along it) times cos(theta).
+    EXPECT_NEAR(f.x, 0.6 * cosTheta * line, 1e-13 * line) << theta << " degrees";
+    EXPECT_NEAR(f.y, 0, 1e-13 * line) << theta << " degrees";
+    EXPECT_NEAR(f.z, 0, 1e-13 * line) << theta << " degrees";
+    if (theta != 90.0)
+    {
+      EXPECT_EQ(f.x > 0, theta < 90) << "away from the liquid below 90 degrees, towards it above";
+    }
+    // Beyond h from every wall: no force.
+    const Vec3d far = wallYoungForce(Vec3d{ 0.5, 0.5, 0.5 }, n, gradC, c, time.wallCos[0]);
+    EXPECT_EQ(length(far), 0.0);
   }
 }

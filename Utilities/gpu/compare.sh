@@ -36,6 +36,10 @@ configs=("64k_f32:--particles 64000 --warmup 20 --steps 100"
   "1M_f32:--particles 1000000 --warmup 20 --steps 100"
   "1M_f64:--precision double --particles 1000000 --warmup 20 --steps 100"
   "10M_f32:--particles 10000000 --warmup 10 --steps 50")
+# PBF_COMPARE_CONFIGS="NAME:pbf_bench options;...": more runs of both trees, e.g.
+# "1M_tension:--particles 1000000 --liquids 2 --surface-tension 0.07 --warmup 20 --steps 100".
+IFS=';' read -r -a extra_configs <<<"${PBF_COMPARE_CONFIGS:-}"
+configs+=("${extra_configs[@]}")
 [[ ${PBF_COMPARE_ONLY_REFINED:-0} == 1 ]] && configs=()
 IFS=';' read -r -a variants <<<"${PBF_COMPARE_VARIANTS:-}"
 refined=(${PBF_COMPARE_REFINED:-})
@@ -89,12 +93,13 @@ if [[ ${PBF_COMPARE_HASHES:-0} == 1 ]]; then
   diff "$out/hashes-baseline.csv" "$out/hashes-this.csv" | head -20
 fi
 
-python3 - "$out" "${variants[@]%%=*}" <<'PY'
+names=("${configs[@]%%:*}")
+PBF_COMPARE_NAMES="${names[*]}" python3 - "$out" "${variants[@]%%=*}" <<'PY'
 import glob, json, os, statistics, sys
 out = sys.argv[1]
 print("| run | baseline ms/step | this tree ms/step | change |")
 print("|---|---:|---:|---:|")
-for name in ("64k_f32", "1M_f32", "1M_f64", "10M_f32"):
+for name in os.environ.get("PBF_COMPARE_NAMES", "").split():
     def median(tree):
         values = [json.load(open(p))["runs"][0]["median_ms"]
                   for p in sorted(glob.glob(os.path.join(out, f"{name}-{tree}-*.json")))]
