@@ -107,9 +107,12 @@ vtkPBFPortDemand vtkPBFPortDemand::Of(vtkAlgorithm* algorithm, vtkInformation* r
   const bool surfaceAsked = from == surfacePort && Wanted(algorithm, surfacePort);
   demand.Surface = keepSurface || surfaceAsked;
   demand.LeftStale = from == surfacePort && !demand.Surface;
-  // A request through the surface's port for the frame already on port 0 makes the surface
-  // alone: the particles' consumers see no new data and do not execute again.
-  if (from == surfacePort && frameHeld && ParticlesCurrent(algorithm, outputVector, frameTime))
+  // A request through the surface's port makes the frame only when the surface needs it: nobody
+  // watching the surface leaves everything as it is (the frame is port 0's request's business,
+  // and a failed one is not run again), and a frame already on port 0 gives the surface alone
+  // (the particles' consumers see no new data and do not execute again).
+  if (from == surfacePort &&
+    (!demand.Surface || (frameHeld && ParticlesCurrent(algorithm, outputVector, frameTime))))
   {
     demand.Frame = false;
   }

@@ -326,6 +326,19 @@ int vtkPBFSimulation::RequestData(
     this->RequestDomain(outputVector);
     this->RequestProbes(inputVector, outputVector);
   }
+  if (demand.Frame && !demand.Surface && !result)
+  {
+    // A failed frame keeps the previous outputs, the surface's too; it counts as made for the
+    // time asked, so that the surface's own request does not run the failing frame again.
+    vtkInformation* info = outputVector->GetInformationObject(SurfacePort);
+    info->Remove(vtkDemandDrivenPipeline::DATA_NOT_GENERATED());
+    vtkInformation* shown = vtkPolyData::GetData(outputVector, 0)->GetInformation();
+    if (shown->Has(vtkDataObject::DATA_TIME_STEP()))
+    {
+      vtkPolyData::GetData(outputVector, SurfacePort)->GetInformation()->Set(
+        vtkDataObject::DATA_TIME_STEP(), shown->Get(vtkDataObject::DATA_TIME_STEP()));
+    }
+  }
   const int surface = demand.Surface ? this->RequestSurface(outputVector) : 1;
   return result && surface;
 }

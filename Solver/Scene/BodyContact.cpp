@@ -140,15 +140,20 @@ bool separate(ContactSide& a, ContactSide& b)
   {
     b.body->centre -= push * (ib / (ia + ib));
   }
-  // Impulses along each normal that stop its point approaching, in turn and a few times over
-  // (projected Gauss-Seidel, as keepInside): a box resting on another rests on all its corners.
+  // Impulses along each normal that bring its point's approach to zero, in turn and a few times
+  // over (projected Gauss-Seidel, as keepInside): a box resting on another rests on all its
+  // corners. Each contact's impulse is accumulated and kept >= 0, so that what a later contact's
+  // push makes too much at an earlier one is taken back: the contact is inelastic, the bodies do
+  // not part faster than they met.
+  std::vector<double> accumulated(contacts.size(), 0.0);
   for (int sweep = 0; sweep < 8; ++sweep)
   {
-    for (const Contact& c : contacts)
+    for (std::size_t i = 0; i < contacts.size(); ++i)
     {
+      const Contact& c = contacts[i];
       const Vec3d& n = c.normal;
       const double approach = dot(velocityAt(a, c.point) - velocityAt(b, c.point), n);
-      if (approach >= 0)
+      if (approach >= 0 && accumulated[i] == 0)
       {
         continue;
       }
@@ -160,7 +165,8 @@ bool separate(ContactSide& a, ContactSide& b)
         armB = c.point - b.body->centre;
         k += dot(cross(inverseInertiaTimes(*b.body, *b.mass, cross(armB, n)), armB), n);
       }
-      const double j = -approach / k;
+      const double j = std::max(accumulated[i] - approach / k, 0.0) - accumulated[i];
+      accumulated[i] += j;
       a.body->velocity += n * (j * ia);
       a.body->angularMomentum += cross(armA, n) * j;
       if (b.body)

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace pbf
 {
@@ -186,22 +187,28 @@ RigidState keepInside(
           contacts.push_back(p + n * deepest);
         }
       }
-      // Impulses along n that stop every touching point moving into the wall, in turn and a few
-      // times over (projected Gauss-Seidel: a box lying flat rests on all four corners).
+      // Impulses along n that bring every touching point's approach to zero, in turn and a few
+      // times over (projected Gauss-Seidel: a box lying flat rests on all four corners), each
+      // point's accumulated and kept >= 0 so that the excess a later point's push leaves at an
+      // earlier one is taken back: the body stops at the wall instead of bouncing off it.
+      std::vector<double> accumulated(contacts.size(), 0.0);
       for (int sweep = 0; sweep < 8; ++sweep)
       {
-        for (const Vec3d& contact : contacts)
+        for (std::size_t i = 0; i < contacts.size(); ++i)
         {
-          const Vec3d arm = contact - next.centre;
+          const Vec3d arm = contacts[i] - next.centre;
           const double approach = dot(next.velocity + cross(angularVelocity(next, m), arm), n);
-          if (approach >= 0)
+          if (approach >= 0 && accumulated[i] == 0)
           {
             continue;
           }
           const Matrix rot = next.orientation.matrix();
           const Vec3d armCrossN = cross(arm, n);
           const Vec3d turn = times(rot, times(inverse(m.inertia), transposeTimes(rot, armCrossN)));
-          const double j = -approach / (1.0 / m.mass + dot(cross(turn, arm), n));
+          const double j =
+            std::max(accumulated[i] - approach / (1.0 / m.mass + dot(cross(turn, arm), n)), 0.0) -
+            accumulated[i];
+          accumulated[i] += j;
           next.velocity += n * (j / m.mass);
           next.angularMomentum += armCrossN * j;
         }
