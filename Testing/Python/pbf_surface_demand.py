@@ -14,7 +14,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import pbf_testing as T  # noqa: E402
-from paraview import simple  # noqa: E402
+from paraview import servermanager, simple  # noqa: E402
 from pbf_images import source_pixels  # noqa: E402
 
 T.load_plugin(globals())
@@ -82,6 +82,13 @@ for f in range(0, 6):
     show_frame(f)
 expect(abs(surface_time() - 12 * INTERVAL) < 1e-12,
        "the hidden surface was made again (time %r)" % surface_time())
+# A Fetch of port 3 (as a script reads it) asks for it too: the frame asked, with triangles.
+fetched = servermanager.Fetch(fluid, idx=3)
+fetched_time = fetched.GetInformation().Get(fetched.DATA_TIME_STEP()) \
+    if fetched.GetInformation().Has(fetched.DATA_TIME_STEP()) else None
+expect(fetched.GetNumberOfCells() > 100,
+       "a Fetch of the Surface output gave %d triangles" % fetched.GetNumberOfCells())
+print("fetched: %d triangles (time %r)" % (fetched.GetNumberOfCells(), fetched_time))
 print("ms per frame, median of six: particles alone %.0f, with the surface %.0f"
       % (sorted(without)[3], sorted(with_surface)[3]))
 T.passed("pbf_surface_demand")
