@@ -25,7 +25,7 @@ struct SolidRegion
   };
   Kind kind = Kind::Box;
   Box box;         // Kind::Box
-  Vec3d center;    // Kind::Sphere
+  Vec3d center{ 0, 0, 0 }; // Kind::Sphere
   double radius = 0;
   TriangleMesh mesh;     // Kind::Mesh: a closed surface, or a shell of `thickness` ...
   std::string file;      // ... or, until a reader fills `mesh`, the file that holds it

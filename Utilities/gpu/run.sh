@@ -360,8 +360,8 @@ if [[ ${PBF_GPU_RESOLUTION:-0} != 0 ]]; then
 fi
 
 if [[ ${PBF_GPU_PAIR_PROBE:-0} == 1 ]]; then
-  # Issue 21's structure, measured apart from the solver (Documentation/Performance.md, "The
-  # neighbour passes' structure, chosen by measurement"): a density-like pass as an ideal
+  # The neighbour passes' structures, measured apart from the solver (Documentation/Performance.md,
+  # "Why the kernels are built this way"): a density-like pass as an ideal
   # gather, with each pair once and scattered, and with the candidates from a list or row masks.
   phase "pair_once_probe"
   if nvcc -O3 -arch=sm_90 -o "$work/pair_once_probe" "$root/Utilities/gpu/pair_once_probe.cu" \

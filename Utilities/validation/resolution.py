@@ -20,7 +20,7 @@ COLUMN = 0.4      # the dam_break preset's column: 0.4 m wide (x), 0.6 m high
 HEIGHT = 0.6
 SPEED_BOUND = 7.5  # the criterion: 3 sqrt(g H) for the 0.6 m column, rounded up
 FRONT_X = [0.6, 0.8, 1.0, 1.2, 1.4]  # where the dam-break front's arrival times are compared
-# The flow after the collapse has started (Validation.md, "What is not met"): the points from
+# The flow after the collapse has started (Validation.md, "Criteria"): the points from
 # x = 0.8 m, and Martin & Moyce's from Z = 2.11. Printed beside the criteria's own figures, for
 # criteria the owner may choose.
 STARTED_X = FRONT_X[1:]
