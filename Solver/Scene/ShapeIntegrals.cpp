@@ -1,0 +1,219 @@
+#include "ShapeIntegrals.h"
+
+#include "Kernels.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+#include <vector>
+
+namespace pbf
+{
+namespace
+{
+
+constexpr double kPi = 3.14159265358979323846;
+// Radial nodes: exact for polynomials up to degree 31; the kernels times r^2 are at most 28
+// (s_corr's W^n times the spiky gradient with n = 4).
+constexpr int kRadialNodes = 16;
+
+// Gauss-Legendre nodes and weights on [-1, 1], by Newton's iteration on P_n.
+std::vector<std::pair<double, double>> gaussLegendre(int n)
+{
+  std::vector<std::pair<double, double>> rule(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i)
+  {
+    double x = std::cos(kPi * (i + 0.75) / (n + 0.5));
+    double derivative = 1;
+    for (int iteration = 0; iteration < 100; ++iteration)
+    {
+      double p0 = 1, p1 = x;
+      for (int k = 2; k <= n; ++k)
+      {
+        const double p2 = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      derivative = n * (x * p1 - p0) / (x * x - 1);
+      const double step = p1 / derivative;
+      x -= step;
+      if (std::abs(step) < 1e-16)
+      {
+        break;
+      }
+    }
+    rule[static_cast<std::size_t>(i)] = { x, 2 / ((1 - x * x) * derivative * derivative) };
+  }
+  return rule;
+}
+
+// The radial integrals of one ray over [a, b] (0 <= a < b <= h), each kernel times r^2.
+struct Radial
+{
+  double poly6 = 0, spiky = 0, spiky2 = 0, tensile = 0;
+};
+
+Radial radial(double a, double b, const ShapeKernels& k)
+{
+  static const std::vector<std::pair<double, double>> nodes = gaussLegendre(kRadialNodes);
+  const Kernels<double> kernels = Kernels<double>::make(k.h);
+  Radial sum;
+  const double half = 0.5 * (b - a), mid = 0.5 * (a + b);
+  for (const auto& [t, weight] : nodes)
+  {
+    const double r = mid + half * t;
+    const double w = kernels.poly6(r * r);
+    // |grad W_spiky| at r: the gradient is g(r) times the unit vector from y to x.
+    const double g = r < k.h ? kernels.spikyGradScale * (k.h - r) * (k.h - r) : 0.0;
+    const double volume = weight * half * r * r;
+    sum.poly6 += w * volume;
+    sum.spiky += g * volume;
+    sum.spiky2 += g * g * volume;
+    sum.tensile += g * -std::pow(w / k.wDeltaQ, k.sCorrN) * volume;
+  }
+  return sum;
+}
+
+// Adds a ray's radial integrals, weighted by its solid angle, to the totals. The gradient with
+// respect to x of W(x - y) points from y to x: against the ray's direction.
+void accumulate(ShapeIntegrals& total, const Radial& r, const Vec3d& direction, double weight)
+{
+  total.poly6 += weight * r.poly6;
+  total.spiky = total.spiky - direction * (weight * r.spiky);
+  total.spiky2 += weight * r.spiky2;
+  total.tensile = total.tensile - direction * (weight * r.tensile);
+}
+
+// The rays of the rule about a pole: direction and solid angle. mu = cos(theta) is split at
+// split (a half-space at distance split h starts there), Gauss-Legendre on each side.
+template <class Visit>
+void forEachRay(const Vec3d& pole, double split, const ShapeRule& rule, Visit&& visit)
+{
+  static thread_local std::vector<std::pair<double, double>> nodes;
+  if (static_cast<int>(nodes.size()) != rule.polar)
+  {
+    nodes = gaussLegendre(rule.polar);
+  }
+  // Two unit vectors across the pole.
+  const Vec3d helper = std::abs(pole.x) < 0.9 ? Vec3d{ 1, 0, 0 } : Vec3d{ 0, 1, 0 };
+  const Vec3d across = cross(pole, helper);
+  const Vec3d e1 = across * (1 / length(across));
+  const Vec3d e2 = cross(pole, e1);
+  const int azimuths = 2 * rule.polar;
+  const double turn = 2 * kPi / azimuths;
+  const double cut = std::clamp(split, -1.0, 1.0);
+  for (const auto& [lo, hi] : { std::pair<double, double>{ -1.0, cut }, { cut, 1.0 } })
+  {
+    if (hi <= lo)
+    {
+      continue;
+    }
+    for (const auto& [t, weight] : nodes)
+    {
+      const double mu = 0.5 * (lo + hi) + 0.5 * (hi - lo) * t;
+      const double sine = std::sqrt(std::max(0.0, 1 - mu * mu));
+      for (int a = 0; a < azimuths; ++a)
+      {
+        const double angle = (a + 0.5) * turn;
+        const Vec3d direction =
+          e1 * (sine * std::cos(angle)) + e2 * (sine * std::sin(angle)) + pole * mu;
+        visit(direction, mu, weight * 0.5 * (hi - lo) * turn);
+      }
+    }
+  }
+}
+
+// Where phi changes sign between r0 (value f0) and r1: bisection to rounding.
+double crossing(const Vec3d& x, const Vec3d& direction,
+  const std::function<double(const Vec3d&)>& phi, double r0, double f0, double r1)
+{
+  for (int iteration = 0; iteration < 60 && r1 - r0 > 1e-15 * (1 + r1); ++iteration)
+  {
+    const double r = 0.5 * (r0 + r1);
+    const double f = phi(x + direction * r);
+    if ((f < 0) == (f0 < 0))
+    {
+      r0 = r;
+    }
+    else
+    {
+      r1 = r;
+    }
+  }
+  return 0.5 * (r0 + r1);
+}
+
+} // namespace
+
+ShapeIntegrals integrateOverSolid(const Vec3d& x, const Vec3d& pole,
+  const std::function<double(const Vec3d&)>& phi, const ShapeKernels& k, const ShapeRule& rule)
+{
+  ShapeIntegrals total;
+  const double here = phi(x);
+  if (here >= k.h)
+  {
+    return total;
+  }
+  forEachRay(pole, here / k.h, rule, [&](const Vec3d& direction, double, double weight) {
+    double r0 = 0, f0 = here;
+    double start = f0 < 0 ? 0.0 : -1.0; // the open interval's start, -1 when outside
+    for (int step = 1; step <= rule.marchSteps; ++step)
+    {
+      const double r1 = k.h * step / rule.marchSteps;
+      const double f1 = phi(x + direction * r1);
+      if ((f1 < 0) != (f0 < 0))
+      {
+        const double r = crossing(x, direction, phi, r0, f0, r1);
+        if (start >= 0)
+        {
+          accumulate(total, radial(start, r, k), direction, weight);
+          start = -1;
+        }
+        else
+        {
+          start = r;
+        }
+      }
+      r0 = r1;
+      f0 = f1;
+    }
+    if (start >= 0)
+    {
+      accumulate(total, radial(start, k.h, k), direction, weight);
+    }
+  });
+  return total;
+}
+
+ShapeIntegrals integrateOverHalfSpace(double d, const ShapeKernels& k, const ShapeRule& rule)
+{
+  ShapeIntegrals total;
+  if (d >= k.h)
+  {
+    return total;
+  }
+  const Vec3d pole{ 0, 0, 1 };
+  forEachRay(pole, d / k.h, rule, [&](const Vec3d& direction, double mu, double weight) {
+    // Inside where d - r mu < 0, within [0, h].
+    double a = 0, b = k.h;
+    if (mu > 0)
+    {
+      a = std::max(0.0, d / mu);
+    }
+    else if (mu < 0)
+    {
+      b = std::min(k.h, d / mu);
+    }
+    else if (d >= 0)
+    {
+      return;
+    }
+    if (b > a)
+    {
+      accumulate(total, radial(a, b, k), direction, weight);
+    }
+  });
+  return total;
+}
+
+} // namespace pbf
