@@ -1,6 +1,6 @@
 // The solid obstacles (Physics/Boundary.h) of a GPU stepper in one block of device memory: the
 // grids' views, the boundary table (poly6, spiky, spiky2, tensile), the loads' sums (StepConstants'
-// loads and loadBlockSums), then each grid's nodes. Laid
+// loads and loadBlockSums), then each grid's nodes and its shape map. Laid
 // out here once for both GPU steppers (DeviceStepperScans.h, DeviceSubdomainSolids.h), on their
 // device policy.
 #pragma once
@@ -48,11 +48,13 @@ void* replaceSolids(Device& device, void* old, const std::vector<DistanceGrid>& 
   const std::size_t blockSumsAt = loadsAt + loadBytes;
   std::size_t total = blockSumsAt +
     aligned(obstacles.size() * std::size_t(kLoadBlocks) * kLoadValues * sizeof(double));
-  std::vector<std::size_t> nodesAt;
+  std::vector<std::size_t> nodesAt, shapeAt;
   for (const DistanceGrid& g : obstacles)
   {
     nodesAt.push_back(total);
     total += aligned(g.phi.size() * sizeof(float));
+    shapeAt.push_back(total);
+    total += aligned(g.shape.size() * sizeof(float));
   }
   void* block = device.allocate(total);
   char* base = static_cast<char*>(block);
@@ -62,7 +64,13 @@ void* replaceSolids(Device& device, void* old, const std::vector<DistanceGrid>& 
   {
     const DistanceGrid& g = obstacles[k];
     device.upload(base + nodesAt[k], g.phi.data(), g.phi.size() * sizeof(float));
-    views.push_back(g.view<Real>(reinterpret_cast<const float*>(base + nodesAt[k])));
+    const float* shape = nullptr;
+    if (!g.shape.empty())
+    {
+      device.upload(base + shapeAt[k], g.shape.data(), g.shape.size() * sizeof(float));
+      shape = reinterpret_cast<const float*>(base + shapeAt[k]);
+    }
+    views.push_back(g.view<Real>(reinterpret_cast<const float*>(base + nodesAt[k]), shape));
     placedViews.push_back(poses.empty() ? views.back() : placed(views.back(), poses[k]));
   }
   device.upload(base, placedViews.data(), placedViews.size() * sizeof(DistanceGridView<Real>));

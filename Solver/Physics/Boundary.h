@@ -5,7 +5,10 @@
 // into it. For a flat solid and a particle at distance d from it on a column of the initial
 // lattice, the reflected lattice has layers at d, d + s, ... inside (the particle's own image
 // first), so its sums depend only on d: they are tabulated once, over d in [0, h]
-// (BoundaryTable), and a curved solid is taken as its tangent plane at the particle. A particle of
+// (BoundaryTable). A solid's true shape enters through its shape map (Scene/ShapeMap.h): the
+// factors, 1 and the normal on a flat face, by which the solid's edges and corners change the
+// sums of its tangent plane at the particle, multiplied onto the table (SolidTerms.h,
+// solidSample); a solid without one is taken as its tangent plane. A particle of
 // the initial lattice next to a flat, lattice-aligned solid then reads exactly rho_0 at rest, as
 // next to a mirror wall; the solid's share enters the density, the constraint gradient of eq. 8,
 // lambda's denominator (eq. 11) and the position correction (eq. 14, with lambda_i for the
@@ -28,6 +31,10 @@
 namespace pbf
 {
 
+// The values a shape map (Scene/ShapeMap.h) holds per node: the factors of poly6, of the spiky
+// gradient (a vector), of |grad W|^2 and of s_corr's vector.
+constexpr int kShapeValues = 8;
+
 // A signed distance grid (DistanceGrid) as the stages read it: raw pointers, host or device.
 template <class Real>
 struct DistanceGridView
@@ -45,6 +52,9 @@ struct DistanceGridView
   // cos(theta) of each liquid's contact angle with this solid (SurfaceTension.h's adhesion);
   // 0: neutral.
   Real contactCos[kMaxLiquids];
+  // The solid's shape map (Scene/ShapeMap.h), kShapeValues per node in the grid's frame; null:
+  // the solid is taken as its tangent plane everywhere.
+  const float* shape;
 
   // The trilinear field at q and its gradient, clamped to the grid (a particle beyond the grid is
   // farther than h from the solid, whose grid is padded by h).
@@ -102,14 +112,13 @@ struct DistanceGridView
       rotation[6] * l.x + rotation[7] * l.y + rotation[8] * l.z };
   }
 
-  // The field at q given in the grid's own frame.
-  PBF_HD PBF_INLINE Real atInGridFrame(const Vec3<Real>& q, Vec3<Real>* gradient) const
+  // The cell of the grid's frame point q, clamped to the grid: its first node i and q's place t
+  // in it.
+  PBF_HD PBF_INLINE void cellOf(const Vec3<Real>& q, int i[3], Real t[3]) const
   {
     const Real u[3] = { (q.x - origin.x) * inverseCell, (q.y - origin.y) * inverseCell,
       (q.z - origin.z) * inverseCell };
     const int n[3] = { nx, ny, nz };
-    int i[3];
-    Real t[3];
     for (int a = 0; a < 3; ++a)
     {
       // Written so that a NaN coordinate (a diverged particle, reported by the health check
@@ -120,6 +129,44 @@ struct DistanceGridView
       i[a] = i[a] > n[a] - 2 ? n[a] - 2 : i[a];
       t[a] = c - Real(i[a]);
     }
+  }
+
+  // The shape map at the world point q, trilinear between the nodes; the vectors in the world's
+  // frame. Only for a grid with a shape map.
+  PBF_HD PBF_INLINE void shapeAt(const Vec3<Real>& q, Real values[kShapeValues]) const
+  {
+    int i[3];
+    Real t[3];
+    cellOf(toGridFrame(q), i, t);
+    for (int v = 0; v < kShapeValues; ++v)
+    {
+      values[v] = Real(0);
+    }
+    for (int corner = 0; corner < 8; ++corner)
+    {
+      const int d[3] = { corner & 1, (corner >> 1) & 1, (corner >> 2) & 1 };
+      const Real w = (d[0] ? t[0] : Real(1) - t[0]) * (d[1] ? t[1] : Real(1) - t[1]) *
+        (d[2] ? t[2] : Real(1) - t[2]);
+      const float* node = shape +
+        ((static_cast<std::size_t>(i[2] + d[2]) * ny + (i[1] + d[1])) * nx + (i[0] + d[0])) *
+          kShapeValues;
+      for (int v = 0; v < kShapeValues; ++v)
+      {
+        values[v] += w * static_cast<Real>(node[v]);
+      }
+    }
+    const Vec3<Real> spiky = toWorldDirection({ values[1], values[2], values[3] });
+    const Vec3<Real> tensile = toWorldDirection({ values[5], values[6], values[7] });
+    values[1] = spiky.x, values[2] = spiky.y, values[3] = spiky.z;
+    values[5] = tensile.x, values[6] = tensile.y, values[7] = tensile.z;
+  }
+
+  // The field at q given in the grid's own frame.
+  PBF_HD PBF_INLINE Real atInGridFrame(const Vec3<Real>& q, Vec3<Real>* gradient) const
+  {
+    int i[3];
+    Real t[3];
+    cellOf(q, i, t);
     Real value = Real(0);
     Real g[3] = { Real(0), Real(0), Real(0) };
     for (int corner = 0; corner < 8; ++corner)

@@ -69,12 +69,12 @@ PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real, N
       }
     }
   });
-  // Each solid within h: its share, the lattice reflected in its tangent plane (Boundary.h).
+  // Each solid within h: its share, the lattice continued into it (Boundary.h, SolidTerms.h).
   forEachNearSolid(pi, f,
-    [&](const Vec3<Real>& n, const BoundarySample<Real>& b, const DistanceGridView<Real>&) {
-    rho += b.poly6;
-    gradI += n * (b.spiky * f.c.massOverRho0);
-    sumGradJ2 += b.spiky2 * f.c.massOverRho0 * f.c.massOverRho0;
+    [&](const Vec3<Real>&, const SolidSample<Real>& s, const DistanceGridView<Real>&) {
+    rho += s.poly6;
+    gradI += s.spiky * f.c.massOverRho0;
+    sumGradJ2 += s.spiky2 * f.c.massOverRho0 * f.c.massOverRho0;
   });
   rho *= f.c.mass;
   Real C = rho * f.c.inverseRestDensity - Real(1);
@@ -171,8 +171,8 @@ PBF_HD PBF_INLINE void positionCorrection(
   // The solid's share carries lambda_i, as a mirror image does (Boundary.h).
   const Real tensileI = solidTensile<Liquids>(i, f);
   forEachNearSolid(pi, f,
-    [&](const Vec3<Real>& n, const BoundarySample<Real>& b, const DistanceGridView<Real>&) {
-    delta += solidShare(n, b, lambdaI, tensileI);
+    [&](const Vec3<Real>&, const SolidSample<Real>& s, const DistanceGridView<Real>&) {
+    delta += solidShare(s, lambdaI, tensileI);
   });
   f.scratch[i] =
     delta * (Liquids && f.liquid ? f.c.massOverRho0 * liquidWeight(i, f) : f.c.massOverRho0);

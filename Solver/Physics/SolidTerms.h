@@ -40,8 +40,34 @@ PBF_HD PBF_INLINE void forEachSolidField(
   }
 }
 
-// Calls visit(n, b, solid) for each solid within h of q: n its outward unit normal there (the
-// field's gradient), b the table's sums at q's distance from it, solid its view (for its velocity).
+// What a solid adds to the sums of a particle at q, at outward normal n with the table's sums b
+// at q's distance: the table times the solid's shape factors there (Scene/ShapeMap.h), 1 and n on
+// a flat face. A solid without a shape map is its tangent plane: the table along n.
+template <class Real>
+struct SolidSample
+{
+  Real poly6;          // density, before the mass
+  Vec3<Real> spiky;    // eq. 8 and 14, before m / rho_0
+  Real spiky2;         // eq. 11's denominator
+  Vec3<Real> tensile;  // s_corr, before this step's coefficient
+};
+
+template <class Real>
+PBF_HD PBF_INLINE SolidSample<Real> solidSample(const DistanceGridView<Real>& solid,
+  const Vec3<Real>& q, const Vec3<Real>& n, const BoundarySample<Real>& b)
+{
+  if (!solid.shape)
+  {
+    return { b.poly6, n * b.spiky, b.spiky2, n * b.tensile };
+  }
+  Real r[kShapeValues];
+  solid.shapeAt(q, r);
+  return { b.poly6 * r[0], Vec3<Real>{ r[1], r[2], r[3] } * b.spiky, b.spiky2 * r[4],
+    Vec3<Real>{ r[5], r[6], r[7] } * b.tensile };
+}
+
+// Calls visit(n, s, solid) for each solid within h of q: n its outward unit normal there (the
+// field's gradient), s what it adds to q's sums (SolidSample), solid its view (for its velocity).
 template <class Real, class Neighbors, class Visit>
 PBF_HD PBF_INLINE void forEachNearSolid(
   const Vec3<Real>& q, const FluidView<Real, Neighbors>& f, Visit&& visit)
@@ -49,7 +75,8 @@ PBF_HD PBF_INLINE void forEachNearSolid(
   forEachSolidField(q, f, [&](int o, Real d, const Vec3<Real>& gradient, Real g) {
     if (d < f.c.kernels.h && g > Real(0))
     {
-      visit(gradient * (Real(1) / g), sampleBoundary(f.boundary, d), f.obstacles[o]);
+      const Vec3<Real> n = gradient * (Real(1) / g);
+      visit(n, solidSample(f.obstacles[o], q, n, sampleBoundary(f.boundary, d)), f.obstacles[o]);
     }
   });
 }
@@ -102,14 +129,13 @@ PBF_HD PBF_INLINE SolidMirror<Real> nearestSolid(
   return m;
 }
 
-// A solid's share of delta p_i (eq. 14, before m / rho_0), for the solid at outward normal n with
-// the table's sums b there: it carries lambda_i, as a mirror image does, and s_corr's push.
+// A solid's share of delta p_i (eq. 14, before m / rho_0), from what it adds to the sums there
+// (SolidSample): it carries lambda_i, as a mirror image does, and s_corr's push.
 // positionCorrection adds it; the particle pushes the solid back with it (solidLoads).
 template <class Real>
-PBF_HD PBF_INLINE Vec3<Real> solidShare(
-  const Vec3<Real>& n, const BoundarySample<Real>& b, Real lambdaI, Real tensile)
+PBF_HD PBF_INLINE Vec3<Real> solidShare(const SolidSample<Real>& s, Real lambdaI, Real tensile)
 {
-  return n * (b.spiky * (lambdaI + lambdaI) + tensile * b.tensile);
+  return s.spiky * (lambdaI + lambdaI) + s.tensile * tensile;
 }
 
 // A particle inside an obstacle goes to its surface, along the field's gradient. Solid by solid:
@@ -138,8 +164,8 @@ PBF_HD PBF_INLINE void solidLoads(std::uint32_t i, const FluidView<Real, Neighbo
   const Real tensile = solidTensile(i, f);
   const Real scale = -f.c.massOverRho0 * f.c.mass * f.time->inverseDt * f.time->inverseDt;
   forEachNearSolid(pi, f,
-    [&](const Vec3<Real>& n, const BoundarySample<Real>& b, const DistanceGridView<Real>& solid) {
-    const Vec3<Real> force = solidShare(n, b, lambdaI, tensile) * scale;
+    [&](const Vec3<Real>&, const SolidSample<Real>& s, const DistanceGridView<Real>& solid) {
+    const Vec3<Real> force = solidShare(s, lambdaI, tensile) * scale;
     add(static_cast<int>(&solid - f.obstacles), force, cross(pi, force));
   });
 }

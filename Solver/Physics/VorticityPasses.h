@@ -100,10 +100,10 @@ PBF_HD PBF_INLINE void vorticityAndXsph(std::uint32_t i, const FluidView<Real, N
   if (Friction && friction != Real(0))
   {
     forEachNearSolid(pi, f,
-      [&](const Vec3<Real>& n, const BoundarySample<Real>& b, const DistanceGridView<Real>& solid) {
+      [&](const Vec3<Real>& n, const SolidSample<Real>& s, const DistanceGridView<Real>& solid) {
       // The velocity relative to the solid's surface (a moving obstacle drags the fluid along).
       const Vec3<Real> slip = vi - solid.velocityAt(pi);
-      smoothing += (slip - n * dot(slip, n)) * (friction * f.c.massOverRho0 * b.poly6);
+      smoothing += (slip - n * dot(slip, n)) * (friction * f.c.massOverRho0 * s.poly6);
     });
   }
   f.omega[i] = omega;

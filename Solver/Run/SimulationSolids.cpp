@@ -174,7 +174,9 @@ ContactSide Simulation::contactSide(std::size_t k, const std::vector<SolidPose>&
     side.pose = poses[k];
     side.centre = side.pose.toWorld(side.centre);
   }
-  const DistanceGridView<double> view = solidFields_[k].view<double>(solidFields_[k].phi.data());
+  // Contacts read the field alone.
+  const DistanceGridView<double> view =
+    solidFields_[k].view<double>(solidFields_[k].phi.data(), nullptr);
   side.field = side.pose.moving ? placed(view, side.pose) : view;
   return side;
 }
@@ -271,7 +273,9 @@ SurfaceSolids Simulation::surfaceSolids(double time) const
   for (std::size_t k = 0; k < solidFields_.size(); ++k)
   {
     // posesAt gives none when no solid moves: each then stands where its field was made.
-    const DistanceGridView<double> view = solidFields_[k].view<double>(solidFields_[k].phi.data());
+    // Contacts read the field alone.
+  const DistanceGridView<double> view =
+    solidFields_[k].view<double>(solidFields_[k].phi.data(), nullptr);
     solids.views.push_back(k < poses.size() ? placed(view, poses[k]) : view);
   }
   return solids;

@@ -123,21 +123,43 @@ void forEachRay(const Vec3d& pole, double split, const ShapeRule& rule, Visit&& 
   }
 }
 
-// Where phi changes sign between r0 (value f0) and r1: bisection to rounding.
+// Where phi changes sign between r0 (value f0) and r1 (value f1): the Illinois variant of
+// regula falsi, to 1e-9 of h. phi is close to linear along a ray between two nodes, so a few
+// steps reach it where bisection takes fifty.
 double crossing(const Vec3d& x, const Vec3d& direction,
-  const std::function<double(const Vec3d&)>& phi, double r0, double f0, double r1)
+  const std::function<double(const Vec3d&)>& phi, double r0, double f0, double r1, double f1,
+  double tolerance)
 {
-  for (int iteration = 0; iteration < 60 && r1 - r0 > 1e-15 * (1 + r1); ++iteration)
+  int side = 0;
+  for (int iteration = 0; iteration < 100 && r1 - r0 > tolerance; ++iteration)
   {
-    const double r = 0.5 * (r0 + r1);
+    double r = (r0 * f1 - r1 * f0) / (f1 - f0);
+    if (!(r > r0 && r < r1))
+    {
+      r = 0.5 * (r0 + r1);
+    }
     const double f = phi(x + direction * r);
+    if (f == 0)
+    {
+      return r;
+    }
     if ((f < 0) == (f0 < 0))
     {
       r0 = r;
+      f0 = f;
+      f1 = side == -1 ? 0.5 * f1 : f1;
+      side = -1;
     }
     else
     {
       r1 = r;
+      f1 = f;
+      f0 = side == 1 ? 0.5 * f0 : f0;
+      side = 1;
+    }
+    if (std::abs(r1 - r0) <= tolerance)
+    {
+      break;
     }
   }
   return 0.5 * (r0 + r1);
@@ -157,13 +179,16 @@ ShapeIntegrals integrateOverSolid(const Vec3d& x, const Vec3d& pole,
   forEachRay(pole, here / k.h, rule, [&](const Vec3d& direction, double, double weight) {
     double r0 = 0, f0 = here;
     double start = f0 < 0 ? 0.0 : -1.0; // the open interval's start, -1 when outside
-    for (int step = 1; step <= rule.marchSteps; ++step)
+    // phi is a distance: no surface lies within |phi| of a point, so the march strides that far
+    // (nine tenths of it, for the interpolated field), and never less than h / marchSteps.
+    const double least = k.h / rule.marchSteps;
+    while (r0 < k.h)
     {
-      const double r1 = k.h * step / rule.marchSteps;
+      const double r1 = std::min(k.h, r0 + std::max(least, 0.9 * std::abs(f0)));
       const double f1 = phi(x + direction * r1);
       if ((f1 < 0) != (f0 < 0))
       {
-        const double r = crossing(x, direction, phi, r0, f0, r1);
+        const double r = crossing(x, direction, phi, r0, f0, r1, f1, 1e-9 * k.h);
         if (start >= 0)
         {
           accumulate(total, radial(start, r, k), direction, weight);

@@ -11,7 +11,8 @@
 // The integrals are taken along rays from x: Gauss-Legendre in mu = cos(theta) about a pole
 // (into the solid, -grad phi), split at mu = phi(x) / h where a half-space at distance phi(x)
 // starts to cross the ball, times evenly spaced azimuths; along each ray the solid's intervals
-// are found by marching phi and bisecting its sign changes, and each interval's radial integral
+// are found by marching phi (striding its distance) and locating its sign changes by regula
+// falsi, and each interval's radial integral
 // is Gauss-Legendre of the kernels, polynomials in r of degree at most 28 (exact for them).
 #pragma once
 
@@ -33,7 +34,7 @@ struct ShapeIntegrals
 struct ShapeRule
 {
   int polar = 12;             // Gauss-Legendre nodes in mu on each side of the split
-  int marchSteps = 64;        // phi samples along a ray of length h
+  int marchSteps = 64;        // the march's shortest stride is h / marchSteps
 };
 
 // The kernels' constants: smoothing length h, s_corr's exponent n and W(dq).

@@ -41,6 +41,10 @@ struct DistanceGrid
   double cell = 0;         // node spacing [m]
   int nx = 0, ny = 0, nz = 0;
   std::vector<float> phi; // node values [m], x fastest, then y, then z
+  // The shape map (ShapeMap.h): kShapeValues per node, in the order of phi's nodes; empty: the
+  // stages take the solid as its tangent plane.
+  std::vector<float> shape;
+  const float* shapeNodes() const { return shape.empty() ? nullptr : shape.data(); }
   // Each liquid's contact angle with the solid [degrees] (SolidRegion::contactAngle); 90: neutral.
   std::array<double, kMaxLiquids> contactAngle = [] {
     std::array<double, kMaxLiquids> neutral;
@@ -66,9 +70,10 @@ struct DistanceGrid
   // The gradient of the trilinear field at x (about the outward normal near the surface); zero
   // where x is not finite.
   Vec3d gradient(const Vec3d& x) const;
-  // How the stages read this grid, its node values at `nodes` (host or device memory).
+  // How the stages read this grid, its node values at `nodes` and its shape map at
+  // `shapeNodes` (host or device memory; null: none).
   template <class Real>
-  DistanceGridView<Real> view(const float* nodes) const
+  DistanceGridView<Real> view(const float* nodes, const float* shapeNodes) const
   {
     DistanceGridView<Real> v{};
     v.origin = Vec3<Real>::from(origin);
@@ -77,6 +82,7 @@ struct DistanceGrid
     v.ny = ny;
     v.nz = nz;
     v.phi = nodes;
+    v.shape = shapeNodes;
     for (int l = 0; l < kMaxLiquids; ++l)
     {
       // Exactly 0 at 90 degrees (cos of the rounded pi / 2 is 6e-17): a neutral solid adds nothing.

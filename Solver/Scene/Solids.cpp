@@ -1,7 +1,10 @@
 #include "Solids.h"
 
+#include "ShapeMap.h"
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -57,6 +60,24 @@ bool overlaps(const Box& a, const Box& b)
 std::string nameOf(const SolidRegion& s, std::size_t k)
 {
   return s.name.empty() ? "obstacles[" + std::to_string(k) + "]" : s.name;
+}
+
+// A solid no node of its grid lies inside is thinner than the grid resolves: the stages would
+// not see it. InvalidInput naming it, its grid's cell and the field's least value.
+void requireResolved(const DistanceGrid& g, const std::string& name)
+{
+  float least = std::numeric_limits<float>::infinity();
+  for (float v : g.phi)
+  {
+    least = std::min(least, v);
+  }
+  if (!(least < 0.0f))
+  {
+    std::ostringstream text;
+    text << name << ": thinner than its grid resolves: no node of cell " << g.cell
+         << " m lies inside it (the nearest is " << least << " m from its surface)";
+    throw InvalidInput(text.str());
+  }
 }
 
 } // namespace
@@ -117,6 +138,7 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
 {
   const double h = p.smoothingLength();
   const Box& d = p.domain;
+  const ShapeKernels kernels = shapeKernels(p);
   std::vector<DistanceGrid> fields;
   for (std::size_t k = 0; k < solids.size(); ++k)
   {
@@ -174,6 +196,8 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
       fields.push_back(boxDistanceOn(s.box, gridOver(reach, cell, h, "obstacles")));
     }
     fields.back().contactAngle = s.contactAngle;
+    requireResolved(fields.back(), name);
+    buildShapeMap(fields.back(), kernels);
   }
   return fields;
 }

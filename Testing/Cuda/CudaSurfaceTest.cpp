@@ -162,8 +162,8 @@ TEST(CudaSurface, ObstaclesClipAsOnTheCpu)
   end.rotation = Rotation::fromDegrees({ 10, 20, 30 });
   motion.keyframes = { start, end };
   SurfaceSolids solids;
-  solids.views.push_back(fields[0].view<double>(fields[0].phi.data()));
-  solids.views.push_back(placed(fields[1].view<double>(fields[1].phi.data()), motion.at(0.5)));
+  solids.views.push_back(fields[0].view<double>(fields[0].phi.data(), nullptr));
+  solids.views.push_back(placed(fields[1].view<double>(fields[1].phi.data(), nullptr), motion.at(0.5)));
   SurfaceOptions smoothed;
   smoothed.smoothing = 2;
   expectCpuMesh<float>(SurfaceOptions{}, solids);

@@ -334,7 +334,7 @@ struct ContactBox
     const Box& b = solid.box;
     s.reach = 0.5 * length(b.max - b.min);
     s.centre = (b.min + b.max) * 0.5;
-    const DistanceGridView<double> view = grid.view<double>(grid.phi.data());
+    const DistanceGridView<double> view = grid.view<double>(grid.phi.data(), nullptr);
     s.field = view;
     if (solid.density > 0)
     {

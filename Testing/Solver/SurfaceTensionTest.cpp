@@ -170,7 +170,7 @@ TEST(SurfaceTension, BadContactAnglesAreNamed)
   grid.contactAngle = scene.solids[0].contactAngle;
   grid.contactAngle[2] = 90.0;
   grid.cell = 1;
-  const DistanceGridView<double> view = grid.view<double>(nullptr);
+  const DistanceGridView<double> view = grid.view<double>(nullptr, nullptr);
   EXPECT_NEAR(view.contactCos[0], 0.5, 1e-15);
   EXPECT_NEAR(view.contactCos[1], -0.5, 1e-15);
   EXPECT_EQ(view.contactCos[2], 0.0);

@@ -322,7 +322,7 @@ TEST(Surface, AnObstacleClipsTheSurfaceAtItsFace)
   slab.box = { { 0.1, 0.1, 0.1 }, { 0.9, 0.9, 0.45 } };
   const std::vector<DistanceGrid> fields = solidFields({ slab }, s.parameters);
   SurfaceSolids solids;
-  solids.views.push_back(fields[0].view<double>(fields[0].phi.data()));
+  solids.views.push_back(fields[0].view<double>(fields[0].phi.data(), nullptr));
   const SurfaceMesh clipped = extractSurface<double>(s.x.data(), s.v.data(), s.rho.data(),
     s.x.size(), s.parameters, {}, true, {}, solids);
   const SurfaceMesh whole = surfaceOf(s, true);
