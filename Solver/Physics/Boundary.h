@@ -6,9 +6,9 @@
 // lattice, the reflected lattice has layers at d, d + s, ... inside (the particle's own image
 // first), so its sums depend only on d: they are tabulated once, over d in [0, h]
 // (BoundaryTable). A solid's true shape enters through its shape map (Scene/ShapeMap.h): the
-// factors, 1 and the normal on a flat face, by which the solid's edges and corners change the
-// sums of its tangent plane at the particle, multiplied onto the table (SolidTerms.h,
-// solidSample); a solid without one is taken as its tangent plane. A particle of
+// factors, 1 and the normal on a flat face, by which its edges and corners change the sums of its
+// tangent plane at the particle, multiplied onto the table (SolidTerms.h, solidSample); a solid
+// without one is taken as its tangent plane. A particle of
 // the initial lattice next to a flat, lattice-aligned solid then reads exactly rho_0 at rest, as
 // next to a mirror wall; the solid's share enters the density, the constraint gradient of eq. 8,
 // lambda's denominator (eq. 11) and the position correction (eq. 14, with lambda_i for the
@@ -142,6 +142,11 @@ struct DistanceGridView
     {
       values[v] = Real(0);
     }
+    // One corner at a time: unrolled, the corners' 64 loads would all be in flight at once, and
+    // their registers would count against every pass that reads a solid.
+#if defined(__CUDA_ARCH__)
+#pragma unroll 1
+#endif
     for (int corner = 0; corner < 8; ++corner)
     {
       const int d[3] = { corner & 1, (corner >> 1) & 1, (corner >> 2) & 1 };

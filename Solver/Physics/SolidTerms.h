@@ -139,14 +139,26 @@ PBF_HD PBF_INLINE Vec3<Real> solidShare(const SolidSample<Real>& s, Real lambdaI
 }
 
 // A particle inside an obstacle goes to its surface, along the field's gradient. Solid by solid:
-// each is asked where the particle is after the ones before it moved it.
+// each is asked where the particle is after the ones before it moved it. Near an edge or a corner
+// the interpolated field bends, so one move along its gradient can stop short of the surface:
+// the solid is asked again, up to kCollisionLooks times in all, until the particle reads outside.
+constexpr int kCollisionLooks = 4;
+
 template <class Real, class Neighbors>
 PBF_HD PBF_INLINE Vec3<Real> collideWithObstacles(Vec3<Real> q, const FluidView<Real, Neighbors>& f)
 {
-  forEachSolidField(q, f, [&](int, Real d, const Vec3<Real>& gradient, Real g) {
-    if (d < Real(0) && g > Real(0))
+  forEachSolidField(q, f, [&](int o, Real d, Vec3<Real> gradient, Real g) {
+#if defined(__CUDA_ARCH__)
+#pragma unroll 1
+#endif
+    for (int look = 1; d < Real(0) && g > Real(0); ++look)
     {
       q -= gradient * (d / g);
+      if (look == kCollisionLooks || !f.obstacles[o].within(q, &d, &gradient))
+      {
+        break;
+      }
+      g = length(gradient);
     }
   });
   return q;

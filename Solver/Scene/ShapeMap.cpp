@@ -2,6 +2,7 @@
 
 #include "Kernels.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -23,6 +24,38 @@ std::array<float, kShapeValues> flatFactors(const Vec3d& n)
 {
   const auto x = static_cast<float>(n.x), y = static_cast<float>(n.y), z = static_cast<float>(n.z);
   return { 1.0f, x, y, z, 1.0f, x, y, z };
+}
+
+// Whether the grid's field within h of node (i, j, k) is the plane through it along its gradient:
+// every node of the cells that cover the ball, as far as the grid goes, on the plane to a
+// ten-thousandth of a cell. The trilinear field between such nodes is that plane exactly, so the
+// node's factors are the flat ones without integrating (most nodes of a solid's faces). Beyond
+// the grid the field only grows (SignedDistance.h): the solid lies within it.
+bool flatAround(const DistanceGrid& g, int i, int j, int k, double h)
+{
+  const Vec3d x = g.nodePosition(i, j, k);
+  const Vec3d n = unitOr(g.gradient(x), Vec3d{ 0, 0, 0 });
+  if (length(n) == 0)
+  {
+    return false;
+  }
+  const int reach = static_cast<int>(std::ceil(h / g.cell)) + 1;
+  const double d = g.node(i, j, k), tolerance = 1e-4 * g.cell;
+  for (int c = std::max(0, k - reach); c <= std::min(g.nz - 1, k + reach); ++c)
+  {
+    for (int b = std::max(0, j - reach); b <= std::min(g.ny - 1, j + reach); ++b)
+    {
+      for (int a = std::max(0, i - reach); a <= std::min(g.nx - 1, i + reach); ++a)
+      {
+        const Vec3d offset{ (a - i) * g.cell, (b - j) * g.cell, (c - k) * g.cell };
+        if (std::abs(g.node(a, b, c) - (d + dot(n, offset))) > tolerance)
+        {
+          return false;
+        }
+      }
+    }
+  }
+  return true;
 }
 
 } // namespace
@@ -87,7 +120,9 @@ std::size_t buildShapeMap(DistanceGrid& grid, const ShapeKernels& k, const Shape
     const std::int64_t plane = static_cast<std::int64_t>(grid.nx) * grid.ny;
     const Vec3d x = grid.nodePosition(static_cast<int>(index % grid.nx),
       static_cast<int>((index % plane) / grid.nx), static_cast<int>(index / plane));
-    const bool near = phi >= inside && phi <= outside;
+    const bool near = phi >= inside && phi <= outside &&
+      !flatAround(grid, static_cast<int>(index % grid.nx),
+        static_cast<int>((index % plane) / grid.nx), static_cast<int>(index / plane), k.h);
     const std::array<float, kShapeValues> values = near
       ? shapeFactorsAt(grid, x, k, rule)
       : flatFactors(unitOr(grid.gradient(x), Vec3d{ 0, 0, 1 }));

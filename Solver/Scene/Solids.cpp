@@ -1,7 +1,5 @@
 #include "Solids.h"
 
-#include "ShapeMap.h"
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -138,7 +136,6 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
 {
   const double h = p.smoothingLength();
   const Box& d = p.domain;
-  const ShapeKernels kernels = shapeKernels(p);
   std::vector<DistanceGrid> fields;
   for (std::size_t k = 0; k < solids.size(); ++k)
   {
@@ -196,8 +193,11 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
       fields.push_back(boxDistanceOn(s.box, gridOver(reach, cell, h, "obstacles")));
     }
     fields.back().contactAngle = s.contactAngle;
-    requireResolved(fields.back(), name);
-    buildShapeMap(fields.back(), kernels);
+    if (s.density == 0)
+    {
+      // A body's own checks name a shell that encloses nothing (RigidBody.h).
+      requireResolved(fields.back(), name);
+    }
   }
   return fields;
 }

@@ -49,8 +49,9 @@ struct SolidRegion
 // The field of each solid: nodes s/2 apart (coarser only beyond 2^24 nodes) over the part of the
 // solid within h of the domain (a terrain larger than the tank costs only what is inside),
 // padded by h (the reach of the boundary's sums); a mesh's distance is exact within h + 2 nodes
-// of its surface. Each field carries its shape map (ShapeMap.h). Throws InvalidInput naming the
-// solid when it lies wholly outside the domain, its mesh is bad, or no node lies inside it.
+// of its surface. No shape map (ShapeMap.h; buildShapeMap adds one). Throws InvalidInput naming
+// the solid when it lies wholly outside the domain, its mesh is bad, or no node lies inside it (a
+// solid that is not a body: a body names a shell that encloses nothing itself).
 std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, const Parameters& p);
 
 // Whether x is inside a solid (its field < 0) with the solids at `poses` (none: as sampled).

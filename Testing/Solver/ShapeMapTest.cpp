@@ -1,7 +1,7 @@
 // The solids' shape maps (Scene/ShapeMap.h) as the stages read them: 1 and the normal on a flat
 // face, a cube's mesh the same as the box, the map between its nodes against direct integration,
-// and the lattice at rest around a box's face, edge and corner and cut by a sphere, against the
-// tangent plane alone.
+// and the density a lattice at rest reads around a box's face, edge and corner and cut by a
+// sphere, against the tangent plane alone.
 #include "CpuStepper.h"
 #include "ShapeMap.h"
 #include "Solids.h"
@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -59,21 +60,33 @@ struct RestDensity
   int count[4] = { 0, 0, 0, 0 };
 };
 
+// A solid's field as a run makes it (solidFields), with its shape map.
+DistanceGrid mapped(const SolidRegion& solid, const Parameters& p)
+{
+  DistanceGrid g = solidFields({ solid }, p)[0];
+  EXPECT_TRUE(g.shape.empty());
+  buildShapeMap(g, shapeKernels(p));
+  EXPECT_EQ(g.shape.size(), g.phi.size() * kShapeValues);
+  return g;
+}
+
+// The density the stages read at rest, with the shape map (exact) or without it (the tangent
+// plane).
 RestDensity restDensityAround(const SolidRegion& solid, bool exact)
 {
   const Parameters p = tankParameters();
   Scene scene;
   scene.domain = p.domain;
   scene.boxes.push_back({ p.domain.min, p.domain.max, { 0, 0, 0 } });
-  std::vector<DistanceGrid> fields = solidFields({ solid }, p);
+  DistanceGrid field = mapped(solid, p);
   if (!exact)
   {
-    fields[0].shape.clear();
+    field.shape.clear();
   }
   std::size_t removed = 0;
-  const ParticleBatch fluid = outsideSolids(fillScene(scene, p), fields, {}, removed);
+  const ParticleBatch fluid = outsideSolids(fillScene(scene, p), { field }, {}, removed);
   CpuStepper<double> stepper(false, p, fluid);
-  stepper.setObstacles(fields);
+  stepper.setObstacles({ field });
   Snapshot<double> state;
   stepper.read(state);
   const double h = p.smoothingLength();
@@ -84,13 +97,14 @@ RestDensity restDensityAround(const SolidRegion& solid, bool exact)
     const Vec3d x = state.position[i];
     const double wall = std::min({ x.x, x.y, x.z, p.domain.max.x - x.x, p.domain.max.y - x.y,
       p.domain.max.z - x.z });
-    if (wall < h || fields[0].at(x) >= h)
+    if (wall < h || field.at(x) >= h)
     {
       continue;
     }
     const int beyond = (x.x < bounds.min.x || x.x > bounds.max.x) +
       (x.y < bounds.min.y || x.y > bounds.max.y) + (x.z < bounds.min.z || x.z > bounds.max.z);
-    r.worst[beyond] = std::max(r.worst[beyond], std::abs(state.density[i] / p.restDensity - 1));
+    r.worst[beyond] =
+      std::max(r.worst[beyond], std::abs(state.density[i] / p.restDensity - 1));
     ++r.count[beyond];
   }
   return r;
@@ -112,8 +126,17 @@ SolidRegion cube()
 TEST(ShapeMap, AFlatFaceReadsOneAndItsNormal)
 {
   const Parameters p = tankParameters();
-  const DistanceGrid g = solidFields({ cube() }, p)[0];
+  const DistanceGrid g = mapped(cube(), p);
   ASSERT_EQ(g.shape.size(), g.phi.size() * kShapeValues);
+  DistanceGrid again = g;
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t integrated = buildShapeMap(again, shapeKernels(p));
+  const double seconds =
+    std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("the cube's map: %zu nodes, %zu integrated, %.2f s\n", g.phi.size(), integrated,
+    seconds);
+  // The same map whatever the threads.
+  EXPECT_EQ(again.shape, g.shape);
   const double h = p.smoothingLength();
   // Points within h of the top face, farther than h from its edges: the half-space itself.
   double worst = 0;
@@ -152,7 +175,7 @@ TEST(ShapeMap, BetweenItsNodesTheMapFollowsTheIntegrals)
   ball.radius = 0.2;
   for (const SolidRegion& solid : { cube(), ball })
   {
-    const DistanceGrid g = solidFields({ solid }, p)[0];
+    const DistanceGrid g = mapped(solid, p);
     double worst = 0;
     int points = 0;
     // A line across the corner (or the ball's side), off the nodes.
@@ -205,13 +228,14 @@ TEST(ShapeMap, ACubesMeshHasTheBoxsMap)
   }
   mesh.mesh.triangles = { { 0, 2, 1 }, { 1, 2, 3 }, { 4, 5, 6 }, { 5, 7, 6 }, { 0, 1, 4 },
     { 1, 5, 4 }, { 2, 6, 3 }, { 3, 6, 7 }, { 0, 4, 2 }, { 2, 4, 6 }, { 1, 3, 5 }, { 3, 7, 5 } };
-  const DistanceGrid fromMesh = solidFields({ mesh }, p)[0];
-  const DistanceGrid fromBox = solidFields({ cube() }, p)[0];
+  const DistanceGrid fromMesh = mapped(mesh, p);
+  const DistanceGrid fromBox = mapped(cube(), p);
   const double h = p.smoothingLength();
   double worst = 0;
   for (double t = 0; t < 1.2; t += 0.0231)
   {
-    const Vec3d x{ 0.8 + 0.3 * h * std::sin(7 * t), 0.4 + t * 0.35, 0.8 + 0.5 * h * std::cos(5 * t) };
+    const Vec3d x{ 0.8 + 0.3 * h * std::sin(7 * t), 0.4 + t * 0.35,
+      0.8 + 0.5 * h * std::cos(5 * t) };
     if (fromBox.at(x) >= h)
     {
       continue;
