@@ -73,7 +73,7 @@ PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real, N
   forEachNearSolid(pi, f,
     [&](const Vec3<Real>&, const SolidSample<Real>& s, const DistanceGridView<Real>&) {
     rho += s.poly6;
-    gradI += s.spiky * f.c.massOverRho0;
+    gradI += s.spikyDirection * (s.spiky * f.c.massOverRho0);
     sumGradJ2 += s.spiky2 * f.c.massOverRho0 * f.c.massOverRho0;
   });
   rho *= f.c.mass;

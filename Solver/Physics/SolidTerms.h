@@ -41,15 +41,18 @@ PBF_HD PBF_INLINE void forEachSolidField(
 }
 
 // What a solid adds to the sums of a particle at q, at outward normal n with the table's sums b
-// at q's distance: the table times the solid's shape factors there (Scene/ShapeMap.h), 1 and n on
-// a flat face. A solid without a shape map is its tangent plane: the table along n.
+// at q's distance: the table's sums, the spiky and s_corr ones along their directions. Without a
+// shape map both directions are n, the tangent plane's; with one (Scene/ShapeMap.h) the sums are
+// the table's times the solid's factors there, 1 and n on a flat face.
 template <class Real>
 struct SolidSample
 {
-  Real poly6;          // density, before the mass
-  Vec3<Real> spiky;    // eq. 8 and 14, before m / rho_0
-  Real spiky2;         // eq. 11's denominator
-  Vec3<Real> tensile;  // s_corr, before this step's coefficient
+  Real poly6;            // density, before the mass
+  Real spiky;            // eq. 8 and 14 along spikyDirection, before m / rho_0
+  Real spiky2;           // eq. 11's denominator
+  Real tensile;          // s_corr along tensileDirection, before this step's coefficient
+  Vec3<Real> spikyDirection, tensileDirection;
+  bool shaped;           // false: both directions are n
 };
 
 template <class Real>
@@ -58,12 +61,12 @@ PBF_HD PBF_INLINE SolidSample<Real> solidSample(const DistanceGridView<Real>& so
 {
   if (!solid.shape)
   {
-    return { b.poly6, n * b.spiky, b.spiky2, n * b.tensile };
+    return { b.poly6, b.spiky, b.spiky2, b.tensile, n, n, false };
   }
   Real r[kShapeValues];
   solid.shapeAt(q, r);
-  return { b.poly6 * r[0], Vec3<Real>{ r[1], r[2], r[3] } * b.spiky, b.spiky2 * r[4],
-    Vec3<Real>{ r[5], r[6], r[7] } * b.tensile };
+  return { b.poly6 * r[0], b.spiky, b.spiky2 * r[4], b.tensile, Vec3<Real>{ r[1], r[2], r[3] },
+    Vec3<Real>{ r[5], r[6], r[7] }, true };
 }
 
 // Calls visit(n, s, solid) for each solid within h of q: n its outward unit normal there (the
@@ -135,30 +138,23 @@ PBF_HD PBF_INLINE SolidMirror<Real> nearestSolid(
 template <class Real>
 PBF_HD PBF_INLINE Vec3<Real> solidShare(const SolidSample<Real>& s, Real lambdaI, Real tensile)
 {
-  return s.spiky * (lambdaI + lambdaI) + s.tensile * tensile;
+  if (!s.shaped)
+  {
+    return s.spikyDirection * (s.spiky * (lambdaI + lambdaI) + tensile * s.tensile);
+  }
+  return s.spikyDirection * (s.spiky * (lambdaI + lambdaI)) +
+    s.tensileDirection * (tensile * s.tensile);
 }
 
 // A particle inside an obstacle goes to its surface, along the field's gradient. Solid by solid:
-// each is asked where the particle is after the ones before it moved it. Near an edge or a corner
-// the interpolated field bends, so one move along its gradient can stop short of the surface:
-// the solid is asked again, up to kCollisionLooks times in all, until the particle reads outside.
-constexpr int kCollisionLooks = 4;
-
+// each is asked where the particle is after the ones before it moved it.
 template <class Real, class Neighbors>
 PBF_HD PBF_INLINE Vec3<Real> collideWithObstacles(Vec3<Real> q, const FluidView<Real, Neighbors>& f)
 {
-  forEachSolidField(q, f, [&](int o, Real d, Vec3<Real> gradient, Real g) {
-#if defined(__CUDA_ARCH__)
-#pragma unroll 1
-#endif
-    for (int look = 1; d < Real(0) && g > Real(0); ++look)
+  forEachSolidField(q, f, [&](int, Real d, const Vec3<Real>& gradient, Real g) {
+    if (d < Real(0) && g > Real(0))
     {
       q -= gradient * (d / g);
-      if (look == kCollisionLooks || !f.obstacles[o].within(q, &d, &gradient))
-      {
-        break;
-      }
-      g = length(gradient);
     }
   });
   return q;

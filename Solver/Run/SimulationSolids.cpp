@@ -272,10 +272,10 @@ SurfaceSolids Simulation::surfaceSolids(double time) const
   const std::vector<SolidPose> poses = solidPoses(time);
   for (std::size_t k = 0; k < solidFields_.size(); ++k)
   {
-    // posesAt gives none when no solid moves: each then stands where its field was made.
-    // Contacts read the field alone.
-  const DistanceGridView<double> view =
-    solidFields_[k].view<double>(solidFields_[k].phi.data(), nullptr);
+    // posesAt gives none when no solid moves: each then stands where its field was made. The
+    // surface and the probes read the field alone.
+    const DistanceGridView<double> view =
+      solidFields_[k].view<double>(solidFields_[k].phi.data(), nullptr);
     solids.views.push_back(k < poses.size() ? placed(view, poses[k]) : view);
   }
   return solids;

@@ -63,7 +63,8 @@ Radial radial(double a, double b, const ShapeKernels& k)
   {
     const double r = mid + half * t;
     const double w = kernels.poly6(r * r);
-    // |grad W_spiky| at r: the gradient is g(r) times the unit vector from y to x.
+    // The spiky gradient at r: grad_x W(x - y) is g(r) times the unit vector from y to x, with
+    // g < 0, so it points towards y.
     const double g = r < k.h ? kernels.spikyGradScale * (k.h - r) * (k.h - r) : 0.0;
     const double volume = weight * half * r * r;
     sum.poly6 += w * volume;
@@ -75,7 +76,7 @@ Radial radial(double a, double b, const ShapeKernels& k)
 }
 
 // Adds a ray's radial integrals, weighted by its solid angle, to the totals. The gradient with
-// respect to x of W(x - y) points from y to x: against the ray's direction.
+// respect to x of W(x - y) is g times the unit vector from y to x, minus the ray's direction.
 void accumulate(ShapeIntegrals& total, const Radial& r, const Vec3d& direction, double weight)
 {
   total.poly6 += weight * r.poly6;

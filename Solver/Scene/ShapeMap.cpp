@@ -13,6 +13,8 @@ namespace
 
 // See shapeFactorsAt.
 constexpr double kRegularization = 1e-3;
+// Moves along the gradient towards a node's surface point.
+constexpr int kLooks = 4;
 
 Vec3d unitOr(const Vec3d& v, const Vec3d& fallback)
 {
@@ -30,7 +32,8 @@ std::array<float, kShapeValues> flatFactors(const Vec3d& n)
 // every node of the cells that cover the ball, as far as the grid goes, on the plane to a
 // ten-thousandth of a cell. The trilinear field between such nodes is that plane exactly, so the
 // node's factors are the flat ones without integrating (most nodes of a solid's faces). Beyond
-// the grid the field only grows (SignedDistance.h): the solid lies within it.
+// the grid the field only grows (SignedDistance.h), and a grid cut at the domain reaches h past
+// where any particle can be.
 bool flatAround(const DistanceGrid& g, int i, int j, int k, double h)
 {
   const Vec3d x = g.nodePosition(i, j, k);
@@ -74,12 +77,15 @@ std::array<float, kShapeValues> shapeFactorsAt(
   const Vec3d n = unitOr(grid.gradient(x), Vec3d{ 0, 0, 1 });
   double d = grid.at(x);
   Vec3d at = x;
-  if (d < 0)
+  // Inside: a particle found here goes to the surface along the field's gradient
+  // (collideWithObstacles); the factors are those of its surface point, looked for again where
+  // the field bends near an edge.
+  for (int look = 0; look < kLooks && d < 0; ++look)
   {
-    // Where the collision puts a particle found here: its nearest surface point.
-    at = x - n * d;
-    d = std::max(0.0, grid.at(at));
+    at -= unitOr(grid.gradient(at), n) * d;
+    d = grid.at(at);
   }
+  d = std::max(0.0, d);
   const Vec3d outward = unitOr(grid.gradient(at), n);
   if (d >= k.h)
   {
@@ -96,8 +102,8 @@ std::array<float, kShapeValues> shapeFactorsAt(
     const double e = kRegularization * surfaceValue;
     return (solidValue + e) / (halfValue + e);
   };
-  // The half-space's vectors lie along its pole, into the solid: along the outward normal they
-  // are minus their z.
+  // The half-space's vectors lie along its pole (the spiky one into the solid, s_corr's out of
+  // it): their components along the outward normal are minus their z.
   const double es = kRegularization * -surface.spiky.z, et = kRegularization * -surface.tensile.z;
   const Vec3d s = (solid.spiky + outward * es) * (1 / (-half.spiky.z + es));
   const Vec3d t = (solid.tensile + outward * et) * (1 / (-half.tensile.z + et));
