@@ -177,6 +177,14 @@ std::vector<ParameterSpec> forceRows()
       "the fluid continued beyond it: fluid at rest against a wall then reads rho_0 instead of "
       "packing against it.",
       PBF_BOOLEAN(mirrorWalls) },
+    { "exactBoundaries", "ExactBoundaries", "exact-boundaries", "Exact Boundaries", "Solver", "",
+      T::Boolean, boolean, 0, 1, true, nullptr, "",
+      "Obstacles and floating bodies push the fluid by their true shape: near a solid's edges "
+      "and corners a particle feels only the part of the solid within its reach, from a shape "
+      "map integrated over the solid's distance field at the run's start (seconds of the cores "
+      "for a large solid, then cached). Off: every solid acts as its tangent plane, exact on "
+      "flat faces only.",
+      PBF_BOOLEAN(exactBoundaries) },
     { "wallFriction", "WallFriction", "friction", "Wall Friction", "Solver", "", T::Real,
       unitInterval, 0.0, 1.0, false, nullptr, "0 free-slip, 1 no-slip",
       "Friction of the domain walls and the obstacles: 0 (the default) lets the fluid slide "

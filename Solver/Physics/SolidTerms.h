@@ -146,15 +146,40 @@ PBF_HD PBF_INLINE Vec3<Real> solidShare(const SolidSample<Real>& s, Real lambdaI
     s.tensileDirection * (tensile * s.tensile);
 }
 
+// Collision looks at a solid with a shape map: near its edges the trilinear field bends, and a
+// particle its gradient moved once can still be inside; the map's factors, which push the fluid
+// closer to an edge than the tangent plane does, bring particles there.
+constexpr int kCollisionLooks = 3;
+
 // A particle inside an obstacle goes to its surface, along the field's gradient. Solid by solid:
-// each is asked where the particle is after the ones before it moved it.
+// each is asked where the particle is after the ones before it moved it; a solid with a map is
+// asked again where its move left the particle, up to kCollisionLooks times.
 template <class Real, class Neighbors>
 PBF_HD PBF_INLINE Vec3<Real> collideWithObstacles(Vec3<Real> q, const FluidView<Real, Neighbors>& f)
 {
-  forEachSolidField(q, f, [&](int, Real d, const Vec3<Real>& gradient, Real g) {
+  forEachSolidField(q, f, [&](int o, Real d, const Vec3<Real>& gradient, Real g) {
     if (d < Real(0) && g > Real(0))
     {
       q -= gradient * (d / g);
+      const DistanceGridView<Real>& solid = f.obstacles[o];
+#if defined(__CUDACC__)
+#pragma unroll 1
+#endif
+      for (int look = 1; solid.shape && look < kCollisionLooks; ++look)
+      {
+        Real again;
+        Vec3<Real> towards;
+        if (!solid.within(q, &again, &towards) || !(again < Real(0)))
+        {
+          break;
+        }
+        const Real l = length(towards);
+        if (!(l > Real(0)))
+        {
+          break;
+        }
+        q -= towards * (again / l);
+      }
     }
   });
   return q;

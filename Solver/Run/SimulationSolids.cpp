@@ -14,6 +14,44 @@
 
 namespace pbf
 {
+namespace
+{
+
+// A body held until its release stays at rest where it is given; after it, the coordinates and
+// momenta of its locked freedoms are the resting state's, so it moves along its free axes and
+// turns only if it may (a sphere on a vertical guide heaves).
+RigidState withinFreedoms(
+  const RigidState& s, const RigidState& rest, const SolidRegion& solid, double end)
+{
+  if (end <= solid.release)
+  {
+    return rest;
+  }
+  RigidState r = s;
+  if (!solid.freeAxes[0])
+  {
+    r.centre.x = rest.centre.x;
+    r.velocity.x = 0;
+  }
+  if (!solid.freeAxes[1])
+  {
+    r.centre.y = rest.centre.y;
+    r.velocity.y = 0;
+  }
+  if (!solid.freeAxes[2])
+  {
+    r.centre.z = rest.centre.z;
+    r.velocity.z = 0;
+  }
+  if (!solid.turns)
+  {
+    r.orientation = rest.orientation;
+    r.angularMomentum = rest.angularMomentum;
+  }
+  return r;
+}
+
+} // namespace
 
 // The fastest point of a moving solid now and one largest step on (the next step may begin a
 // faster keyframe segment): a function of the time alone, so the steps stay a function of the
@@ -125,6 +163,10 @@ void Simulation::moveBodies(double dt, double end)
 {
   for (Body& body : bodies_)
   {
+    if (end <= scene_.solids[body.solid].release)
+    {
+      continue; // held where it is given (withinFreedoms puts it back after the contacts)
+    }
     body.state = advanceRigid(
       body.state, body.mass, body.load.force, body.load.torque, parameters_.gravity, dt);
   }
@@ -148,6 +190,8 @@ void Simulation::moveBodies(double dt, double end)
   for (Body& body : bodies_)
   {
     body.state = keepInside(body.state, body.mass, body.hull, parameters_.domain);
+    body.state =
+      withinFreedoms(body.state, restingState(body.mass), scene_.solids[body.solid], end);
   }
 }
 

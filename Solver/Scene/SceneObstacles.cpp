@@ -2,6 +2,7 @@
 // and how they move (keyframes) or are moved (a density: a body the fluid moves).
 #include "SceneJson.h"
 
+#include <array>
 #include <cmath>
 
 namespace pbf::scenejson
@@ -54,21 +55,24 @@ SolidRegion parseObstacleShape(const json& item, const std::string& path)
   SolidRegion solid;
   if (type == "box")
   {
-    requireKeys(item, path, { "type", "name", "min", "max", "motion", "density", "contactAngle" }, { "min", "max" });
+    requireKeys(item, path, { "type", "name", "min", "max", "motion", "density", "contactAngle",
+      "degreesOfFreedom", "release" }, { "min", "max" });
     solid.kind = SolidRegion::Kind::Box;
     solid.box = { vector3(item, path, "min"), vector3(item, path, "max") };
     requireOrdered(solid.box.min, solid.box.max, path, item["max"]);
   }
   else if (type == "sphere")
   {
-    requireKeys(item, path, { "type", "name", "center", "radius", "motion", "density", "contactAngle" }, { "center", "radius" });
+    requireKeys(item, path, { "type", "name", "center", "radius", "motion", "density", "contactAngle",
+      "degreesOfFreedom", "release" }, { "center", "radius" });
     solid.kind = SolidRegion::Kind::Sphere;
     solid.center = vector3(item, path, "center");
     solid.radius = positive(item, path, "radius");
   }
   else if (type == "mesh")
   {
-    requireKeys(item, path, { "type", "name", "file", "thickness", "motion", "density", "contactAngle" }, { "file" });
+    requireKeys(item, path, { "type", "name", "file", "thickness", "motion", "density", "contactAngle",
+      "degreesOfFreedom", "release" }, { "file" });
     if (!item["file"].is_string() || item["file"].get<std::string>().empty())
     {
       reject(path + ".file", item["file"], "must be the path of an STL, OBJ, PLY or VTP file");
@@ -86,6 +90,53 @@ SolidRegion parseObstacleShape(const json& item, const std::string& path)
     reject(path + ".type", item["type"], "must be \"box\", \"sphere\" or \"mesh\"");
   }
   return solid;
+}
+
+// A body's "degreesOfFreedom" (the axes its centre moves along, and "rotation" if it turns; all
+// when absent) and "release" (the time it is held until); both for bodies only.
+void parseBodyFreedoms(const json& item, const std::string& path, SolidRegion& solid)
+{
+  for (const char* key : { "degreesOfFreedom", "release" })
+  {
+    if (item.contains(key) && !item.contains("density"))
+    {
+      reject(path + "." + key, item[key], "applies to a body the fluid moves (give its density)");
+    }
+  }
+  if (item.contains("degreesOfFreedom"))
+  {
+    const json& list = item["degreesOfFreedom"];
+    const char* const names[4] = { "x", "y", "z", "rotation" };
+    const std::string rule = "must be a list of distinct \"x\", \"y\", \"z\", \"rotation\"";
+    if (!list.is_array())
+    {
+      reject(path + ".degreesOfFreedom", list, rule);
+    }
+    std::array<bool, 4> free{ false, false, false, false };
+    for (const json& name : list)
+    {
+      int which = -1;
+      for (int k = 0; k < 4 && name.is_string(); ++k)
+      {
+        which = name.get<std::string>() == names[k] ? k : which;
+      }
+      if (which < 0 || free[static_cast<std::size_t>(which)])
+      {
+        reject(path + ".degreesOfFreedom", list, rule);
+      }
+      free[static_cast<std::size_t>(which)] = true;
+    }
+    solid.freeAxes = { free[0], free[1], free[2] };
+    solid.turns = free[3];
+  }
+  if (item.contains("release"))
+  {
+    solid.release = number(item, path, "release");
+    if (!(solid.release >= 0) || !std::isfinite(solid.release))
+    {
+      reject(path + ".release", item["release"], "must be a finite time >= 0 [s]");
+    }
+  }
 }
 
 // An obstacle's keys beyond its shape: its name, motion, contact angle and density.
@@ -129,6 +180,7 @@ void parseObstacleProperties(const json& item, const std::string& path, SolidReg
         "an obstacle is moved either by the fluid (density) or by its keyframes (motion), not both");
     }
   }
+  parseBodyFreedoms(item, path, solid);
 }
 
 } // namespace

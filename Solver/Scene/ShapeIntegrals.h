@@ -33,7 +33,7 @@ struct ShapeIntegrals
 
 struct ShapeRule
 {
-  int polar = 12;             // Gauss-Legendre nodes in mu on each side of the split
+  int polar = 8;             // Gauss-Legendre nodes in mu on each side of the split
   int marchSteps = 64;        // the march's shortest stride is h / marchSteps
 };
 

@@ -13,10 +13,10 @@
 // rho_0 by less than a difference of the same integrals added to the table: the table's layering
 // near the particle scales with the solid's share.)
 //
-// A run's solids (Solids.h, solidFields) carry no map: the stages take them as their tangent
-// planes. Integrating the nodes along a box's edges costs about 0.56 ms of a core each (4.2 s on
-// two cores for a cube of 8 spacings; 95 s for a moving 4 x 1.1 x 2 m box at 2.5 cm, whose grid
-// covers all of it), too long to build for every solid at every run's start.
+// A run's solids get their maps from solidFields (Solids.h) unless Parameters::exactBoundaries
+// is off, through a cache (ShapeMapCache.h). A node costs about 0.14 ms of a core to integrate
+// (256 rays); the nodes whose surroundings repeat another's (along a box's edges,
+// RepeatedWindows.h) copy its factors instead, so a box costs about its eight corners.
 //
 // Nodes within h + 2 cells outside and 2 cells inside the surface are integrated (a node inside
 // takes the factors of its nearest surface point, where the collision puts a particle), unless
@@ -36,12 +36,25 @@ namespace pbf
 // The kernels of a run: h, s_corr's n and W(delta_q).
 ShapeKernels shapeKernels(const Parameters& parameters);
 
+// The domain's mirror walls as a fixed solid's map sees them (Parameters::mirrorWalls): the
+// stages take the world beyond a wall as the mirror image of the inside, so a solid that meets a
+// wall (a floor slab, a box standing on the floor) continues in its image there instead of
+// ending at it, and the map integrates the field folded back into the domain. A moving solid's
+// or a body's map is in its own frame, which the walls move through: none for them.
+struct ShapeWalls
+{
+  bool mirror = false;
+  Box domain{};
+};
+ShapeWalls shapeWalls(const Parameters& parameters, bool fixedSolid);
+
 // The kShapeValues factors at x of the grid's frame, from the grid's field.
-std::array<float, kShapeValues> shapeFactorsAt(
-  const DistanceGrid& grid, const Vec3d& x, const ShapeKernels& k, const ShapeRule& rule = {});
+std::array<float, kShapeValues> shapeFactorsAt(const DistanceGrid& grid, const Vec3d& x,
+  const ShapeKernels& k, const ShapeWalls& walls = {}, const ShapeRule& rule = {});
 
 // Fills grid.shape, node by node (OpenMP threads, each node on its own: the same map whatever the
 // threads). Returns how many nodes were integrated (the rest lie on a flat face or away from it).
-std::size_t buildShapeMap(DistanceGrid& grid, const ShapeKernels& k, const ShapeRule& rule = {});
+std::size_t buildShapeMap(DistanceGrid& grid, const ShapeKernels& k, const ShapeWalls& walls = {},
+  const ShapeRule& rule = {});
 
 } // namespace pbf

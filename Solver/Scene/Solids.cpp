@@ -1,5 +1,7 @@
 #include "Solids.h"
 
+#include "ShapeMapCache.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -75,6 +77,25 @@ void requireResolved(const DistanceGrid& g, const std::string& name)
     text << name << ": thinner than its grid resolves: no node of cell " << g.cell
          << " m lies inside it (the nearest is " << least << " m from its surface)";
     throw InvalidInput(text.str());
+  }
+}
+
+// A map with a value that is not a number (a field the integration cannot follow) would poison
+// every particle near the solid: InvalidInput naming the solid and the node.
+void requireFiniteMap(const DistanceGrid& g, const std::string& name)
+{
+  for (std::size_t v = 0; v < g.shape.size(); ++v)
+  {
+    if (!std::isfinite(g.shape[v]))
+    {
+      const std::size_t node = v / kShapeValues;
+      const Vec3d x = g.nodePosition(static_cast<int>(node % g.nx),
+        static_cast<int>(node / g.nx % g.ny), static_cast<int>(node / g.nx / g.ny));
+      std::ostringstream text;
+      text << name << ": its shape map cannot be built: the node at (" << x.x << ", " << x.y
+           << ", " << x.z << ") reads " << g.shape[v];
+      throw InvalidInput(text.str());
+    }
   }
 }
 
@@ -197,6 +218,12 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
     {
       // A body's own checks name a shell that encloses nothing (RigidBody.h).
       requireResolved(fields.back(), name);
+    }
+    if (p.exactBoundaries)
+    {
+      attachShapeMap(
+        fields.back(), shapeKernels(p), shapeWalls(p, !s.motion.moves() && s.density == 0));
+      requireFiniteMap(fields.back(), name);
     }
   }
   return fields;

@@ -36,6 +36,13 @@ struct SolidRegion
   // > 0: a body the fluid moves (Scene/RigidBody.h), of this uniform density [kg/m^3], from rest
   // where it is given; 0: it stays or follows `motion`.
   double density = 0;
+  // A body's freedoms (a scene's "degreesOfFreedom"): the world axes its centre moves along and
+  // whether it turns; a body on a vertical guide heaves only (x and z held, no turning).
+  std::array<bool, 3> freeAxes{ true, true, true };
+  bool turns = true;
+  // A body is held at rest where it is given until this time [s], the fluid pushing on it, and
+  // released then: a drop test's hold while the water settles (a scene's "release").
+  double release = 0;
   // The angle each liquid's surface makes with it [degrees] (SurfaceTension.h's adhesion); 90, the
   // default, is neutral. The obstacle's "contactAngle" sets every liquid's, a liquid's
   // "contactAngles" by the solid's name its own.
@@ -49,9 +56,10 @@ struct SolidRegion
 // The field of each solid: nodes s/2 apart (coarser only beyond 2^24 nodes) over the part of the
 // solid within h of the domain (a terrain larger than the tank costs only what is inside),
 // padded by h (the reach of the boundary's sums); a mesh's distance is exact within h + 2 nodes
-// of its surface. No shape map (ShapeMap.h; buildShapeMap adds one). Throws InvalidInput naming
-// the solid when it lies wholly outside the domain, its mesh is bad, or no node lies inside it (a
-// solid that is not a body: a body names a shell that encloses nothing itself).
+// of its surface. With p.exactBoundaries each grid carries its shape map (ShapeMap.h, from the
+// cache of ShapeMapCache.h). Throws InvalidInput naming the solid when it lies wholly outside the
+// domain, its mesh is bad, no node lies inside it (a solid that is not a body: a body names a
+// shell that encloses nothing itself), or its map holds a value that is not a number.
 std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, const Parameters& p);
 
 // Whether x is inside a solid (its field < 0) with the solids at `poses` (none: as sampled).

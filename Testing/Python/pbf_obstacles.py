@@ -52,8 +52,16 @@ fluid = PositionBasedFluids(Obstacles=[sphere, block], ParticleSpacing=SPACING, 
                             NumberOfFrames=FRAMES, FrameInterval=INTERVAL)
 
 
+# A solid is its distance grid's zero set (nodes s/2 apart, trilinear between them), which near
+# an edge or across a curved face lies inside the exact shape by a little: a particle centre may
+# sit that far inside the exact box or cylinder, no farther. With the solids' shape maps the fluid
+# presses closer to their edges than the tangent plane let it (measured 0.002 s inside the STL
+# box's edge, 0.005 s inside the pillar's facets); 0.01 s.
+GRID = 0.01 * SPACING
+
+
 def inside_block(points):
-    return numpy.all((points > BLOCK_LO) & (points < BLOCK_HI), axis=1)
+    return numpy.all((points > BLOCK_LO + GRID) & (points < BLOCK_HI - GRID), axis=1)
 
 
 closest_sphere, closest_block, reached = numpy.inf, numpy.inf, 0
@@ -286,7 +294,8 @@ expect(nearest < HALF + SPACING, "the surge never reached the plate (%.3f m)" % 
 print("plate of 0.06 m: closest particle %.4f m from its sheet" % nearest)
 
 # A scene file's mesh obstacle: Data/Examples/dam_break_pillar.json reads pillar.stl (next to it)
-# with VTK's STL reader. The pillar's facets lie at most 0.08 (1 - cos(pi / 24)) inside its radius.
+# with VTK's STL reader. The pillar's facets lie at most 0.08 (1 - cos(pi / 24)) inside its radius
+# (and its grid's surface GRID inside them).
 data = os.environ.get("PBF_DATA_DIR", os.path.join(os.path.dirname(__file__), "..", "..", "Data"))
 pillar = PositionBasedFluids(SceneFile=os.path.join(data, "Examples", "dam_break_pillar.json"),  # noqa: F821
                              ParticleSpacing=SPACING, NumberOfFrames=FRAMES, FrameInterval=INTERVAL)
@@ -295,7 +304,7 @@ for f in range(0, FRAMES + 1, 2):
     p = T.frame(pillar, f * INTERVAL)["points"]
     below = p[:, 1] < 0.5  # the pillar's top
     r = numpy.hypot(p[below, 0] - 1.0, p[below, 2] - 0.3)
-    expect(r.size == 0 or r.min() >= 0.08 * math.cos(math.pi / 24),
+    expect(r.size == 0 or r.min() >= 0.08 * math.cos(math.pi / 24) - GRID,
            "frame %d: a particle %.4f m from the pillar's axis" % (f, r.min()))
     closest = numpy.minimum(closest, r.min() if r.size else numpy.inf)
 expect(closest < 0.08 + SPACING, "the surge never reached the pillar (%.3f m)" % closest)

@@ -52,10 +52,10 @@ double boxDistance(const Vec3d& p, const Vec3d& lo, const Vec3d& hi)
 } // namespace
 
 // A half-space at distance d: the poly6 integral against its closed form (1/2 at d = 0, half the
-// kernel's mass) and the spiky gradient's normal component against its own. Tolerance 2e-4 of
-// the value at d = 0: the polar rule (12 nodes on each side of the split) integrates functions of
-// d / mu, not polynomials, steepest close to the face (measured 1.0e-4 at d = s/8, 6e-6 at s/4,
-// below 1e-7 from s/2). The shape factor divides by the same rule's half-space, so a flat face
+// kernel's mass) and the spiky gradient's normal component against its own. Tolerance 5e-4 of
+// the value at d = 0: the polar rule (8 nodes on each side of the split) integrates functions of
+// d / mu, not polynomials, steepest close to the face (measured 3.6e-4 at d = s/8, 2.1e-4 at
+// s/4, below 1e-5 from s/2). The shape factor divides by the same rule's half-space, so a flat face
 // stays exact whatever this error.
 TEST(ShapeIntegrals, AHalfSpaceMatchesItsClosedForms)
 {
@@ -65,8 +65,8 @@ TEST(ShapeIntegrals, AHalfSpaceMatchesItsClosedForms)
     const ShapeIntegrals flat = integrateOverHalfSpace(d, kKernels);
     std::printf("d = %.3f: poly6 %.12f (closed %.12f), spiky.z %.12f (closed %.12f)\n", d,
       flat.poly6, halfSpacePoly6(d), flat.spiky.z, halfSpaceSpikyNormal(d));
-    EXPECT_NEAR(flat.poly6, halfSpacePoly6(d), 2e-4 * halfSpacePoly6(0.0)) << "d = " << d;
-    EXPECT_NEAR(flat.spiky.z, halfSpaceSpikyNormal(d), 2e-4 * halfSpaceSpikyNormal(0.0))
+    EXPECT_NEAR(flat.poly6, halfSpacePoly6(d), 5e-4 * halfSpacePoly6(0.0)) << "d = " << d;
+    EXPECT_NEAR(flat.spiky.z, halfSpaceSpikyNormal(d), 5e-4 * halfSpaceSpikyNormal(0.0))
       << "d = " << d;
     EXPECT_NEAR(flat.spiky.x, 0.0, 1e-12);
     EXPECT_NEAR(flat.spiky.y, 0.0, 1e-12);
@@ -76,12 +76,15 @@ TEST(ShapeIntegrals, AHalfSpaceMatchesItsClosedForms)
 }
 
 // A tilted plane: the rays' march and bisection give what the half-space's exact crossings give,
-// the vectors along the pole. Tolerance 1e-9 relative: the bisection stops at 1e-15 of the ray.
+// the vectors along the pole. Tolerance 1e-9 relative: the crossings are found to 1e-9 of h;
+// the vectors' parts across the normal, which cancel between opposite azimuths, to 1e-9 of the
+// half-space's value at the face (at d = 1.7 s the tensile vector itself is ~1e-12 of it).
 TEST(ShapeIntegrals, AFlatFaceOfAnyOrientationIsTheHalfSpace)
 {
   const Vec3d n = Vec3d{ 0.3, -0.5, 0.8 } * (1 / length(Vec3d{ 0.3, -0.5, 0.8 }));
   const Vec3d onPlane{ 0.2, 0.1, -0.3 };
   const auto plane = [&](const Vec3d& y) { return dot(y - onPlane, n); };
+  const ShapeIntegrals face = integrateOverHalfSpace(0.0, kKernels);
   for (double d : { 0.1, 0.5, 1.0, 1.7 })
   {
     const Vec3d x = onPlane + n * d;
@@ -89,16 +92,16 @@ TEST(ShapeIntegrals, AFlatFaceOfAnyOrientationIsTheHalfSpace)
     const ShapeIntegrals flat = integrateOverHalfSpace(d, kKernels);
     EXPECT_NEAR(solid.poly6, flat.poly6, 1e-9 * flat.poly6) << "d = " << d;
     EXPECT_NEAR(solid.spiky2, flat.spiky2, 1e-9 * flat.spiky2) << "d = " << d;
-    EXPECT_NEAR(length(solid.spiky - n * -flat.spiky.z), 0.0, 1e-9 * std::abs(flat.spiky.z));
-    EXPECT_NEAR(length(solid.tensile - n * -flat.tensile.z), 0.0, 1e-9 * std::abs(flat.tensile.z));
+    EXPECT_NEAR(length(solid.spiky - n * -flat.spiky.z), 0.0, 1e-9 * std::abs(face.spiky.z));
+    EXPECT_NEAR(length(solid.tensile - n * -flat.tensile.z), 0.0, 1e-9 * std::abs(face.tensile.z));
   }
 }
 
 // At a box's edge and corner the solid is a quarter or an eighth of the half-space the tangent
 // plane takes: the rays against a brute-force sum over cubes of h/60 (their centres inside the
 // box and the ball). Tolerance 1 % of the half-space's value at d = 0: the cubes' own error and
-// the rule's around the edge (12 polar nodes); measured 0.02-0.1 % of it for poly6, up to 0.15 % for the
-// gradient. The tangent plane's value printed beside them is what the table reads there today
+// the rule's around the edge (8 polar nodes); measured 0.05-0.2 % of it for poly6, up to 0.3 %
+// for the gradient. The tangent plane's value printed beside them is what the table reads there today
 // (3x the edge's share, 10x the corner's).
 TEST(ShapeIntegrals, ABoxEdgeAndCornerAgainstABruteForceSum)
 {
