@@ -150,38 +150,44 @@ PBF_HD PBF_INLINE Vec3<Real> solidShare(const SolidSample<Real>& s, Real lambdaI
 // particle its gradient moved once can still be inside; the map's factors, which push the fluid
 // closer to an edge than the tangent plane does, bring particles there.
 constexpr int kCollisionLooks = 3;
+// Where a mapped solid's collision puts a particle: this share of a cell outside its surface
+// (a micrometre at 2 cm), so that single precision's rounding of the move (1e-7 m on a 1 m
+// tank) leaves it outside, not on the surface a few nanometres in.
+constexpr double kCollisionMargin = 1e-4;
 
 // A particle inside an obstacle goes to its surface, along the field's gradient. Solid by solid:
 // each is asked where the particle is after the ones before it moved it; a solid with a map is
-// asked again where its move left the particle, up to kCollisionLooks times.
+// asked again where its move left the particle, up to kCollisionLooks times, and put
+// kCollisionMargin of a cell outside. One loop for both, so that the passes inline one lookup (a
+// second copy for the later looks took the correction pass from 56 to 61 registers and the 1M
+// step 2.5 % longer, solids or not).
 template <class Real, class Neighbors>
 PBF_HD PBF_INLINE Vec3<Real> collideWithObstacles(Vec3<Real> q, const FluidView<Real, Neighbors>& f)
 {
-  forEachSolidField(q, f, [&](int o, Real d, const Vec3<Real>& gradient, Real g) {
-    if (d < Real(0) && g > Real(0))
-    {
-      q -= gradient * (d / g);
-      const DistanceGridView<Real>& solid = f.obstacles[o];
+  for (int o = 0; o < f.obstacleCount; ++o)
+  {
+    const DistanceGridView<Real>& solid = f.obstacles[o];
+    const int looks = solid.shape ? kCollisionLooks : 1;
+    const Real margin = solid.shape ? Real(kCollisionMargin) / solid.inverseCell : Real(0);
 #if defined(__CUDACC__)
 #pragma unroll 1
 #endif
-      for (int look = 1; solid.shape && look < kCollisionLooks; ++look)
+    for (int look = 0; look < looks; ++look)
+    {
+      Real d;
+      Vec3<Real> gradient;
+      if (!solid.within(q, &d, &gradient))
       {
-        Real again;
-        Vec3<Real> towards;
-        if (!solid.within(q, &again, &towards) || !(again < Real(0)))
-        {
-          break;
-        }
-        const Real l = length(towards);
-        if (!(l > Real(0)))
-        {
-          break;
-        }
-        q -= towards * (again / l);
+        break;
       }
+      const Real g = length(gradient);
+      if (!(d < Real(0) && g > Real(0)))
+      {
+        break;
+      }
+      q -= gradient * ((d - margin) / g);
     }
-  });
+  }
   return q;
 }
 

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -247,6 +248,55 @@ TEST(Bodies, ASceneFileNamesItsBadBodies)
     "density": 500, "motion": {"keyframes": [{"time": 0}]}})");
   EXPECT_NE(both.find("either by the fluid (density) or by its keyframes (motion)"), std::string::npos)
     << both;
+}
+
+// A body's "degreesOfFreedom" and "release" (a guide and a hold): read into the solid, and
+// refused naming the key and the value for an obstacle that is no body, an unknown or repeated
+// freedom, or a release that is not a time.
+TEST(Bodies, ASceneFileGuidesAndHoldsItsBodies)
+{
+  const std::string head = R"({"domain": {"min": [0, 0, 0], "max": [1, 1, 1]},
+    "fluid": [{"type": "box", "min": [0, 0, 0], "max": [1, 0.5, 1]}], "obstacles": [)";
+  const std::string sphere = R"({"type": "sphere", "center": [0.5, 0.6, 0.5], "radius": 0.1, )";
+  auto errorOfFile = [&](const std::string& keys) {
+    try
+    {
+      parseScene(head + sphere + keys + "}]}");
+    }
+    catch (const InvalidInput& e)
+    {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const Scene guided = parseScene(
+    head + sphere + R"("density": 500, "degreesOfFreedom": ["y"], "release": 0.5})" + "]}");
+  const SolidRegion& s = guided.solids.at(0);
+  EXPECT_EQ(s.freeAxes, (std::array<bool, 3>{ false, true, false }));
+  EXPECT_FALSE(s.turns);
+  EXPECT_EQ(s.release, 0.5);
+  const SolidRegion free = parseScene(head + sphere + R"("density": 500})" + "]}").solids.at(0);
+  EXPECT_EQ(free.freeAxes, (std::array<bool, 3>{ true, true, true }));
+  EXPECT_TRUE(free.turns);
+  EXPECT_EQ(free.release, 0.0);
+  const struct
+  {
+    const char* keys;
+    const char* expected;
+  } bad[] = {
+    { R"("degreesOfFreedom": ["y"])", ".obstacles[0].degreesOfFreedom" },
+    { R"("release": 1)", "applies to a body the fluid moves" },
+    { R"("density": 500, "degreesOfFreedom": ["w"])", "must be a list of distinct" },
+    { R"("density": 500, "degreesOfFreedom": ["x", "x"])", "[\"x\",\"x\"]" },
+    { R"("density": 500, "degreesOfFreedom": "y")", "must be a list of distinct" },
+    { R"("density": 500, "release": -1)", ".obstacles[0].release" },
+    { R"("density": 500, "release": -1)", "must be a finite time >= 0" },
+  };
+  for (const auto& b : bad)
+  {
+    const std::string error = errorOfFile(b.keys);
+    EXPECT_NE(error.find(b.expected), std::string::npos) << b.keys << ": " << error;
+  }
 }
 
 // A box three times as dense as the water sinks and comes to rest on the tank's floor: its

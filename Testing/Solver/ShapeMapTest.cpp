@@ -338,3 +338,29 @@ TEST(ShapeMap, ASolidNoNodeLiesInsideIsNamed)
       << e.what();
   }
 }
+
+// A box standing on the tank's floor: with mirror walls the world below the floor is the image
+// of the one above, the box's included, so its side faces continue down through the floor and a
+// point by the foot of a face reads the flat factors (to the integration's 1e-6); without mirror
+// walls the box ends at the floor, an edge that takes part of the half-space away (the poly6
+// factor well below 1).
+TEST(ShapeMap, ABoxOnTheFloorContinuesInItsImage)
+{
+  Parameters p = tankParameters();
+  SolidRegion standing = cube();
+  standing.box.min.y = 0.0;
+  const Vec3d foot{ standing.box.max.x + 0.5 * kSpacing, 0.3 * kSpacing, 0.6 };
+  const DistanceGrid mirrored = mapped(standing, p);
+  const std::array<double, kShapeValues> flat = mapAt(mirrored, foot);
+  p.mirrorWalls = false;
+  const DistanceGrid open = mapped(standing, p);
+  const std::array<double, kShapeValues> edge = mapAt(open, foot);
+  std::printf("by the foot of a face: poly6 factor %.6f with mirror walls, %.4f without\n",
+    flat[0], edge[0]);
+  const double expected[kShapeValues] = { 1, 1, 0, 0, 1, 1, 0, 0 };
+  for (int v = 0; v < kShapeValues; ++v)
+  {
+    EXPECT_NEAR(flat[v], expected[v], 1e-6) << "factor " << v;
+  }
+  EXPECT_LT(edge[0], 0.9);
+}
