@@ -163,12 +163,14 @@ void Simulation::moveBodies(double dt, double end)
 {
   for (Body& body : bodies_)
   {
-    if (end <= scene_.solids[body.solid].release)
+    const double release = scene_.solids[body.solid].release;
+    if (end <= release)
     {
       continue; // held where it is given (withinFreedoms puts it back after the contacts)
     }
-    body.state = advanceRigid(
-      body.state, body.mass, body.load.force, body.load.torque, parameters_.gravity, dt);
+    // The step in which it is let go moves it from the release on.
+    body.state = advanceRigid(body.state, body.mass, body.load.force, body.load.torque,
+      parameters_.gravity, std::min(dt, end - release));
   }
   // Each body against every solid after it, in the scene's order (the result does not depend on
   // anything else); the sides are placed anew for each pair, as the one before may have moved them.

@@ -52,8 +52,10 @@ ShapeWalls shapeWalls(const Parameters& parameters, bool fixedSolid);
 std::array<float, kShapeValues> shapeFactorsAt(const DistanceGrid& grid, const Vec3d& x,
   const ShapeKernels& k, const ShapeWalls& walls = {}, const ShapeRule& rule = {});
 
-// Fills grid.shape, node by node (OpenMP threads, each node on its own: the same map whatever the
-// threads). Returns how many nodes were integrated (the rest lie on a flat face or away from it).
+// Fills grid.shape: the nodes on a flat face or away from the solid take the flat factors, a node
+// whose surroundings repeat an earlier node's copies that node's (RepeatedWindows.h), the rest
+// are integrated (OpenMP threads; the same map whatever the threads). Returns how many nodes
+// were integrated.
 std::size_t buildShapeMap(DistanceGrid& grid, const ShapeKernels& k, const ShapeWalls& walls = {},
   const ShapeRule& rule = {});
 

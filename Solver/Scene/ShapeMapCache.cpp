@@ -1,5 +1,6 @@
 #include "ShapeMapCache.h"
 
+#include <atomic>
 #include <cstddef>
 #include <list>
 #include <mutex>
@@ -39,10 +40,16 @@ struct Entry
   std::size_t bytes() const { return (phi.size() + shape.size()) * sizeof(float); }
 };
 
+std::atomic<std::size_t> built{ 0 };
 std::mutex cacheMutex;
 std::list<Entry> cache; // most recently used first
 
 } // namespace
+
+std::size_t shapeMapsBuilt()
+{
+  return built.load();
+}
 
 void attachShapeMap(
   DistanceGrid& grid, const ShapeKernels& k, const ShapeWalls& walls, const ShapeRule& rule)
@@ -62,6 +69,7 @@ void attachShapeMap(
   // Built outside the lock: other solids' maps are built or read meanwhile; two threads that
   // build the same one store two equal entries, which costs memory, never a wrong map.
   buildShapeMap(grid, k, walls, rule);
+  ++built;
   Entry entry{ grid.origin, grid.cell, grid.nx, grid.ny, grid.nz, grid.phi, k, walls, rule,
     grid.shape };
   if (entry.bytes() > kCacheBytes)

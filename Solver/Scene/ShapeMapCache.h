@@ -15,4 +15,7 @@ namespace pbf
 void attachShapeMap(DistanceGrid& grid, const ShapeKernels& k, const ShapeWalls& walls = {},
   const ShapeRule& rule = {});
 
+// How many maps this process has integrated (not copied from the cache).
+std::size_t shapeMapsBuilt();
+
 } // namespace pbf

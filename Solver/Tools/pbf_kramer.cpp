@@ -118,7 +118,9 @@ int main(int argc, char** argv)
         double worst = 0;
         for (int k = 0; k < 3; ++k)
         {
-          worst = std::max(worst, std::abs(c.period[k] / c.recordPeriod[k] - 1));
+          // A period the heave never completed counts as missed (NaN), not as 0.
+          const double miss = std::abs(c.period[k] / c.recordPeriod[k] - 1);
+          worst = std::isnan(miss) || std::isnan(worst) ? std::nan("") : std::max(worst, miss);
         }
         std::printf("%g,%g,%zu,%+.2f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.2f,%.2f,%.1f\n", s, drop,
           run.particles, 1e3 * (settled - still.start), c.period[0], c.recordPeriod[0],
