@@ -347,9 +347,14 @@ TEST(ShapeMap, ASolidNoNodeLiesInsideIsNamed)
 TEST(ShapeMap, ABoxOnTheFloorContinuesInItsImage)
 {
   Parameters p = tankParameters();
+  // A floor away from y = 0 and a box 3 spacings tall (its top farther than h from the foot), so
+  // that a reflection about the origin, which lands above the box, does not pass for one about
+  // the wall.
+  p.domain.min.y = -0.25;
   SolidRegion standing = cube();
-  standing.box.min.y = 0.0;
-  const Vec3d foot{ standing.box.max.x + 0.5 * kSpacing, 0.3 * kSpacing, 0.6 };
+  standing.box.min.y = p.domain.min.y;
+  standing.box.max.y = p.domain.min.y + 3 * kSpacing;
+  const Vec3d foot{ standing.box.max.x + 0.5 * kSpacing, p.domain.min.y + 0.3 * kSpacing, 0.6 };
   const DistanceGrid mirrored = mapped(standing, p);
   const std::array<double, kShapeValues> flat = mapAt(mirrored, foot);
   p.mirrorWalls = false;
