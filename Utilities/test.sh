@@ -21,7 +21,9 @@ stage() {
     failed+=("$name")
   fi
 }
-tests() (cd "$build" && ctest --output-on-failure --timeout 900 -LE long)
+# As many tests at once as there are cores: the MPI and GUI tests claim two (PROCESSORS) and
+# render under private X servers, so none shares a display or oversubscribes the ranks.
+tests() (cd "$build" && ctest --output-on-failure --timeout 900 -j "$(nproc)" -LE long)
 
 stage "tests (ctest -LE long)" tests
 stage "sanitizers (Utilities/sanitize.sh)" "$root/Utilities/sanitize.sh" "$build-sanitize"

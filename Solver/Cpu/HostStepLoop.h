@@ -15,6 +15,7 @@
 
 #include "HostFluid.h"
 #include "StepLoop.h"
+#include "WallLoads.h"
 
 #include <cstddef>
 #include <limits>
@@ -68,7 +69,7 @@ public:
     }
     const FluidView<Real>& f = f_;
     const FluidView<Real>& pass = p.tensile ? first_ : f_;
-    if (loadsOpen_ && fluid_.parameters.mirrorWalls)
+    if (loadsOpen_ && fluid_.parameters.sumsWallLoads())
     {
       correctSummingWallLoads(pass);
     }
@@ -189,39 +190,28 @@ private:
   void correctSummingWallLoads(const FluidView<Real>& pass)
   {
     const std::size_t firstWall = fluid_.obstacles.size();
-    const Real scale = -pass.c.massOverRho0 * pass.c.mass * pass.time->inverseDt *
-      pass.time->inverseDt;
-    const Real wall[kWalls] = { pass.c.boxMin.x, pass.c.boxMax.x, pass.c.boxMin.y,
-      pass.c.boxMax.y, pass.c.boxMin.z, pass.c.boxMax.z };
+    const Real scale = wallLoadScale<Real>(pass);
     owner_.forEachInBlocks(kLoadBlock, [&](std::size_t b, std::uint32_t i) {
-      Vec3<Real> pressed[kWalls] = {};
-      bool any = false;
-      positionCorrection(i, pass,
-        [&](const Vec3<Real>& term, const WallMirrors<Real>& mirrors, const Vec3<Real>&,
-          const Vec3<Real>&, int ix, int iy, int iz) {
-          wallShares(term, mirrors, ix, iy, iz, pass.c,
-            [&](int w, const Vec3<Real>& part) { pressed[w] += part; });
-          any = true;
-        });
-      if (!any)
-      {
-        return;
-      }
+      WallPush<Real> push;
+      positionCorrection(i, pass, WallTerms<Real>{ push, pass.c.boxMin });
       const auto add = loadAdder(b, firstWall);
-      for (int w = 0; w < static_cast<int>(kWalls); ++w)
+      for (int w = 0; w < kMirrorWalls; ++w)
       {
-        Vec3<Real> foot = pass.p[i];
-        (w / 2 == 0 ? foot.x : w / 2 == 1 ? foot.y : foot.z) = wall[w];
-        const Vec3<Real> force = pressed[w] * scale;
-        add(w, force, cross(foot, force));
+        if (!(push.touched & (1u << w)))
+        {
+          continue;
+        }
+        Vec3<Real> force, torque;
+        push.load(w, pass.p[i], scale, pass.c.boxMin, pass.c.boxMax, force, torque);
+        add(w, force, torque);
       }
     });
   }
 
-  // The loads: the solids', then with mirror walls the six walls'.
+  // The loads: the solids', then with Parameters::tankLoads the six mirror walls'.
   std::size_t loadCount() const
   {
-    return fluid_.obstacles.size() + (fluid_.parameters.mirrorWalls ? kWalls : 0);
+    return fluid_.obstacles.size() + (fluid_.parameters.sumsWallLoads() ? kMirrorWalls : 0);
   }
 
   // add(o, force, torque) into block b's sums of load first + o.
@@ -263,7 +253,6 @@ private:
     loadsOpen_ = false;
   }
 
-  static constexpr std::size_t kWalls = 6;
   static constexpr std::size_t kLoadBlock = 512; // small enough to share out evenly
   static constexpr std::size_t kLoadValues = 6; // force and torque
   std::vector<double> blockLoads_; // per block, per load: force and torque

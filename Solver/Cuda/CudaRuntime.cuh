@@ -203,6 +203,23 @@ public:
     check(cudaGetLastError(), "kernel launch");
   }
 
+  // A neighbour pass as forEachMax whose f(i, part) also fills a Part that each warp adds to its
+  // sums (stageMaxSumKernel), over the passes of a step.
+  template <class Stage, class Part, class F>
+  void forEachMaxSum(Stage stage, std::uint32_t n, unsigned long long* maxBits, Part, WarpSums sums,
+    F f)
+  {
+    static_assert(Launch<Stage>::neighborPass, "a neighbour pass: its warps need no barrier");
+    if (n == 0)
+    {
+      return;
+    }
+    const int block = neighborBlock_;
+    stageMaxSumKernel<Stage, Part><<<(n + block - 1) / block, block, 0, stream_>>>(
+      stage, n, maxBits, sums, f);
+    check(cudaGetLastError(), "kernel launch");
+  }
+
   SortedPairs sortByKey(CellKey* keys, CellKey* keysAlt, std::uint32_t* values,
     std::uint32_t* valuesAlt, std::uint32_t n, int keyBits)
   {

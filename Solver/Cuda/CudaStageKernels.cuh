@@ -139,5 +139,85 @@ __global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageMaxK
   }
 }
 
+// The sum of a warp's values in lane 0, in a fixed tree (lane l adds lane l + 16, then + 8, ...):
+// the same on every run.
+__device__ inline double warpSum(double value)
+{
+  for (int offset = 16; offset > 0; offset >>= 1)
+  {
+    value += __shfl_down_sync(0xffffffffu, value, offset);
+  }
+  return value;
+}
+
+// The bits set in any lane of a warp, in every lane.
+__device__ inline unsigned warpOr(unsigned bits)
+{
+  for (int offset = 16; offset > 0; offset >>= 1)
+  {
+    bits |= __shfl_xor_sync(0xffffffffu, bits, offset);
+  }
+  return bits;
+}
+
+// As stageMaxKernel, and the sums over each warp of what f put in its Part (WallLoads.h's
+// WallLoadPart), added over a step's passes: warp w (lanes 32 w ... 32 w + 31 of the launch) sums
+// each group g (a wall) that one of its lanes has, adds it to sums[w kValues + g kGroupValues + k]
+// (written afresh where bit g of flags[w] was not set: the step zeroes only the flags) and sets
+// that bit. A warp sums only the groups its lanes have: near a face of the tank, one of six. No
+// barrier: a warp leaves when it is done, as the neighbour passes' maxima do.
+template <class Stage, class Part, class F>
+__global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageMaxSumKernel(
+  Stage, std::uint32_t n, unsigned long long* maxBits, WarpSums sums, F f)
+{
+  const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+  unsigned long long bits = 0;
+  Part part; // default-initialised: what it holds is written only where a lane adds something
+  if (i < n)
+  {
+    bits = MaskSchedule::doubleToBits(f(i, part));
+  }
+  bits = warpMax(bits);
+  const bool lead = (threadIdx.x & 31u) == 0;
+  if (lead && bits != 0)
+  {
+    atomicMax(maxBits, bits);
+  }
+  const unsigned groups = warpOr(part.groups());
+  if (groups == 0)
+  {
+    return;
+  }
+  const std::uint32_t warp = i / 32u;
+  const unsigned earlier = lead ? sums.flags[warp] : 0u;
+  constexpr int values = Part::kGroups * Part::kGroupValues;
+  // One group at a time: unrolled, every group's values would be live at once.
+#pragma unroll 1
+  for (int g = 0; g < Part::kGroups; ++g)
+  {
+    if (!(groups & (1u << g)))
+    {
+      continue;
+    }
+    double value[Part::kGroupValues];
+    part.group(g, value);
+    double* const out =
+      sums.values + static_cast<std::size_t>(warp) * values + g * Part::kGroupValues;
+#pragma unroll
+    for (int k = 0; k < Part::kGroupValues; ++k)
+    {
+      const double sum = warpSum(value[k]);
+      if (lead)
+      {
+        out[k] = earlier & (1u << g) ? out[k] + sum : sum;
+      }
+    }
+  }
+  if (lead)
+  {
+    sums.flags[warp] = earlier | groups;
+  }
+}
+
 } // namespace cuda
 } // namespace pbf

@@ -39,9 +39,18 @@ struct ParticleArrays
   // Surface tension (SurfaceTension.h): the colour gradient and its smoothed normal, two Vec3 per
   // particle, written and read within a step (nothing to keep when the store grows).
   bool colour = false;
+  // Mirror walls: the correction's warps' sums of the walls' loads (StepBuffers::wallWarps), a
+  // word of flags and kWallLoadDoubles doubles per warp of 32 particles (9 bytes a particle),
+  // for two passes at once (a sub-domain's border and interior).
+  bool walls = false;
 };
 
 constexpr int kMaxParticleLists = 5;
+// The warps of the walls' sums for `capacity` particles in two passes.
+inline std::size_t wallWarpsFor(std::size_t capacity)
+{
+  return (capacity + 31) / 32 + 2;
+}
 
 template <class Real, class Device>
 class DeviceParticleStore
@@ -189,6 +198,7 @@ public:
     b.moved = p.moved;
     b.stride = static_cast<std::uint32_t>(capacity_);
     b.blockSums = p.blockSums;
+    b.wallWarps = WarpSums{ p.wallFlags, p.wallValues };
     b.colour = p.colour;
     b.normal = p.normal;
     return b;
@@ -210,6 +220,8 @@ public:
     // Per block of kCompressionBlock: sums, then maxima (with several liquids, per liquid a sum
     // and a count, then maxima: CudaStepReductions.cuh's compressionByLiquid).
     double* blockSums = nullptr;
+    std::uint32_t* wallFlags = nullptr; // null without mirror walls (ParticleArrays::walls)
+    double* wallValues = nullptr;
   };
   Pointers p;
 
@@ -227,6 +239,7 @@ private:
     std::size_t masks = 0, moved = 0;
     std::size_t list[kMaxParticleLists] = {};
     std::size_t blockSums = 0;
+    std::size_t wallFlags = 0, wallValues = 0;
     std::size_t total = 0;
   };
 
@@ -269,6 +282,9 @@ private:
     const std::size_t perBlock = a.liquids > 1 ? 2 * static_cast<std::size_t>(a.liquids) + 1 : 2;
     l.blockSums = place(
       perBlock * ((capacity + kCompressionBlock - 1) / kCompressionBlock) * sizeof(double));
+    const std::size_t warps = wallWarpsFor(capacity);
+    l.wallFlags = a.walls ? place(warps * sizeof(std::uint32_t)) : 0;
+    l.wallValues = a.walls ? place(warps * kWallLoadDoubles * sizeof(double)) : 0;
     l.total = offset;
     return l;
   }
@@ -307,6 +323,8 @@ private:
       q.list[k] = static_cast<std::uint32_t*>(at(l.list[k]));
     }
     q.blockSums = static_cast<double*>(at(l.blockSums));
+    q.wallFlags = a.walls ? static_cast<std::uint32_t*>(at(l.wallFlags)) : nullptr;
+    q.wallValues = a.walls ? static_cast<double*>(at(l.wallValues)) : nullptr;
     return q;
   }
 

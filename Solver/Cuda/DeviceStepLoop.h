@@ -54,6 +54,8 @@ public:
   DeviceStepLoop(const DeviceStepLoop&) = delete;
   DeviceStepLoop& operator=(const DeviceStepLoop&) = delete;
 
+  std::uint32_t wallWarps() const { return (n_ + 31u) / 32u; }
+
   static SolveRule rule(const StepConstants<Real>& k)
   {
     SolveRule r;
@@ -101,6 +103,11 @@ public:
     {
       exec_.fillZero(k_.loads,
         static_cast<std::size_t>(k_.obstacleCount) * kLoadValues * sizeof(double));
+    }
+    if (b_.wallWarps.flags)
+    {
+      exec_.fillZero(b_.wallLoads, kWallLoadDoubles * sizeof(double));
+      exec_.fillZero(b_.wallWarps.flags, wallWarps() * sizeof(std::uint32_t));
     }
     // Projection k runs when the reduction before it says so (proceed[k]).
     branches_.resize(static_cast<std::size_t>(k_.iterations) + 1);
@@ -152,8 +159,10 @@ public:
     });
   }
 
+  // The walls' loads that the corrections' warps summed, into b.wallLoads for lastStep().
   void finishSolve()
   {
+    detail::sumWallLoads(exec_, b_, wallWarps(), detail::AllParticles{});
     if (adaptive_)
     {
       detail::finishAdaptiveSolve(

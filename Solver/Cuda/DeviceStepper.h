@@ -180,6 +180,7 @@ DeviceStepper<Real, Device>::DeviceStepper(const Parameters& parameters,
   arrays.volumes = true;
   arrays.liquids = static_cast<int>(parameters_.liquids.size());
   arrays.colour = constants_.c.surfaceTension;
+  arrays.walls = parameters_.sumsWallLoads();
   store_ = std::make_unique<DeviceParticleStore<Real, Device>>(
     *device_, arrays, std::size_t(constants_.cellCount) + 1, constants_.keyBits);
   try

@@ -43,6 +43,9 @@ void DeviceStepper<Real, Device>::allocateFixed()
   const std::size_t adaptiveAt = place(sizeof(AdaptiveState));
   const std::size_t partialsAt = place(device_->statisticsPartialBytes());
   const std::size_t resultAt = place(kStatisticsValues * sizeof(double));
+  const std::size_t wallLoadsAt = place(kWallLoadDoubles * sizeof(double));
+  const std::size_t wallBlockSumsAt =
+    place(std::size_t(kLoadBlocks) * kWallLoadDoubles * sizeof(double));
   fixed_ = device_->allocate(offset);
   fixedBytes_ = offset;
   char* base = static_cast<char*>(fixed_);
@@ -58,6 +61,9 @@ void DeviceStepper<Real, Device>::allocateFixed()
   b.maxMoved = reinterpret_cast<unsigned long long*>(base + movedAt);
   b.maskBuilds = reinterpret_cast<unsigned long long*>(base + buildsAt);
   b.adaptive = reinterpret_cast<AdaptiveState*>(base + adaptiveAt);
+  const bool walls = parameters_.sumsWallLoads();
+  b.wallLoads = walls ? reinterpret_cast<double*>(base + wallLoadsAt) : nullptr;
+  b.wallBlockSums = walls ? reinterpret_cast<double*>(base + wallBlockSumsAt) : nullptr;
   buffers_ = fixedBuffers_;
   // The mask-build counter is read before it is written; the rest is zeroed so that a stale value
   // can never look like a result.
@@ -76,6 +82,8 @@ void DeviceStepper<Real, Device>::allocate(std::size_t capacity, std::size_t par
   b.maxMoved = fixedBuffers_.maxMoved;
   b.maskBuilds = fixedBuffers_.maskBuilds;
   b.adaptive = fixedBuffers_.adaptive;
+  b.wallLoads = fixedBuffers_.wallLoads;
+  b.wallBlockSums = fixedBuffers_.wallBlockSums;
   buffers_ = b;
 }
 

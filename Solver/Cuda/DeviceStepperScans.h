@@ -81,21 +81,28 @@ StepReport DeviceStepper<Real, Device>::lastStep() const
   // Fixed mode computes no reduction inside a step, as on the CPU.
   report.iterations = constants_.iterations;
   report.densityError = std::numeric_limits<double>::quiet_NaN();
+  // The solids' loads, then with mirror walls the six walls' (as the CPU's report has them).
   const std::size_t solids = static_cast<std::size_t>(constants_.obstacleCount);
-  if (!adaptive && solids == 0)
+  const std::size_t walls = buffers_.wallLoads ? kMirrorWalls : 0;
+  if (!adaptive && solids + walls == 0)
   {
     return report;
   }
   device_->activate();
   AdaptiveState state{};
-  std::vector<double> loads(solids * kLoadValues);
+  std::vector<double> loads((solids + walls) * kLoadValues);
   if (adaptive)
   {
     device_->download(&state, buffers_.adaptive, sizeof state);
   }
   if (solids > 0)
   {
-    device_->download(loads.data(), constants_.loads, loads.size() * sizeof(double));
+    device_->download(loads.data(), constants_.loads, solids * kLoadValues * sizeof(double));
+  }
+  if (walls > 0)
+  {
+    device_->download(
+      loads.data() + solids * kLoadValues, buffers_.wallLoads, kWallLoadDoubles * sizeof(double));
   }
   device_->synchronize();
   if (adaptive)
@@ -103,8 +110,8 @@ StepReport DeviceStepper<Real, Device>::lastStep() const
     report.iterations = state.iterations;
     report.densityError = state.densityError;
   }
-  report.loads.resize(solids);
-  for (std::size_t o = 0; o < solids; ++o)
+  report.loads.resize(solids + walls);
+  for (std::size_t o = 0; o < solids + walls; ++o)
   {
     const double* v = &loads[o * kLoadValues];
     report.loads[o].force = Vec3d{ v[0], v[1], v[2] };

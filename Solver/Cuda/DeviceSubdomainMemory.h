@@ -25,6 +25,11 @@ void DeviceSubdomainStepper<Real, Device>::allocateFixed()
   deviceTime_ = allocateFixed<StepTime<Real>>(1);
   constants_.time = deviceTime_;
   adaptive_ = allocateFixed<AdaptiveState>(1);
+  if (parameters_.sumsWallLoads())
+  {
+    wallLoads_ = allocateFixed<double>(kWallLoadDoubles);
+    wallBlockSums_ = allocateFixed<double>(std::size_t(kLoadBlocks) * kWallLoadDoubles);
+  }
   healthBits_ = allocateFixed<unsigned long long>(3);
   listCounts_ = static_cast<std::uint32_t*>(device_->allocateHost(8 * sizeof(std::uint32_t)));
   // The owner counts' copies, then the ghosts sent to each side.
@@ -206,6 +211,7 @@ void DeviceSubdomainStepper<Real, Device>::reserve(std::size_t needed, std::size
     arrays.lists = 2;
     arrays.liquids = static_cast<int>(parameters_.liquids.size());
     arrays.colour = constants_.c.surfaceTension;
+    arrays.walls = parameters_.sumsWallLoads();
     store_ = std::make_unique<DeviceParticleStore<Real, Device>>(
       *device_, arrays, std::size_t(constants_.cellCount) + 1, constants_.keyBits);
   }
@@ -282,6 +288,8 @@ void DeviceSubdomainStepper<Real, Device>::adoptStore()
   ownedList_ = p.list[0];
   interiorList_ = p.list[1];
   blockSums_ = p.blockSums;
+  wallFlags_ = p.wallFlags;
+  wallValues_ = p.wallValues;
   capacity_ = store_->capacity();
 }
 

@@ -51,6 +51,15 @@ public:
     // launches at once.
     edgeBuffers_ = b_;
     edgeBuffers_.maskBuilds = s_.borderMaskBuilds_;
+    // The walls' sums of the border's warps come first, the interior's after them, so that one
+    // reduction adds them all in a fixed order (finishSolve).
+    borderWarps_ = (s_.border_ + 31u) / 32u;
+    wallWarps_ = borderWarps_ + (n_ - s_.border_ + 31u) / 32u;
+    if (b_.wallWarps.flags)
+    {
+      b_.wallWarps.flags += borderWarps_;
+      b_.wallWarps.values += static_cast<std::size_t>(borderWarps_) * kWallLoadDoubles;
+    }
     x_ = s_.vec_[r_.x];
     v_ = s_.vec_[r_.v];
     positions_[0] = s_.vec_[r_.p];
@@ -61,6 +70,11 @@ public:
     {
       exec.fillZero(k_.loads,
         static_cast<std::size_t>(k_.obstacleCount) * kLoadValues * sizeof(double));
+    }
+    if (b_.wallWarps.flags)
+    {
+      exec.fillZero(b_.wallLoads, kWallLoadDoubles * sizeof(double));
+      exec.fillZero(edgeBuffers_.wallWarps.flags, wallWarps_ * sizeof(std::uint32_t));
     }
   }
 
@@ -131,6 +145,8 @@ public:
   // runs here for the positions reached.
   void finishSolve()
   {
+    auto exec = device_.executor();
+    detail::sumWallLoads(exec, edgeBuffers_, wallWarps_, detail::ListedParticles{});
     finishLoads();
     if (k_.tolerance > 0)
     {
@@ -204,21 +220,31 @@ public:
   }
 
 private:
-  // The step's loads: every rank's sums added in rank order, as the CPU sub-domain adds them.
+  // The step's loads, the solids' then the walls': every rank's sums added in rank order, as the
+  // CPU sub-domain adds them.
   void finishLoads()
   {
     const std::size_t solids = static_cast<std::size_t>(k_.obstacleCount);
+    const std::size_t walls = b_.wallLoads ? kMirrorWalls : 0;
     s_.report_.loads.clear();
-    if (solids == 0)
+    if (solids + walls == 0)
     {
       return;
     }
-    std::vector<double> mine(solids * kLoadValues);
-    device_.download(mine.data(), k_.loads, mine.size() * sizeof(double));
+    std::vector<double> mine((solids + walls) * kLoadValues);
+    if (solids > 0)
+    {
+      device_.download(mine.data(), k_.loads, solids * kLoadValues * sizeof(double));
+    }
+    if (walls > 0)
+    {
+      device_.download(
+        mine.data() + solids * kLoadValues, b_.wallLoads, kWallLoadDoubles * sizeof(double));
+    }
     device_.synchronize();
     const std::vector<double> all = distributed::sumInRankOrder(s_.communicator_, mine);
-    s_.report_.loads.resize(solids);
-    for (std::size_t o = 0; o < solids; ++o)
+    s_.report_.loads.resize(solids + walls);
+    for (std::size_t o = 0; o < solids + walls; ++o)
     {
       const double* v = &all[o * kLoadValues];
       s_.report_.loads[o].force = Vec3d{ v[0], v[1], v[2] };
@@ -286,6 +312,8 @@ private:
   Vec3<Real>* positions_[2] = {};
   int performed_ = 0;
   bool stopped_ = false;
+  std::uint32_t borderWarps_ = 0; // the border's warps of the walls' sums
+  std::uint32_t wallWarps_ = 0;   // the border's and the interior's
 };
 
 // With several liquids each rank gives each liquid's sum and count (AdaptiveState's), and the

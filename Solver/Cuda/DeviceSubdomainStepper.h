@@ -342,6 +342,9 @@ private:
     b.maskBuilds = maskBuilds_;
     b.adaptive = nullptr;
     b.blockSums = nullptr;
+    b.wallWarps = WarpSums{ wallFlags_, wallValues_ };
+    b.wallLoads = wallLoads_;
+    b.wallBlockSums = wallBlockSums_;
     return b;
   }
 
@@ -550,6 +553,11 @@ private:
   AdaptiveState* adaptive_ = nullptr; // adaptive mode: this rank's reduction
   unsigned long long* healthBits_ = nullptr; // health(): three maxima as double bits
   double* blockSums_ = nullptr;
+  // With mirror walls: the correction's warps' sums of the walls' loads and the step's loads.
+  std::uint32_t* wallFlags_ = nullptr;
+  double* wallValues_ = nullptr;
+  double* wallLoads_ = nullptr;
+  double* wallBlockSums_ = nullptr;
   std::int64_t *id_ = nullptr, *idAlt_ = nullptr;
   // Each particle's liquid (null without liquids); the colour gradients and their smoothed
   // normals (null without surface tension).

@@ -55,6 +55,14 @@ constexpr int kCompressionBlock = 4096;
 constexpr int kLoadBlocks = 512;
 constexpr int kLoadValues = 6;
 
+// Per warp of a pass that also sums (StepSchedule.h's forEachMaxSum): which groups its lanes
+// added to (a bit each), and the warp's sums (the walls' loads: kGroups kGroupValues a warp).
+struct WarpSums
+{
+  std::uint32_t* flags;
+  double* values;
+};
+
 struct AdaptiveState
 {
   int done;
@@ -96,6 +104,12 @@ struct StepBuffers
   std::uint32_t* cellMoved;       // cellCount entries
   AdaptiveState* adaptive;        // adaptive mode only
   double* blockSums;              // adaptive mode: the reduction's partial sums
+  // With mirror walls (null flags without): the corrections' warps' sums of the walls' loads
+  // (their flags zeroed each step), the step's loads, kMirrorWalls of force and torque, and
+  // their block sums (sumWallLoads: kLoadBlocks kWallLoadDoubles).
+  WarpSums wallWarps;
+  double* wallLoads;
+  double* wallBlockSums;
   // Surface tension only (null without): grad c and its smoothed normal (FluidView::colour,
   // FluidView::normal), written and read after the solve.
   Vec3<Real>* colour;

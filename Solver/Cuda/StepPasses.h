@@ -8,6 +8,7 @@
 #include "HostDevice.h"
 #include "NeighborMasks.h"
 #include "StepBuffers.h"
+#include "WallLoads.h"
 
 #include <cstdint>
 
@@ -197,6 +198,51 @@ void withConfinementPass(const FluidView<Real, MaskedNeighbors<Real>>& f, Run&& 
   }
 }
 
+// One particle's correction (correctionPassOf): delta p_i, its mirror images' terms to onWall,
+// and the Jacobi update; returns how far the particle moved, for the masks.
+template <bool Accelerate, bool Liquids, class Real, class OnWall>
+PBF_HD PBF_INLINE double correctParticle(std::uint32_t i,
+  const FluidView<Real, MaskedNeighbors<Real>>& f, bool last, const AdaptiveState* state,
+  Real omega, const MovedSinceSort& local, OnWall& onWall)
+{
+  FluidView<Real, MaskedNeighbors<Real>> apply = f;
+  apply.p = f.scratch;
+  apply.scratch = f.p;
+  if (state && state->done)
+  {
+    // Adaptive mode is done: the positions stay where they are (finishAdaptiveSolve).
+    return 0.0;
+  }
+  Vec3<Real> twoBack{};
+  if constexpr (Accelerate)
+  {
+    twoBack = f.scratch[i];
+  }
+  // delta p_i lands in the other position buffer (f.scratch), which nobody reads in this
+  // pass; applyCorrection then adds p_i to it in place. IEEE addition is commutative, so
+  // this is exactly x*_i + delta p_i, and no particle reads a position that moved.
+  positionCorrection<Real, MaskedNeighbors<Real>, OnWall&, Liquids>(i, f, onWall);
+  const Vec3<Real> delta = f.scratch[i];
+  applyCorrection(i, apply);
+  if constexpr (Accelerate)
+  {
+    f.scratch[i] = acceleratedCorrection(f.scratch[i], twoBack, omega, f);
+  }
+  if (last)
+  {
+    updateVelocity(i, apply); // line 21 needs only particle i's own corrected position
+  }
+  // What the masks must allow for: delta p_i, or more where a solid or the blend moved the
+  // particle on.
+  const Real moved = f.obstacleCount > 0 || Accelerate ? length(f.scratch[i] - f.p[i]) : Real(0);
+  const double distance = static_cast<double>(length(delta) > moved ? length(delta) : moved);
+  if (local.moved)
+  {
+    local.add(i, f.grid.cells.particleKeys[i], distance);
+  }
+  return distance;
+}
+
 // Lines 10-19 and, in the last iteration, 21: delta p_i (eq. 14) into f.scratch, then the Jacobi
 // update in place there, so f.scratch holds the corrected positions afterwards; the largest
 // |delta p_i| goes to maxMoved[iteration] for the mask schedule. With Chebyshev's acceleration
@@ -204,82 +250,109 @@ void withConfinementPass(const FluidView<Real, MaskedNeighbors<Real>>& f, Run&& 
 // f.scratch holds p^{k-1} when the pass starts (the projection before the last wrote there), so
 // each particle reads its own before overwriting it, and no buffer is added. Accelerate false
 // compiles the blend out, as withPass does for the optional terms of other passes: its registers
-// would cost the plain projections.
-template <bool Accelerate, bool Liquids, class Real, class Exec, class Visit>
+// would cost the plain projections. With Walls each warp also adds what its particles push the
+// mirror walls with (WallLoads.h) to its sums in b.wallWarps, for sumWallLoads.
+template <bool Accelerate, bool Liquids, bool Walls, class Real, class Exec, class Visit>
 void correctionPassOf(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
   const AdaptiveState* state, Real omega, Visit visit)
 {
   const MovedSinceSort local{ b.moved, b.cellMoved };
-  exec.forEachMax(CorrectionStage{}, n, b.maxMoved + iteration,
-    [=] PBF_HD(std::uint32_t k) -> double {
-      const std::uint32_t i = visit(k);
-      FluidView<Real, MaskedNeighbors<Real>> apply = f;
-      apply.p = f.scratch;
-      apply.scratch = f.p;
-      if (state && state->done)
-      {
-        // Adaptive mode is done: the positions stay where they are (finishAdaptiveSolve).
-        return 0.0;
-      }
-      // omega is named here, outside the constexpr-if: nvcc's extended lambdas may not capture a
-      // variable there first.
-      const Real weight = omega;
-      Vec3<Real> twoBack{};
-      if constexpr (Accelerate)
-      {
-        twoBack = f.scratch[i];
-      }
-      // delta p_i lands in the other position buffer (f.scratch), which nobody reads in this
-      // pass; applyCorrection then adds p_i to it in place. IEEE addition is commutative, so
-      // this is exactly x*_i + delta p_i, and no particle reads a position that moved.
-      positionCorrection<Real, MaskedNeighbors<Real>, NoWallTerms, Liquids>(i, f);
-      const Vec3<Real> delta = f.scratch[i];
-      applyCorrection(i, apply);
-      if constexpr (Accelerate)
-      {
-        f.scratch[i] = acceleratedCorrection(f.scratch[i], twoBack, weight, f);
-      }
-      if (last)
-      {
-        updateVelocity(i, apply); // line 21 needs only particle i's own corrected position
-      }
-      // What the masks must allow for: delta p_i, or more where a solid or the blend moved the
-      // particle on.
-      const Real moved =
-        f.obstacleCount > 0 || Accelerate ? length(f.scratch[i] - f.p[i]) : Real(0);
-      const double distance = static_cast<double>(length(delta) > moved ? length(delta) : moved);
-      if (local.moved)
-      {
-        local.add(i, f.grid.cells.particleKeys[i], distance);
-      }
-      return distance;
-    });
+  if constexpr (Walls)
+  {
+    exec.forEachMaxSum(CorrectionStage{}, n, b.maxMoved + iteration, WallLoadPart<Real>{},
+      b.wallWarps, [=] PBF_HD(std::uint32_t k, WallLoadPart<Real>& part) -> double {
+        const std::uint32_t i = visit(k);
+        WallTerms<Real> terms{ part.push, f.c.boxMin };
+        const double distance =
+          correctParticle<Accelerate, Liquids>(i, f, last, state, omega, local, terms);
+        if (part.push.any())
+        {
+          part.p = f.p[i];
+          part.boxMin = f.c.boxMin;
+          part.boxMax = f.c.boxMax;
+          part.scale = wallLoadScale<Real>(f);
+        }
+        return distance;
+      });
+  }
+  else
+  {
+    exec.forEachMax(CorrectionStage{}, n, b.maxMoved + iteration,
+      [=] PBF_HD(std::uint32_t k) -> double {
+        NoWallTerms none;
+        return correctParticle<Accelerate, Liquids>(visit(k), f, last, state, omega, local, none);
+      });
+  }
 }
 
-template <class Real, class Exec, class Visit = AllParticles>
-void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
+template <bool Walls, class Real, class Exec, class Visit>
+void correctionPassWith(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
-  const AdaptiveState* state, bool accelerate, Real omega, Visit visit = Visit{})
+  const AdaptiveState* state, bool accelerate, Real omega, Visit visit)
 {
   // The liquids' terms compiled in only where the particles carry liquids (positionCorrection).
   const bool liquids = f.liquid != nullptr;
   if (accelerate && liquids)
   {
-    correctionPassOf<true, true>(exec, b, n, f, iteration, last, state, omega, visit);
+    correctionPassOf<true, true, Walls>(exec, b, n, f, iteration, last, state, omega, visit);
   }
   else if (accelerate)
   {
-    correctionPassOf<true, false>(exec, b, n, f, iteration, last, state, omega, visit);
+    correctionPassOf<true, false, Walls>(exec, b, n, f, iteration, last, state, omega, visit);
   }
   else if (liquids)
   {
-    correctionPassOf<false, true>(exec, b, n, f, iteration, last, state, omega, visit);
+    correctionPassOf<false, true, Walls>(exec, b, n, f, iteration, last, state, omega, visit);
   }
   else
   {
-    correctionPassOf<false, false>(exec, b, n, f, iteration, last, state, omega, visit);
+    correctionPassOf<false, false, Walls>(exec, b, n, f, iteration, last, state, omega, visit);
   }
+}
+
+// The walls' sums are compiled in where the buffers hold a place for them (mirror walls).
+template <class Real, class Exec, class Visit = AllParticles>
+void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
+  const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
+  const AdaptiveState* state, bool accelerate, Real omega, Visit visit = Visit{})
+{
+  if (b.wallWarps.flags)
+  {
+    correctionPassWith<true>(exec, b, n, f, iteration, last, state, accelerate, omega, visit);
+  }
+  else
+  {
+    correctionPassWith<false>(exec, b, n, f, iteration, last, state, accelerate, omega, visit);
+  }
+}
+
+static_assert(kWallLoadValues == kLoadValues, "a wall's load is a solid's: a force and a torque");
+
+// The walls' loads that a step's corrections summed in the first `warps` warps of b.wallWarps,
+// into b.wallLoads (kMirrorWalls loads of force and torque), in sumLoads' fixed order: once a
+// step, after the solve (every correction adds to the warps' sums). Visit, the correction's,
+// gives each translation unit kernels of its own, as loadsPass's does.
+template <class Real, class Exec, class Visit>
+void sumWallLoads(Exec& exec, const StepBuffers<Real>& b, std::uint32_t warps, Visit)
+{
+  if (!b.wallWarps.flags)
+  {
+    return;
+  }
+  const WarpSums sums = b.wallWarps;
+  exec.sumLoads(warps, kMirrorWalls, nullptr, b.wallBlockSums, b.wallLoads,
+    [=] PBF_HD(std::uint32_t w, int o, double* acc) {
+      if (sums.flags[w] & (1u << o))
+      {
+        const double* v = sums.values + static_cast<std::size_t>(w) * kWallLoadDoubles +
+          static_cast<std::size_t>(o) * kWallLoadValues;
+        for (int k = 0; k < kWallLoadValues; ++k)
+        {
+          acc[k] += v[k];
+        }
+      }
+    });
 }
 
 // What the fluid pushes each solid with in this projection (SolidTerms.h's solidLoads, the same

@@ -177,6 +177,12 @@ std::vector<ParameterSpec> forceRows()
       "the fluid continued beyond it: fluid at rest against a wall then reads rho_0 instead of "
       "packing against it.",
       PBF_BOOLEAN(mirrorWalls) },
+    { "tankLoads", "TankLoads", "tank-loads", "Tank Loads", "Solver", "", T::Boolean, boolean, 0,
+      1, false, nullptr, "",
+      "Sum what the fluid pushes each of the tank's six walls with (a force and a torque, in "
+      "the Diagnostics with the obstacles' loads); needs MirrorWalls. A CPU step barely notices; "
+      "on a GPU a step takes about an eighth longer, so it is off unless asked for.",
+      PBF_BOOLEAN(tankLoads) },
     { "exactBoundaries", "ExactBoundaries", "exact-boundaries", "Exact Boundaries", "Solver", "",
       T::Boolean, boolean, 0, 1, true, nullptr, "",
       "Obstacles and floating bodies push the fluid by their true shape: near a solid's edges "

@@ -141,10 +141,16 @@ struct Parameters
   double contactAngle = 90.0;
   bool unilateral = true;       // clamp C_i at 0: a free surface is not pulled together
   bool mirrorWalls = true;      // walls mirror the fluid near them (Equations.h, WallMirrors)
+  // The mirror walls' loads summed with the solids' (StepReport::loads, the tank's rows of the
+  // Diagnostics): a CPU step barely notices, a GPU step pays about an eighth
+  // (Documentation/Performance.md), so they are asked for.
+  bool tankLoads = false;
   // Solids push by their true shape: each solid's grid carries a shape map (Scene/ShapeMap.h)
   // that corrects the flat-wall table near its edges and corners; off: every solid is its
   // tangent plane (exact on flat faces only, and no map to build at the run's start).
   bool exactBoundaries = true;
+  // Whether a step sums the six mirror walls' loads.
+  bool sumsWallLoads() const { return mirrorWalls && tankLoads; }
   // Friction of the walls and solids, phi in [0, 1]: 0 lets the fluid slide along them
   // (free-slip), 1 holds it as the fluid's own XSPH viscosity holds the fluid (no-slip at that
   // viscosity): a wall's image of a particle moves with its tangential velocity scaled by

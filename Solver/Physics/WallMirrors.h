@@ -145,12 +145,16 @@ PBF_HD PBF_INLINE Vec3<Real> reflected(const Vec3<Real>& v, int ix, int iy, int 
 // parts are scaled by -m (m / rho_0) / dt^2 (the reaction, as solidLoads has it for a solid).
 template <class Real, class Add>
 PBF_HD PBF_INLINE void wallShares(const Vec3<Real>& term, const WallMirrors<Real>& mirrors, int ix,
-  int iy, int iz, const Coefficients<Real>& c, Add&& add)
+  int iy, int iz, const Vec3<Real>& boxMin, Add&& add)
 {
   const int slot[3] = { ix, iy, iz };
   const Real along[3] = { term.x, term.y, term.z };
-  const Real lo[3] = { c.boxMin.x, c.boxMin.y, c.boxMin.z };
+  const Real lo[3] = { boxMin.x, boxMin.y, boxMin.z };
   const int walls = (ix > 0) + (iy > 0) + (iz > 0);
+  // Unrolled, with the wall chosen by a select (nearWalls says why).
+#if defined(__CUDACC__)
+#pragma unroll
+#endif
   for (int a = 0; a < 3; ++a)
   {
     if (slot[a] == 0)
@@ -162,8 +166,8 @@ PBF_HD PBF_INLINE void wallShares(const Vec3<Real>& term, const WallMirrors<Real
     {
       share[b] = b == a ? along[b] : (slot[b] > 0 ? Real(0) : along[b] / Real(walls));
     }
-    add(2 * a + (mirrors.wall[a][slot[a] - 1] == lo[a] ? 0 : 1),
-      Vec3<Real>{ share[0], share[1], share[2] });
+    const Real wall = slot[a] == 1 ? mirrors.wall[a][0] : mirrors.wall[a][1];
+    add(2 * a + (wall == lo[a] ? 0 : 1), Vec3<Real>{ share[0], share[1], share[2] });
   }
 }
 

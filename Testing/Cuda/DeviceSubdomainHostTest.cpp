@@ -82,9 +82,9 @@ std::vector<SolidPose> poseAfterStep(const SolidMotion& motion, const Parameters
   return { motion.at((s + 1) * p.timeStep) };
 }
 
-// loads, when given, receives each step's load on the solid.
+// loads, when given, receives each step's loads: the solid's, then the six walls'.
 Snapshot<double> serialWithSolid(const PresetFluid& setup, const DistanceGrid& solid, int steps,
-  const SolidMotion& motion = {}, std::vector<SolidLoad>* loads = nullptr)
+  const SolidMotion& motion = {}, std::vector<std::vector<SolidLoad>>* loads = nullptr)
 {
   auto serial = makeStepper(Backend::Serial, Precision::Double, setup.parameters, setup.fluid);
   serial->setObstacles({ solid });
@@ -97,7 +97,7 @@ Snapshot<double> serialWithSolid(const PresetFluid& setup, const DistanceGrid& s
     serial->step();
     if (loads)
     {
-      loads->push_back(serial->lastStep().loads.at(0));
+      loads->push_back(serial->lastStep().loads);
     }
   }
   Snapshot<double> state;
@@ -343,9 +343,10 @@ TEST(DeviceSubdomainOnHost, ACheckpointLoadedOnTheSameRanksContinuesBitIdentical
 TEST(DeviceSubdomainOnHost, SolidsMatchTheSerialBackend)
 {
   // A sphere just beyond the column's face, within h of its front particles from the start.
-  const PresetFluid setup = presetFluid("dam_break", 0.04);
+  PresetFluid setup = presetFluid("dam_break", 0.04);
+  setup.parameters.tankLoads = true;
   const DistanceGrid sphere = sphereDistance({ 0.5, 0.1, 0.3 }, 0.09, 0.02, 0.08);
-  std::vector<SolidLoad> loads;
+  std::vector<std::vector<SolidLoad>> loads;
   const Snapshot<double> reference = serialWithSolid(setup, sphere, 10, {}, &loads);
   const DecomposedFactory plain = onHost<double>();
   const DecomposedFactory withSphere = [&](distributed::Communicator& communicator,
@@ -365,20 +366,31 @@ TEST(DeviceSubdomainOnHost, SolidsMatchTheSerialBackend)
     const DecomposedOutcome many = runDecomposed(ranks, setup, 10, withSphere, true);
     EXPECT_LE(maxRelativePositionError(many.state, reference), 1e-9) << ranks << " ranks";
     EXPECT_GT(many.ghosts, 0u) << ranks << " ranks: no ghosts";
-    // Every rank's share of the sphere's load, added in rank order: the serial load to the
-    // positions' rounding (1e-9 of the largest force) and the same on every rank.
+    // Every rank's share of the sphere's load and of each wall's (summed per warp in the
+    // correction), added in rank order: the serial loads to the positions' rounding (1e-9 of
+    // the largest force, the floor's) and the same on every rank. A rank that missed its share
+    // of the sphere would be off by ~1e-2 of its load, ~1e-4 of the floor's.
     ASSERT_EQ(many.loads.size(), loads.size());
-    double largest = 0;
-    for (const SolidLoad& load : loads)
+    double largest = 0, sphereLargest = 0;
+    for (const std::vector<SolidLoad>& step : loads)
     {
-      largest = std::max(largest, length(load.force));
+      ASSERT_EQ(step.size(), 1u + kMirrorWalls);
+      sphereLargest = std::max(sphereLargest, length(step[0].force));
+      for (const SolidLoad& load : step)
+      {
+        largest = std::max(largest, length(load.force));
+      }
     }
-    ASSERT_GT(largest, 0.0) << "the fluid never pressed the sphere";
+    ASSERT_GT(sphereLargest, 0.0) << "the fluid never pressed the sphere";
     for (std::size_t s = 0; s < loads.size(); ++s)
     {
-      ASSERT_EQ(many.loads[s].size(), 1u);
-      EXPECT_LE(length(many.loads[s][0].force - loads[s].force), 1e-9 * largest) << s;
-      EXPECT_LE(length(many.loads[s][0].torque - loads[s].torque), 1e-9 * largest) << s;
+      ASSERT_EQ(many.loads[s].size(), loads[s].size());
+      for (std::size_t o = 0; o < loads[s].size(); ++o)
+      {
+        const double tolerance = 1e-9 * (o == 0 ? sphereLargest : largest);
+        EXPECT_LE(length(many.loads[s][o].force - loads[s][o].force), tolerance) << s << " " << o;
+        EXPECT_LE(length(many.loads[s][o].torque - loads[s][o].torque), tolerance) << s << " " << o;
+      }
     }
     EXPECT_TRUE(many.loadsAgreeOnEveryRank) << ranks << " ranks";
   }

@@ -217,6 +217,60 @@ public:
     }
   }
 
+  // As forEachMax, each warp of 32 particles' Part groups added as stageMaxSumKernel adds them
+  // (lane l adds lane l + 16, then + 8, ...) to the warp's sums of the step.
+  template <class Stage, class Part, class F>
+  void forEachMaxSum(
+    Stage, std::uint32_t n, unsigned long long* maxBits, Part, cuda::WarpSums sums, F f)
+  {
+    std::vector<Part> parts(n);
+    for (std::uint32_t k = 0; k < n; ++k)
+    {
+      const std::uint32_t i = backwards_ ? n - 1 - k : k;
+      *maxBits = std::max(*maxBits, MaskSchedule::doubleToBits(f(i, parts[i])));
+    }
+    constexpr int values = Part::kGroups * Part::kGroupValues;
+    for (std::uint32_t w = 0; w * 32 < n; ++w)
+    {
+      const std::uint32_t end = std::min(n, w * 32 + 32);
+      unsigned groups = 0;
+      for (std::uint32_t i = w * 32; i < end; ++i)
+      {
+        groups |= parts[i].groups();
+      }
+      for (int g = 0; g < Part::kGroups; ++g)
+      {
+        if (!(groups & (1u << g)))
+        {
+          continue;
+        }
+        double lanes[32][Part::kGroupValues] = {};
+        for (std::uint32_t i = w * 32; i < end; ++i)
+        {
+          parts[i].group(g, lanes[i - w * 32]);
+        }
+        for (int k = 0; k < Part::kGroupValues; ++k)
+        {
+          double tree[32];
+          for (int l = 0; l < 32; ++l)
+          {
+            tree[l] = lanes[l][k];
+          }
+          for (int offset = 16; offset > 0; offset >>= 1)
+          {
+            for (int l = 0; l < offset; ++l)
+            {
+              tree[l] += tree[l + offset];
+            }
+          }
+          double& sum = sums.values[static_cast<std::size_t>(w) * values + g * Part::kGroupValues + k];
+          sum = sums.flags[w] & (1u << g) ? sum + tree[0] : tree[0];
+        }
+      }
+      sums.flags[w] |= groups;
+    }
+  }
+
   template <class Pred>
   void selectIf(std::uint32_t n, Pred pred, std::uint32_t* out, std::uint32_t* count)
   {

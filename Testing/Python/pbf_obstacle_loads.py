@@ -43,7 +43,7 @@ FRAMES = int(os.environ.get("PBF_LOADS_FRAMES", 40))
 # on, so the floor alone carries the weight. With shape maps, checked at the end, a wall's face
 # ends where the floor begins.
 source = PositionBasedFluids(SceneFile=path, ParticleSpacing=S, NumberOfFrames=FRAMES + 1,  # noqa: F821
-                             Backend="CPU (OpenMP)", ExactBoundaries=0)
+                             Backend="CPU (OpenMP)", ExactBoundaries=0, TankLoads=1)
 particles = T.output_at(source, FRAMES * INTERVAL)
 names = particles.GetFieldData().GetAbstractArray("ObstacleNames")
 # The five solids, then the tank's six mirror walls (out of the water's reach here: no load).

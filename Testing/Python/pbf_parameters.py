@@ -32,6 +32,7 @@ FIELDS = {
     "contactAngle": ("ContactAngle", "ContactAngle"),
     "unilateral": ("Unilateral", "Unilateral"),
     "mirrorWalls": ("MirrorWalls", "MirrorWalls"),
+    "tankLoads": ("TankLoads", "TankLoads"),
     "exactBoundaries": ("ExactBoundaries", "ExactBoundaries"),
     "wallFriction": ("WallFriction", "WallFriction"),
     "gravity": ("Gravity", "Gravity"),

@@ -37,6 +37,7 @@ Container container()
   Container c;
   const double inner = kAcross * kSpacing, floorTop = 0.3, lo = 0.5;
   c.parameters.particleSpacing = kSpacing;
+  c.parameters.tankLoads = true; // the six walls' rows too, which the water must leave at zero
   c.parameters.domain = { { 0, 0, 0 }, { 2 * lo + inner, floorTop + 2 * kHigh * kSpacing, 2 * lo + inner } };
   Scene scene;
   scene.domain = c.parameters.domain;
@@ -165,6 +166,7 @@ TEST(Loads, TheMirrorWallsCarryTheWaterAsSolidsDo)
   constexpr int across = 12, high = 16;
   Parameters p;
   p.particleSpacing = kSpacing;
+  p.tankLoads = true;
   const double W = across * kSpacing, H = high * kSpacing;
   p.domain = { { 0, 0, 0 }, { W, 2 * H, W } };
   Scene scene;
