@@ -74,7 +74,8 @@ public:
       (a.alternates ? 2 : 1) * sizeof(std::int64_t) + 2 * sizeof(CellKey) +
       (a.liquids > 0 ? (a.alternates ? 2 : 1) : 0) * sizeof(std::uint8_t) +
       (a.masks ? kNeighborRows * sizeof(std::uint32_t) : 0) + (a.moved ? sizeof(float) : 0) +
-      static_cast<std::size_t>(a.lists) * sizeof(std::uint32_t);
+      static_cast<std::size_t>(a.lists) * sizeof(std::uint32_t) +
+      (a.walls ? (sizeof(std::uint32_t) + kWallLoadDoubles * sizeof(double) + 31) / 32 : 0);
   }
 
   // Head room for what the driver allocates beside us: the kernels' stacks, graphs, CUB's

@@ -43,9 +43,10 @@ void DeviceStepper<Real, Device>::allocateFixed()
   const std::size_t adaptiveAt = place(sizeof(AdaptiveState));
   const std::size_t partialsAt = place(device_->statisticsPartialBytes());
   const std::size_t resultAt = place(kStatisticsValues * sizeof(double));
-  const std::size_t wallLoadsAt = place(kWallLoadDoubles * sizeof(double));
+  const bool walls = parameters_.sumsWallLoads();
+  const std::size_t wallLoadsAt = walls ? place(kWallLoadDoubles * sizeof(double)) : 0;
   const std::size_t wallBlockSumsAt =
-    place(std::size_t(kLoadBlocks) * kWallLoadDoubles * sizeof(double));
+    walls ? place(std::size_t(kLoadBlocks) * kWallLoadDoubles * sizeof(double)) : 0;
   fixed_ = device_->allocate(offset);
   fixedBytes_ = offset;
   char* base = static_cast<char*>(fixed_);
@@ -61,7 +62,6 @@ void DeviceStepper<Real, Device>::allocateFixed()
   b.maxMoved = reinterpret_cast<unsigned long long*>(base + movedAt);
   b.maskBuilds = reinterpret_cast<unsigned long long*>(base + buildsAt);
   b.adaptive = reinterpret_cast<AdaptiveState*>(base + adaptiveAt);
-  const bool walls = parameters_.sumsWallLoads();
   b.wallLoads = walls ? reinterpret_cast<double*>(base + wallLoadsAt) : nullptr;
   b.wallBlockSums = walls ? reinterpret_cast<double*>(base + wallBlockSumsAt) : nullptr;
   buffers_ = fixedBuffers_;

@@ -18,6 +18,11 @@
 // Executor interface (Exec):
 //   forEach(Stage, n, f)                 f(i) for i in [0, n), in any order
 //   forEachMax(Stage, n, maxBits, f)     as forEach; *maxBits = max(*maxBits, bits of f(i) >= 0)
+//   forEachMaxSum(Stage, n, maxBits, Part{}, sums, f)   a neighbour pass as forEachMax, f(i, part)
+//                                        also filling a Part (WallLoads.h's WallLoadPart) whose
+//                                        groups each warp of 32 adds (lane l + 16, then + 8, ...)
+//                                        to its sums over the step (WarpSums: a bit per group
+//                                        in flags, zeroed by the step)
 //   sortByKey(keys, keysAlt, values, valuesAlt, n, keyBits) -> SortedPairs (stable radix sort)
 //   maxScan(data, count)                 inclusive max-scan in place
 //   fillZero(pointer, bytes), copy(destination, source, bytes)

@@ -122,7 +122,7 @@ changed = {
     "RestDensity": 800.0, "ParticleSpacing": 0.05, "SmoothingRatio": 2.5, "SolverIterations": 3,
     "RelaxationEpsilon": 0.02, "SCorrK": 0.05, "SCorrN": 3.0, "SCorrDeltaQ": 0.25,
     "XSPHViscosity": 0.02, "XSPHHyperViscosity": 0.03, "VorticityEpsilon": 0.005, "Unilateral": 0, "MirrorWalls": 0,
-    "ExactBoundaries": 0,
+    "ExactBoundaries": 0, "TankLoads": 1,
     "WallFriction": 0.25, "ChebyshevRho": 0.5, "SurfaceTension": 0.5, "ContactAngle": 120.0,
     "Gravity": [0.5, -5.0, 0.25], "CFLNumber": 0.3, "MaxTimeStep": 0.005, "MaxDensityErrorTolerance": 3.0,
 }
