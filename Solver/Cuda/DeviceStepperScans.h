@@ -81,7 +81,7 @@ StepReport DeviceStepper<Real, Device>::lastStep() const
   // Fixed mode computes no reduction inside a step, as on the CPU.
   report.iterations = constants_.iterations;
   report.densityError = std::numeric_limits<double>::quiet_NaN();
-  // The solids' loads, then with mirror walls the six walls' (as the CPU's report has them).
+  // The solids' loads, then with TankLoads the six walls' (as the CPU's report has them).
   const std::size_t solids = static_cast<std::size_t>(constants_.obstacleCount);
   const std::size_t walls = buffers_.wallLoads ? kMirrorWalls : 0;
   if (!adaptive && solids + walls == 0)

@@ -311,7 +311,7 @@ void correctionPassWith(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   }
 }
 
-// The walls' sums are compiled in where the buffers hold a place for them (mirror walls).
+// The walls' sums are compiled in where the buffers hold a place for them (TankLoads).
 template <class Real, class Exec, class Visit = AllParticles>
 void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
