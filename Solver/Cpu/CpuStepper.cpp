@@ -64,8 +64,7 @@ void CpuStepper<Real>::evaluateDensityAtRest()
   sortByCell();
   const FluidView<Real> f = fluid_.view();
   forEachParticle([&](std::uint32_t i) { densityAndLambda(i, f); });
-  // No step has corrected these positions: no pressure yet (the sort left the old in disorder).
-  std::fill(fluid_.pressure.begin(), fluid_.pressure.end(), Real(0));
+  // The pressure's mean goes on (the sort carried it); appended particles start at 0.
 }
 
 template <class Real>

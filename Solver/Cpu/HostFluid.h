@@ -33,11 +33,11 @@ struct HostFluid
     geometry = makeGridGeometry<Real>(parameters.domain, parameters.smoothingLength());
   }
 
-  void setTimeStep(double step)
+  void setTimeStep(double step, double pressureElapsed = 0)
   {
     checkTimeStep(step);
     dt = step;
-    time = StepTime<Real>::make(parameters, lattice, step);
+    time = StepTime<Real>::make(parameters, lattice, step, pressureElapsed);
   }
 
   // The arrays as the stages see them; `tensile`: this projection adds s_corr.
@@ -94,7 +94,8 @@ struct HostFluid
   }
 
   // Sorts the particles by the cell of p (Green 2008): keys, a counting sort (O(N + cells),
-  // serial), then x, p, v, id, liquid and keys gathered in the new order. forEach(f) runs f(i) for every
+  // serial), then x, p, v, id, liquid, pressure (a mean over the frame's steps so far) and keys
+  // gathered in the new order. forEach(f) runs f(i) for every
   // particle, in parallel or not; gatherMore(gather) gathers a stepper's own arrays the same way
   // (gather(array, scratch)).
   template <class ForEach, class GatherMore>
@@ -120,6 +121,7 @@ struct HostFluid
     {
       gather(liquid, gatherLiquid);
     }
+    gather(pressure, gatherReal);
     gather(keys, gatherKey);
     gatherMore(gather);
   }
@@ -167,7 +169,7 @@ struct HostFluid
       colour.reserve(n);
       normal.reserve(n);
     }
-    for (auto* a : { &density, &lambda, &pressure })
+    for (auto* a : { &density, &lambda, &pressure, &gatherReal })
     {
       a->reserve(n);
     }
@@ -188,7 +190,7 @@ struct HostFluid
   {
     const std::size_t vectors = 6 + (coefficients.surfaceTension ? 2 : 0);
     const std::size_t liquids = parameters.liquids.empty() ? 0 : 2;
-    return vectors * sizeof(Vec3<Real>) + 3 * sizeof(Real) + 2 * sizeof(std::int64_t) +
+    return vectors * sizeof(Vec3<Real>) + 4 * sizeof(Real) + 2 * sizeof(std::int64_t) +
       liquids * sizeof(std::uint8_t) + 2 * sizeof(CellKey) + sizeof(std::uint32_t);
   }
 
@@ -201,7 +203,7 @@ struct HostFluid
     {
       sum += bytes(*a);
     }
-    for (const auto* a : { &density, &lambda, &pressure })
+    for (const auto* a : { &density, &lambda, &pressure, &gatherReal })
     {
       sum += bytes(*a);
     }
@@ -247,6 +249,7 @@ struct HostFluid
   std::vector<std::uint32_t> cellOffsets, order, cursor;
   // Gather targets of the cell sort, kept to avoid allocating every step.
   std::vector<Vec3<Real>> gatherVec;
+  std::vector<Real> gatherReal;
   std::vector<std::int64_t> gatherId;
   std::vector<std::uint8_t> gatherLiquid;
   std::vector<CellKey> gatherKey;

@@ -25,7 +25,10 @@ public:
   {
     copyToSnapshot(fluid_.parameters, fluid_.particles(), out);
   }
-  void setTimeStep(double dt) override { fluid_.setTimeStep(dt); }
+  void setTimeStep(double dt, double pressureElapsed = 0) override
+  {
+    fluid_.setTimeStep(dt, pressureElapsed);
+  }
   double timeStep() const override { return fluid_.dt; }
   StepReport lastStep() const override { return report_; }
 

@@ -57,7 +57,7 @@ public:
   void step() override;
   void append(const ParticleBatch& batch) override;
   std::size_t removeOutflow(const std::vector<Box>& zones) override;
-  void setTimeStep(double dt) override;
+  void setTimeStep(double dt, double pressureElapsed = 0) override;
   double timeStep() const override { return dt_; }
 
   std::size_t size() const override { return n_; }
@@ -115,9 +115,10 @@ private:
   // (captureGraph).
   void captureGraphs();
   void captureGraph(int x);
-  // Uploads x, v and id of the n_ particles into a fresh allocation.
+  // Uploads x, v, id, liquid and pressure of the n_ particles into a fresh allocation.
   void restore(const std::vector<Vec3<Real>>& x, const std::vector<Vec3<Real>>& v,
-    const std::vector<std::int64_t>& id, const std::vector<std::uint8_t>& liquid);
+    const std::vector<std::int64_t>& id, const std::vector<std::uint8_t>& liquid,
+    const std::vector<Real>& pressure);
   // After the particles changed (append, load, solids): density and lambda at rest, the step
   // captured again, and a wait (the host arrays that went up may die).
   void settle();
@@ -223,11 +224,11 @@ DeviceStepper<Real, Device>::~DeviceStepper()
 }
 
 template <class Real, class Device>
-void DeviceStepper<Real, Device>::setTimeStep(double dt)
+void DeviceStepper<Real, Device>::setTimeStep(double dt, double pressureElapsed)
 {
   checkTimeStep(dt);
   device_->activate();
-  const StepTime<Real> time = StepTime<Real>::make(parameters_, lattice_, dt);
+  const StepTime<Real> time = StepTime<Real>::make(parameters_, lattice_, dt, pressureElapsed);
   // Ordered before the next step; the policy stages the bytes before it returns, so `time` may go.
   device_->upload(deviceTime_, &time, sizeof time);
   dt_ = dt;

@@ -90,7 +90,7 @@ void DeviceStepper<Real, Device>::allocate(std::size_t capacity, std::size_t par
 template <class Real, class Device>
 void DeviceStepper<Real, Device>::restore(const std::vector<Vec3<Real>>& x,
   const std::vector<Vec3<Real>>& v, const std::vector<std::int64_t>& id,
-  const std::vector<std::uint8_t>& liquid)
+  const std::vector<std::uint8_t>& liquid, const std::vector<Real>& pressure)
 {
   if (n_ == 0)
   {
@@ -99,6 +99,7 @@ void DeviceStepper<Real, Device>::restore(const std::vector<Vec3<Real>>& x,
   device_->upload(buffers_.vec[roles_.x], x.data(), n_ * sizeof(Vec3<Real>));
   device_->upload(buffers_.vec[roles_.v], v.data(), n_ * sizeof(Vec3<Real>));
   device_->upload(buffers_.id, id.data(), n_ * sizeof(std::int64_t));
+  device_->upload(buffers_.pressure, pressure.data(), n_ * sizeof(Real));
   if (buffers_.liquid)
   {
     device_->upload(buffers_.liquid, liquid.data(), n_);
@@ -119,17 +120,19 @@ void DeviceStepper<Real, Device>::append(const ParticleBatch& batch)
   }
   if (n > store_->capacity())
   {
-    // Grow by half again, so that emitters reallocate O(log N) times. x, v and id survive
-    // through the host, so that the old and the new arrays never take memory together;
-    // everything else is recomputed from them.
+    // Grow by half again, so that emitters reallocate O(log N) times. x, v, id, liquid and the
+    // pressure's mean survive through the host, so that the old and the new arrays never take
+    // memory together; everything else is recomputed from them.
     std::vector<Vec3<Real>> x(n_), v(n_);
     std::vector<std::int64_t> id(n_);
     std::vector<std::uint8_t> liquid(buffers_.liquid ? n_ : 0);
+    std::vector<Real> pressure(n_);
     if (n_ > 0)
     {
       device_->download(x.data(), buffers_.vec[roles_.x], n_ * sizeof(Vec3<Real>));
       device_->download(v.data(), buffers_.vec[roles_.v], n_ * sizeof(Vec3<Real>));
       device_->download(id.data(), buffers_.id, n_ * sizeof(std::int64_t));
+      device_->download(pressure.data(), buffers_.pressure, n_ * sizeof(Real));
       if (buffers_.liquid)
       {
         device_->download(liquid.data(), buffers_.liquid, n_);
@@ -159,12 +162,12 @@ void DeviceStepper<Real, Device>::append(const ParticleBatch& batch)
       // Keep the particles we had: the memory they used was just freed.
       allocate(oldCapacity, n_);
       roles_ = Roles{};
-      restore(x, v, id, liquid);
+      restore(x, v, id, liquid, pressure);
       settle();
       throw;
     }
     roles_ = Roles{};
-    restore(x, v, id, liquid);
+    restore(x, v, id, liquid, pressure);
   }
   if (added > 0)
   {
@@ -177,6 +180,8 @@ void DeviceStepper<Real, Device>::append(const ParticleBatch& batch)
     device_->upload(buffers_.vec[roles_.x] + n_, x.data(), added * sizeof(Vec3<Real>));
     device_->upload(buffers_.vec[roles_.v] + n_, v.data(), added * sizeof(Vec3<Real>));
     device_->upload(buffers_.id + n_, batch.id.data(), added * sizeof(std::int64_t));
+    // No step has corrected the new particles: their pressure starts at 0.
+    device_->executor().fillZero(buffers_.pressure + n_, added * sizeof(Real));
     // A batch without liquids is of liquid 0 (checkBatch).
     const std::vector<std::uint8_t> zeros(buffers_.liquid && batch.liquid.empty() ? added : 0, 0);
     if (buffers_.liquid)

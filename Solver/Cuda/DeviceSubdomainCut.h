@@ -181,7 +181,7 @@ typename DeviceSubdomainStepper<Real, Device>::Roles4 DeviceSubdomainStepper<Rea
       }
     }
     subdomain::packMigrants(
-      exec, leaving, ownedList_, vec_[r.x], vec_[r.p], vec_[r.v], id_, liquid_, packed);
+      exec, leaving, ownedList_, vec_[r.x], vec_[r.p], vec_[r.v], pressure_, id_, liquid_, packed);
     device_->download(staging, packed, std::size_t(leaving) * sizeof(Record));
   }
   // The exchange needs the leavers' bytes (and the counts) only: the holes are filled while
@@ -196,6 +196,7 @@ typename DeviceSubdomainStepper<Real, Device>::Roles4 DeviceSubdomainStepper<Rea
     subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, vec_[r.x]);
     subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, vec_[r.p]);
     subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, vec_[r.v]);
+    subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, pressure_);
     subdomain::fillHoles<Real>(exec, most, selected_, sendList_, ghostList_, id_);
     if (liquid_)
     {
@@ -225,6 +226,7 @@ typename DeviceSubdomainStepper<Real, Device>::Roles4 DeviceSubdomainStepper<Rea
     vec_[r.x],
     vec_[r.p],
     vec_[r.v],
+    pressure_,
     id_,
     liquid_);
   n_ = stay + arriving;

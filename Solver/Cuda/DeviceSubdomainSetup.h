@@ -130,11 +130,12 @@ inline Health DeviceSubdomainStepper<Real, Device>::healthAlone() const
 }
 
 template <class Real, class Device>
-inline void DeviceSubdomainStepper<Real, Device>::setTimeStepAlone(double dt)
+inline void DeviceSubdomainStepper<Real, Device>::setTimeStepAlone(
+  double dt, double pressureElapsed)
 {
   checkTimeStep(dt);
   device_->activate();
-  const StepTime<Real> time = StepTime<Real>::make(parameters_, lattice_, dt);
+  const StepTime<Real> time = StepTime<Real>::make(parameters_, lattice_, dt, pressureElapsed);
   device_->upload(deviceTime_, &time, sizeof time);
   device_->synchronize(); // `time` dies here
   dt_ = dt;
@@ -181,6 +182,8 @@ inline void DeviceSubdomainStepper<Real, Device>::appendOwned(Owned&& o)
     device_->upload(vec_[xBuffer_] + n_, o.x.data(), o.x.size() * sizeof(Vec3<Real>));
     device_->upload(vec_[vBuffer_] + n_, o.v.data(), o.v.size() * sizeof(Vec3<Real>));
     device_->upload(id_ + n_, o.id.data(), o.id.size() * sizeof(std::int64_t));
+    // No step has corrected the new particles: their pressure starts at 0.
+    device_->executor().fillZero(pressure_ + n_, o.x.size() * sizeof(Real));
     if (liquid_)
     {
       device_->upload(liquid_ + n_, o.liquid.data(), o.liquid.size());

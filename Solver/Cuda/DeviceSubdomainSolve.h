@@ -419,8 +419,7 @@ void DeviceSubdomainStepper<Real, Device>::evaluateAtRest()
     detail::firstPassOnPositions(exec, DensityStage<Real>{}, b, constants_, count(n_), f, 0, false,
       pass, detail::ListedParticles{ ownedList_ });
   });
-  // No step has corrected these positions: no pressure yet.
-  exec.fillZero(pressure_, static_cast<std::size_t>(n_) * sizeof(Real));
+  // The pressure's mean goes on (the sort carried it); appended particles start at 0.
   keepOwned(vec_[r.x], vec_[r.v], r.p, r.free);
   device_->synchronize();
   checkLists();

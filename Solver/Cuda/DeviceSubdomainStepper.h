@@ -140,9 +140,9 @@ public:
   {
     distributed::together(communicator_, [&] { stepAlone(); });
   }
-  void setTimeStep(double dt) override
+  void setTimeStep(double dt, double pressureElapsed = 0) override
   {
-    distributed::together(communicator_, [&] { setTimeStepAlone(dt); });
+    distributed::together(communicator_, [&] { setTimeStepAlone(dt, pressureElapsed); });
   }
   // Collective: this rank's particles in the zones go; returns the count over every rank.
   std::size_t removeOutflow(const std::vector<Box>& zones) override;
@@ -259,7 +259,7 @@ private:
   }
 
   // Every rank sets the same dt (Simulation chooses it from reduced maxima).
-  void setTimeStepAlone(double dt);
+  void setTimeStepAlone(double dt, double pressureElapsed);
 
   // Every rank passes the whole batch; each keeps the particles of its slab.
   void appendAlone(const ParticleBatch& batch);

@@ -87,7 +87,7 @@ struct StepBuffers
   Vec3<Real>* vec[4];
   Real* density;
   Real* lambda;            // also the sort's values (the permutation) until density is evaluated
-  Real* pressure;          // the step's pressure (recordPressure)
+  Real* pressure;          // the pressure, a mean over the frame (recordPressure)
   Real* volume;            // m / rho_i for the vorticity passes; may be null (FluidView::volume)
   Real* omegaLength;       // |omega_i| for the confinement; may be null
   std::int64_t* id;

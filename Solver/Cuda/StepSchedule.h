@@ -105,8 +105,10 @@ void gatherWithOffsets(Exec& exec, const StepConstants<Real>& k, std::uint32_t n
 }
 
 // Sorts by the keys in keys[0] (values: the identity in lambda), builds the cell offsets and
-// gathers every array into cell order. On entry A = x, B = v, C = p (old order), D is free; on
-// exit D = x, A = p, C = v (cell order) and B is free. Returns the sorted keys.
+// gathers every array into cell order (density and lambda aside: the step computes them again;
+// the pressure is a mean over the frame's steps so far). On entry A = x, B = v, C = p (old
+// order), D is free; on exit D = x, A = p, C = v (cell order) and B is free. Returns the sorted
+// keys.
 template <class Real, class Exec>
 const CellKey* sortAndGather(Exec& exec, const StepBuffers<Real>& b, const StepConstants<Real>& k,
   std::uint32_t n, Vec3<Real>* A, Vec3<Real>* B, Vec3<Real>* C, Vec3<Real>* D)
@@ -133,6 +135,10 @@ const CellKey* sortAndGather(Exec& exec, const StepBuffers<Real>& b, const StepC
     exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { liquidSorted[i] = liquid[perm[i]]; });
     exec.copy(liquid, liquidSorted, static_cast<std::size_t>(n));
   }
+  Real* pressure = b.pressure;
+  Real* pressureSorted = reinterpret_cast<Real*>(B);
+  exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { pressureSorted[i] = pressure[perm[i]]; });
+  exec.copy(pressure, pressureSorted, static_cast<std::size_t>(n) * sizeof(Real));
   return keys;
 }
 
@@ -226,8 +232,7 @@ void enqueueEvaluateAtRest(Exec& exec, const StepBuffers<Real>& b, const StepCon
     detail::firstPassOnPositions(exec, DensityStage<Real>{}, b, k, n, f, 0, false, pass);
   });
   exec.copy(B, C, static_cast<std::size_t>(n) * sizeof(Vec3<Real>));
-  // No step has corrected these positions: no pressure yet.
-  exec.fillZero(b.pressure, static_cast<std::size_t>(n) * sizeof(Real));
+  // The pressure's mean goes on (sortAndGather carried it); appended particles start at 0.
 }
 
 // Sorts the positions x (n particles) into cell order on a grid of their own, as statistics()

@@ -101,12 +101,14 @@ PBF_HD PBF_INLINE int columnOfKey(CellKey key, int nx)
   return static_cast<int>(key % static_cast<CellKey>(nx));
 }
 
-// What a particle that changes rank takes along: everything the step still needs of it. The
-// liquid sits in the padding before the id: in single precision the record stays 48 bytes.
+// What a particle that changes rank takes along: everything the step still needs of it, and its
+// pressure's mean over the frame so far (56 bytes in single precision; few particles migrate
+// in a step).
 template <class Real>
 struct Migrant
 {
   Vec3<Real> x, p, v;
+  Real pressure;
   std::uint8_t liquid; // 0 in a scene without liquids
   std::int64_t id;
 };
@@ -303,19 +305,20 @@ void gather(Exec& exec, std::uint32_t n, const std::uint32_t* perm, const T* fro
 // liquid: null in a scene without liquids (the records carry 0).
 template <class Real, class Exec>
 void packMigrants(Exec& exec, std::uint32_t count, const std::uint32_t* list, const Vec3<Real>* x,
-  const Vec3<Real>* p, const Vec3<Real>* v, const std::int64_t* id, const std::uint8_t* liquid,
-  Migrant<Real>* out)
+  const Vec3<Real>* p, const Vec3<Real>* v, const Real* pressure, const std::int64_t* id,
+  const std::uint8_t* liquid, Migrant<Real>* out)
 {
   exec.forEach(GatherStage{}, count, [=] PBF_HD(std::uint32_t k) {
     const std::uint32_t i = list[k];
-    out[k] = Migrant<Real>{ x[i], p[i], v[i], liquid ? liquid[i] : std::uint8_t(0), id[i] };
+    out[k] = Migrant<Real>{ x[i], p[i], v[i], pressure[i], liquid ? liquid[i] : std::uint8_t(0),
+      id[i] };
   });
 }
 
 template <class Real, class Exec>
 void unpackMigrants(Exec& exec, std::uint32_t first, std::uint32_t count,
-  const Migrant<Real>* in, Vec3<Real>* x, Vec3<Real>* p, Vec3<Real>* v, std::int64_t* id,
-  std::uint8_t* liquid)
+  const Migrant<Real>* in, Vec3<Real>* x, Vec3<Real>* p, Vec3<Real>* v, Real* pressure,
+  std::int64_t* id, std::uint8_t* liquid)
 {
   exec.forEach(GatherStage{}, count, [=] PBF_HD(std::uint32_t k) {
     const std::uint32_t i = first + k;
@@ -323,6 +326,7 @@ void unpackMigrants(Exec& exec, std::uint32_t first, std::uint32_t count,
     x[i] = m.x;
     p[i] = m.p;
     v[i] = m.v;
+    pressure[i] = m.pressure;
     id[i] = m.id;
     if (liquid)
     {

@@ -237,8 +237,7 @@ void SubdomainStepper<Real>::evaluateAtRest()
   const FluidView<Real> f = fluid_.view();
   forOwned([&](std::uint32_t i) { densityAndLambda(i, f); });
   dropGhosts();
-  // No step has corrected these positions: no pressure yet.
-  std::fill(fluid_.pressure.begin(), fluid_.pressure.end(), Real(0));
+  // The pressure's mean goes on (the sort carried it); appended particles start at 0.
 }
 
 template <class Real>

@@ -96,15 +96,25 @@ PBF_HD PBF_INLINE void densityAndLambda(std::uint32_t i, const FluidView<Real, N
 // lattice's gradient moment G (LatticeCalibration::gradientMoment): the discrete gradient
 // reads G times a smooth field's, so water at rest holds itself up with 1 / G times rho_0 g d.
 // s_corr's push is not part of it: it is an artificial pressure between pairs, not a
-// particle's. The first projection (f.tensile) starts the sum.
+// particle's. The step's sum joins the particle's running mean over the frame (StepTime's
+// pressureKeep and pressureWeight): the first projection (f.tensile) scales the mean so far,
+// or drops it when a new mean starts (keep 0, so that an unset value never leaks in).
 template <class Real, class Neighbors>
 PBF_HD PBF_INLINE void recordPressure(
   std::uint32_t i, const FluidView<Real, Neighbors>& f, Real lambdaI)
 {
   if (f.pressure)
   {
-    const Real p = -f.c.pressureScale * lambdaI * f.time->inverseDt * f.time->inverseDt;
-    f.pressure[i] = f.tensile ? p : f.pressure[i] + p;
+    const StepTime<Real>& t = *f.time;
+    const Real p = -f.c.pressureScale * lambdaI * t.inverseDt * t.inverseDt * t.pressureWeight;
+    if (!f.tensile)
+    {
+      f.pressure[i] += p;
+    }
+    else
+    {
+      f.pressure[i] = t.pressureKeep == Real(0) ? p : f.pressure[i] * t.pressureKeep + p;
+    }
   }
 }
 

@@ -105,12 +105,21 @@ struct StepTime
   Real tension[kMaxLiquids];
   // Adhesion per liquid: the cosine of its contact angle with the walls (SurfaceTension.h).
   Real wallCos[kMaxLiquids];
+  // The step's pressure joins a running mean over time (recordPressure): the mean before the step
+  // (over `elapsed` seconds of steps) times pressureKeep = elapsed / (elapsed + dt), plus the
+  // step's times pressureWeight = dt / (elapsed + dt). elapsed = 0 starts a new mean.
+  Real pressureKeep;
+  Real pressureWeight;
 
-  static StepTime make(const Parameters& p, const LatticeCalibration& lattice, double dt)
+  // `elapsed`: the seconds of steps the particles' pressure is a mean over before this step.
+  static StepTime make(
+    const Parameters& p, const LatticeCalibration& lattice, double dt, double elapsed = 0)
   {
     StepTime t;
     t.dt = static_cast<Real>(dt);
     t.inverseDt = static_cast<Real>(1.0 / dt);
+    t.pressureKeep = static_cast<Real>(elapsed / (elapsed + dt));
+    t.pressureWeight = static_cast<Real>(dt / (elapsed + dt));
     t.tensile =
       static_cast<Real>(p.sCorrK * kStandardGravity * dt * dt / lattice.tensileSurfacePush);
     // c + c_4 at most kMaxXsphBlend: explicit smoothing beyond it is unstable (a pattern's gain

@@ -20,8 +20,10 @@ struct Snapshot
   std::vector<Vec3<Real>> velocity;
   std::vector<Real> density; // rho_i from the last constraint evaluation [kg/m^3], of its liquid
   std::vector<Real> lambda;  // lambda_i from the last constraint evaluation
-  std::vector<Real> pressure; // p_i of the last step's corrections [Pa] (Equations.h's
-                              // recordPressure); 0 before a particle's first step
+  // p_i [Pa]: the pressure the corrections stand for (Equations.h's recordPressure), a mean
+  // over the steps since the mean began (Stepper::setTimeStep; Simulation's frame); 0 before a
+  // particle's first step.
+  std::vector<Real> pressure;
   std::vector<std::int64_t> id;
   // Each particle's liquid, its index in Parameters::liquids; empty where the scene names none.
   std::vector<std::uint8_t> liquid;

@@ -74,8 +74,8 @@ struct FrameRow
   double loadImbalance = 0; // decomposed: the largest rank's particles over the mean - 1, percent
   // Per obstacle of the scene, then per mirror wall: the mean force the fluid pushed it with
   // over the frame's steps [N] and its torque about the obstacle's centre of mass (a wall's
-  // middle) [N m] (their impulses over the frame's time); empty at frame 0 and where the backend
-  // sums no loads (CUDA, for now).
+  // middle) [N m] (their impulses over the frame's time); empty at frame 0, and the walls'
+  // without Parameters::tankLoads.
   std::vector<SolidLoad> loads;
   std::vector<std::string> loadNames; // the obstacles' and walls' names (Simulation::loadName)
   // Per body the fluid moves (Simulation::bodies): where it is at the frame.

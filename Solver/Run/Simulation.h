@@ -76,6 +76,7 @@ struct SimulationCheckpoint
   double time = 0; // [s]
   std::int64_t nextId = 0;
   std::uint64_t removed = 0; // particles gone through the outflows
+  double pressureElapsed = 0; // [s] the steps the particles' pressure is a mean over so far
   std::vector<std::int64_t> layersEmitted;
   std::variant<Snapshot<float>, Snapshot<double>> state;
   // The bodies the fluid moves (Simulation::Body): their states and last loads.
@@ -149,12 +150,18 @@ public:
   // longer fit in the device's memory (the stepper keeps the particles it had); DeviceFault for a
   // GPU that fails. After any of them, restore a checkpoint (or start again) before stepping on.
   // `steps` solver steps of the size nextTimeStep() chooses, landing on no particular time.
+  // The particles' pressure (Snapshot::pressure) is then the last step's, as the state after
+  // step k does not depend on how the steps were split into calls.
   AdvanceReport advance(std::uint64_t steps);
 
   // Steps until time() is `until` exactly (the time of an output frame): each step is the one
   // nextTimeStep() chooses, shortened so that a whole number of them ends on `until`. The sizes
   // follow from the state alone, so a run frame by frame is the same bit for bit however it is
   // split into calls, resumed or repeated. Nothing happens when time() >= until.
+  // The particles' pressure is then their mean over the frame's steps, each weighed by its dt
+  // (the steps since the last landing on a frame's time, or since the last advance()), so that
+  // a frame's pressure (and the surface pressure and probes read from it) does not flicker with
+  // its last step's corrections. Density, lambda and velocity are the last step's.
   AdvanceReport advanceTo(double until);
   // One step of advanceTo(until); returns true when time() has reached `until`. For callers that
   // must be able to stop within a frame (the VTK filter's abort).
@@ -285,6 +292,11 @@ private:
   double xsphStepLimit_ = 0; // kMaxXsphBlend beta h^2 / (nu + nu_4) [s]; infinity without XSPH
   std::int64_t nextId_ = 0;
   std::uint64_t removed_ = 0;
+  // [s] the steps the particles' pressure is a mean over so far: 0 after a landing (advanceTo)
+  // and in advance(), so that the next step starts a new mean. stepperElapsed_ is what the
+  // stepper was last given (NaN: not known, after a restore).
+  double pressureElapsed_ = 0;
+  double stepperElapsed_ = 0;
   std::vector<Box> outflowZones_;
   std::vector<Vec3d> solidCentres_; // per solid, its centre of mass in its own frame
   std::vector<Body> bodies_;

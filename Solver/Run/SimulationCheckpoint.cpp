@@ -27,6 +27,7 @@ SimulationCheckpoint Simulation::checkpoint() const
   c.time = time_;
   c.nextId = nextId_;
   c.removed = removed_;
+  c.pressureElapsed = pressureElapsed_;
   c.layersEmitted = layersEmitted_;
   for (const Body& body : bodies_)
   {
@@ -74,6 +75,8 @@ void Simulation::restore(const SimulationCheckpoint& c)
   time_ = c.time;
   nextId_ = c.nextId;
   removed_ = c.removed;
+  pressureElapsed_ = c.pressureElapsed;
+  stepperElapsed_ = std::numeric_limits<double>::quiet_NaN(); // the next step sets it again
   layersEmitted_ = c.layersEmitted;
   lastGoodStep_ = steps_;
   // The next automatic step needs the fastest particle, which a fresh scan gives exactly as the

@@ -76,9 +76,10 @@ double Simulation::checkedTimeStep() const
 
 void Simulation::stepOnce(double dt, double end, AdvanceReport& report)
 {
-  if (dt != stepper_->timeStep())
+  if (dt != stepper_->timeStep() || !(pressureElapsed_ == stepperElapsed_))
   {
-    stepper_->setTimeStep(dt);
+    stepper_->setTimeStep(dt, pressureElapsed_);
+    stepperElapsed_ = pressureElapsed_;
   }
   moveBodies(dt, end);
   // The constraints hold at the step's end, with the solids where they are then.
@@ -89,6 +90,7 @@ void Simulation::stepOnce(double dt, double end, AdvanceReport& report)
   }
   stepper_->step();
   ++steps_;
+  pressureElapsed_ += dt;
   healthValid_ = false;
   const StepReport step = stepper_->lastStep();
   report.iterations += step.iterations;
@@ -113,6 +115,7 @@ AdvanceReport Simulation::advance(std::uint64_t steps)
   const bool automatic = parameters_.timeStepping == TimeStepping::Automatic;
   for (std::uint64_t k = 0; k < steps; ++k)
   {
+    pressureElapsed_ = 0; // each step's pressure is its own: the state after step k is one
     if (automatic && !healthValid_)
     {
       checkDivergence(); // the fastest particle, and the check for free
@@ -126,6 +129,7 @@ AdvanceReport Simulation::advance(std::uint64_t steps)
     }
     emit();
   }
+  pressureElapsed_ = 0;
   stepper_->synchronize();
   report.milliseconds =
     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -156,6 +160,10 @@ bool Simulation::stepToward(double until, AdvanceReport& report)
   const bool landed = count == 1.0;
   stepOnce(dt, landed ? until : time_ + dt, report);
   time_ = landed ? until : time_ + dt;
+  if (landed)
+  {
+    pressureElapsed_ = 0; // the frame's mean is complete: the next step starts another
+  }
   if (automatic || landed || (checkInterval_ > 0 && steps_ % checkInterval_ == 0))
   {
     checkDivergence();

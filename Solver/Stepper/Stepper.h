@@ -100,7 +100,10 @@ public:
 
   // The size of the steps that follow [s]; Parameters::timeStep until set. Simulation sets it
   // before every step when the time stepping is automatic. Throws InvalidInput for dt <= 0.
-  virtual void setTimeStep(double dt) = 0;
+  // pressureElapsed [s]: the particles' pressure is a running mean over time (Equations.h's
+  // recordPressure), and the next step joins a mean over that many seconds of steps before it;
+  // 0 (the default) starts a new mean with it. Simulation sets it before every step.
+  virtual void setTimeStep(double dt, double pressureElapsed = 0) = 0;
   virtual double timeStep() const = 0;
 
   virtual std::size_t size() const = 0;

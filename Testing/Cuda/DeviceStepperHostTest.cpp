@@ -47,6 +47,7 @@ struct Case
   double sigma = 0;     // surfaceTension [N/m]
   double contactAngle = 90; // [degrees]
   bool tankLoads = false;   // the walls' loads too, checked step by step (expectSameLoads)
+  bool pressureMean = false; // the pressure a running mean over the steps (setTimeStep)
 };
 
 cuda::Options optionsOf(const Case& c)
@@ -130,6 +131,11 @@ void compareWithSerial(const Case& c, int steps, double* builds = nullptr)
   bool pressed = false;
   for (int s = 0; s < steps; ++s)
   {
+    if (c.pressureMean)
+    {
+      serial->setTimeStep(p.timeStep, s * p.timeStep);
+      device->setTimeStep(p.timeStep, s * p.timeStep);
+    }
     serial->step();
     device->step();
     serialIterations += serial->lastStep().iterations;
@@ -150,7 +156,8 @@ void compareWithSerial(const Case& c, int steps, double* builds = nullptr)
   }
   SCOPED_TRACE(std::string(c.scene) + ", " + std::to_string(c.iterations) + " iterations, " +
     (c.masks ? "masks, skin " + std::to_string(c.skin) : std::string("cell walk")) +
-    (c.backwards ? ", backwards" : "") + (c.graphs ? ", graphs" : ", stage by stage"));
+    (c.backwards ? ", backwards" : "") + (c.graphs ? ", graphs" : ", stage by stage") +
+    (c.pressureMean ? ", pressure's mean" : ""));
   test::expectBitIdentical(stateOf<Real>(*serial), stateOf<Real>(*device));
   if (builds)
   {
@@ -243,6 +250,20 @@ TEST(StepSchedule, ChebyshevAccelerationReproducesTheSerialBackendBitForBit)
   }
 }
 
+TEST(StepSchedule, APressureMeanOverStepsFollowsTheSortLikeTheSerialBackend)
+{
+  // The pressure's running mean (Stepper::setTimeStep) rides on the cell sort's gathers: the
+  // dam break falls, its particles change cells every step, and the mean must stay with them.
+  for (bool graphs : { true, false })
+  {
+    Case c{ "dam_break", 4, true, 0.02, false, 0, graphs };
+    c.pressureMean = true;
+    compareWithSerial<float>(c, 30);
+    c.scene = "double_dam_break";
+    compareWithSerial<double>(c, 30);
+  }
+}
+
 TEST(DeviceStepperOnHost, StageByStageAndCapturedStepsAreTheSame)
 {
   // Options::graphs off queues every stage at every step; on, the step recorded at construction
@@ -295,8 +316,9 @@ TEST(DeviceStepperOnHost, TheStepIsCapturedAgainOnlyWhenItsArgumentsChange)
 TEST(DeviceStepperOnHost, EmittersGrowTheArraysLikeTheSerialBackend)
 {
   // The arrays start with room for 1024 particles; each batch below passes the capacity, so the
-  // state goes through the host into larger arrays. Bit-identical: the host policy rounds as the
-  // serial backend does, and the appended particles join in the same order.
+  // state (the pressure's running mean with it) goes through the host into larger arrays.
+  // Bit-identical: the host policy rounds as the serial backend does, and the appended
+  // particles join in the same order, their pressure at 0.
   const Scene scene = presetScene("dam_break");
   const Parameters p = fixedParameters({ "dam_break", 4, true, 0.02, false }, scene);
   const ParticleBatch initial = fillScene(scene, p);
@@ -318,6 +340,10 @@ TEST(DeviceStepperOnHost, EmittersGrowTheArraysLikeTheSerialBackend)
     device->append(batch);
     for (int s = 0; s < 5; ++s)
     {
+      // One pressure mean over all 15 steps: the larger arrays must keep it.
+      const double elapsed = (5 * round + s) * p.timeStep;
+      serial->setTimeStep(p.timeStep, elapsed);
+      device->setTimeStep(p.timeStep, elapsed);
       serial->step();
       device->step();
     }
