@@ -181,6 +181,25 @@ vtkPBFBodyTag vtkPBFBodyTagOf(vtkDataSet* obstacle)
     {
       tag.Name = name->GetValue(0);
     }
+    // Absent (a dataset marked by an older filter): every freedom, no hold.
+    vtkDataArray* axes = fields->GetArray("PBFBodyFreeAxes");
+    if (axes && axes->GetNumberOfTuples() > 0 && axes->GetNumberOfComponents() == 3)
+    {
+      for (int a = 0; a < 3; ++a)
+      {
+        tag.FreeAxes[a] = axes->GetComponent(0, a) != 0;
+      }
+    }
+    vtkDataArray* turns = fields->GetArray("PBFBodyTurns");
+    if (turns && turns->GetNumberOfTuples() > 0)
+    {
+      tag.Turns = turns->GetComponent(0, 0) != 0;
+    }
+    vtkDataArray* release = fields->GetArray("PBFBodyRelease");
+    if (release && release->GetNumberOfTuples() > 0)
+    {
+      tag.Release = release->GetComponent(0, 0);
+    }
   }
   return tag;
 }

@@ -38,6 +38,9 @@ struct vtkPBFBodyTag
   bool Tagged = false; // PBFBodyDensity is there: the obstacle is a body
   double Density = 0;  // [kg/m^3], as typed (checked where the run is built)
   std::string Name;    // empty: the simulation names it
+  bool FreeAxes[3] = { true, true, true }; // the world axes its centre moves along
+  bool Turns = true;
+  double Release = 0; // [s], as typed (checked where the run is built)
 };
 vtkPBFBodyTag vtkPBFBodyTagOf(vtkDataSet* obstacle);
 

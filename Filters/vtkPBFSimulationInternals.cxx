@@ -164,7 +164,9 @@ pbf::PlaybackKey vtkPBFSimulationInternals::MakeKey(const vtkPBFSettings& settin
     for (vtkDataSet* obstacle : obstacles)
     {
       const vtkPBFBodyTag tag = vtkPBFBodyTagOf(obstacle);
-      solids << " body " << tag.Density << " " << tag.Name;
+      solids << " body " << tag.Density << " " << tag.Name << " axes " << tag.FreeAxes[0]
+             << tag.FreeAxes[1] << tag.FreeAxes[2] << " turns " << tag.Turns << " release "
+             << tag.Release;
     }
     key.obstacles = solids.str();
   }
@@ -242,8 +244,18 @@ std::unique_ptr<pbf::Simulation> vtkPBFSimulationInternals::Build(const vtkPBFSe
              << ": a rigid body's density must be a positive number [kg/m^3]";
         throw pbf::InvalidInput(text.str());
       }
+      if (!(tag.Release >= 0) || !std::isfinite(tag.Release))
+      {
+        std::ostringstream text;
+        text << called << ": Release = " << tag.Release
+             << ": a rigid body's release must be a finite time >= 0 [s]";
+        throw pbf::InvalidInput(text.str());
+      }
       solid.density = tag.Density;
       solid.name = called;
+      solid.freeAxes = { tag.FreeAxes[0], tag.FreeAxes[1], tag.FreeAxes[2] };
+      solid.turns = tag.Turns;
+      solid.release = tag.Release;
     }
   }
   // Decomposed, every rank generates only its slab of the scene's fluid (pbf::SceneFluid), and

@@ -2,7 +2,9 @@
 Rigid Body filter (Density, Name) floats in the tank like the scene file's crate of
 pbf_floating_body.py. The Diagnostics and field data name it, the Domain output draws it where it
 is, another density is another run, and a density that is not positive is an error naming the
-body and the value, with the previous output kept."""
+body and the value, with the previous output kept. On a vertical guide (FreeAxes 0 1 0, Turns
+off) and held until Release, it stays put until then and afterwards moves only up and down; a
+negative Release is an error naming it."""
 import json
 import os
 import sys
@@ -75,4 +77,25 @@ _, messages = T.capture_messages(lambda: source.UpdatePipeline(FRAMES * INTERVAL
 expect("crate: Density = -1" in messages, "no error names the density: %s" % messages)
 T.expect_identical(T.particles_of(source.GetClientSideObject().GetOutputDataObject(0)), kept,
                    "the output after the bad density")
+
+# On a vertical guide, held until 0.2 s: where it was given (to the last bit: a held body is not
+# integrated) at 0.1 s; at the end it has sunk, with x and z as given and no turn (a held axis's
+# coordinate is never changed, 1e-12 for the sums that carry it in double).
+crate.Density = 500
+crate.FreeAxes = [0, 1, 0]
+crate.Turns = 0
+crate.Release = 0.2
+given = T.field_value(T.output_at(source, 0), "BodyPosition")  # the float Box's centre of mass
+held = T.field_value(T.output_at(source, 3 * INTERVAL), "BodyPosition")
+expect(list(held) == list(given), "held until 0.2 s, the crate is at %s at 0.1 s, given at %s" % (held, given))
+guided = T.field_value(T.output_at(source, FRAMES * INTERVAL), "BodyPosition")
+turned = T.field_value(T.output_at(source, FRAMES * INTERVAL), "BodyOrientation")
+expect(guided[1] < start_y - 0.005, "the guided crate did not sink: centre y %.4f" % guided[1])
+expect(abs(guided[0] - given[0]) < 1e-12 and abs(guided[2] - given[2]) < 1e-12,
+       "the guided crate left its guide: %s from %s" % (guided, given))
+expect(max(abs(q - e) for q, e in zip(turned, (1, 0, 0, 0))) < 1e-12,
+       "the crate turned without Turns: %s" % (turned,))
+crate.Release = -1
+_, messages = T.capture_messages(lambda: source.UpdatePipeline(FRAMES * INTERVAL))
+expect("crate: Release = -1" in messages, "no error names the release: %s" % messages)
 T.passed("RigidBody")
