@@ -203,19 +203,6 @@ public:
     check(cudaGetLastError(), "kernel launch");
   }
 
-  // counts[bin(i)] += 1 for i in [0, n), bin(i) in [0, bins): a histogram in integers.
-  template <class F>
-  void forEachCount(std::uint32_t n, std::uint32_t* counts, int bins, F bin)
-  {
-    if (n == 0)
-    {
-      return;
-    }
-    countKernel<<<(n + kMaxBlock - 1) / kMaxBlock, kMaxBlock, bins * sizeof(std::uint32_t),
-      stream_>>>(n, counts, bins, bin);
-    check(cudaGetLastError(), "kernel launch");
-  }
-
   // A neighbour pass as forEachMax whose f(i, part) also fills a Part that each warp adds to its
   // sums (stageMaxSumKernel), over the passes of a step.
   template <class Stage, class Part, class F>

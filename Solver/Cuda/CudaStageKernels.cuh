@@ -219,32 +219,5 @@ __global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageMaxS
   }
 }
 
-// counts[bin(i)] += 1 for every particle i: a block's counts in shared memory (`bins` of them),
-// then added to the global ones. Integer additions: the counts are the same in any order.
-template <class F>
-__global__ void __launch_bounds__(kMaxBlock) countKernel(
-  std::uint32_t n, std::uint32_t* counts, int bins, F bin)
-{
-  extern __shared__ std::uint32_t blockCounts[];
-  for (int b = static_cast<int>(threadIdx.x); b < bins; b += static_cast<int>(blockDim.x))
-  {
-    blockCounts[b] = 0;
-  }
-  __syncthreads();
-  const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i < n)
-  {
-    atomicAdd(&blockCounts[bin(i)], 1u);
-  }
-  __syncthreads();
-  for (int b = static_cast<int>(threadIdx.x); b < bins; b += static_cast<int>(blockDim.x))
-  {
-    if (blockCounts[b] != 0)
-    {
-      atomicAdd(&counts[b], blockCounts[b]);
-    }
-  }
-}
-
 } // namespace cuda
 } // namespace pbf

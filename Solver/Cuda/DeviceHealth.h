@@ -1,12 +1,11 @@
-// The divergence check's scan and the automatic step's speeds on a GPU stepper, written once for
-// both (DeviceStepper, DeviceSubdomainStepper): three maxima over the particles, queued on the
-// executor (the largest speed^2, the largest compression, any non-finite value), as the bits of
-// doubles so that the device's integer maxima give the same answer in any order, then the
-// speeds' histogram (SpeedHistogram.h) in integers. kHealthWords words come back (2 KB).
+// The divergence check's scan and the automatic step's fastest particle on a GPU stepper, written
+// once for both (DeviceStepper, DeviceSubdomainStepper): three maxima over the particles, queued
+// on the executor (the largest speed^2, the largest compression, any non-finite value), as the
+// bits of doubles so that the device's integer maxima give the same answer in any order. 24
+// bytes come back.
 #pragma once
 
 #include "NeighborMasks.h"
-#include "SpeedHistogram.h"
 #include "StepSchedule.h"
 
 #include <cmath>
@@ -17,24 +16,12 @@ namespace pbf
 namespace cuda
 {
 
-// The three maxima, then kSpeedBins 32-bit counts.
-constexpr std::size_t kHealthWords = 3 + kSpeedBins / 2;
-inline std::uint32_t* speedCountsOf(unsigned long long* bits)
-{
-  return reinterpret_cast<std::uint32_t*>(bits + 3);
-}
-inline const std::uint32_t* speedCountsOf(const unsigned long long* bits)
-{
-  return reinterpret_cast<const std::uint32_t*>(bits + 3);
-}
-
-// Queues the three maxima into bits[0..2] and the speeds' counts after them (zeroed first):
-// kHealthWords words.
+// Queues the three maxima into bits[0..2] (zeroed first).
 template <class Real, class Exec>
 void enqueueHealth(Exec& exec, const Vec3<Real>* x, const Vec3<Real>* v, const Real* density,
   std::uint32_t n, double inverseRestDensity, unsigned long long* bits)
 {
-  exec.fillZero(bits, kHealthWords * sizeof(unsigned long long));
+  exec.fillZero(bits, 3 * sizeof(unsigned long long));
   exec.forEachMax(GatherStage{}, n, bits, [=] PBF_HD(std::uint32_t i) -> double {
     const Vec3<Real> vi = v[i];
     const double speed2 = double(vi.x) * vi.x + double(vi.y) * vi.y + double(vi.z) * vi.z;
@@ -48,12 +35,6 @@ void enqueueHealth(Exec& exec, const Vec3<Real>* x, const Vec3<Real>* v, const R
     const Vec3<Real> xi = x[i], vi = v[i];
     const double sum = double(xi.x) + xi.y + xi.z + vi.x + vi.y + vi.z;
     return sum - sum == 0.0 ? 0.0 : 1.0; // finite exactly when sum - sum is 0
-  });
-  // speed^2 as the maximum has it, the same double the CPU's scan bins (HostParticles.h); a
-  // non-finite one is counted in bin 0 here and not at all there: a blow-up stops the run anyway.
-  exec.forEachCount(n, speedCountsOf(bits), kSpeedBins, [=] PBF_HD(std::uint32_t i) -> int {
-    const Vec3<Real> vi = v[i];
-    return speedBin(double(vi.x) * vi.x + double(vi.y) * vi.y + double(vi.z) * vi.z);
   });
 }
 

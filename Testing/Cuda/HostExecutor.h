@@ -54,15 +54,6 @@ public:
     }
   }
 
-  template <class F>
-  void forEachCount(std::uint32_t n, std::uint32_t* counts, int, F bin)
-  {
-    for (std::uint32_t k = 0; k < n; ++k)
-    {
-      ++counts[bin(backwards_ ? n - 1 - k : k)];
-    }
-  }
-
   // A stable sort, like CUB's radix sort; the results go to the alternate buffers.
   cuda::SortedPairs sortByKey(CellKey* keys, CellKey* keysAlt, std::uint32_t* values,
     std::uint32_t* valuesAlt, std::uint32_t n, int)
