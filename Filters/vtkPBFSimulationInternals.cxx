@@ -35,6 +35,7 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <iomanip>
 #include <iterator>
 #include <sstream>
 #include <stdexcept>
@@ -158,6 +159,8 @@ pbf::PlaybackKey vtkPBFSimulationInternals::MakeKey(const vtkPBFSettings& settin
   if (!obstacles.empty())
   {
     std::ostringstream solids;
+    // Every digit: two runs whose thickness, density or release differ in the 7th digit differ.
+    solids << std::setprecision(17);
     solids << obstacles.size() << " thickness " << settings.ObstacleThickness
            << this->ObstacleMotion.Key();
     // A body's density and name (vtkPBFRigidBody) are part of the run.

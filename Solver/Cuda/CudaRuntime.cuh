@@ -203,6 +203,18 @@ public:
     check(cudaGetLastError(), "kernel launch");
   }
 
+  // The health scan (healthKernel): maxBits[0..2] the maxima of f(i).maxima over i in [0, n).
+  template <class F>
+  void forEachHealth(std::uint32_t n, unsigned long long* maxBits, F f)
+  {
+    if (n == 0)
+    {
+      return;
+    }
+    healthKernel<<<(n + kMaxBlock - 1) / kMaxBlock, kMaxBlock, 0, stream_>>>(n, maxBits, f);
+    check(cudaGetLastError(), "kernel launch");
+  }
+
   // A neighbour pass as forEachMax whose f(i, part) also fills a Part that each warp adds to its
   // sums (stageMaxSumKernel), over the passes of a step.
   template <class Stage, class Part, class F>

@@ -219,5 +219,47 @@ __global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageMaxS
   }
 }
 
+// The health scan in one pass (DeviceHealth.h): f(i) gives a particle's three maxima
+// (s.maxima, non-negative doubles), taken as stageMaxKernel takes them outside the neighbour
+// passes: a warp max, a block max, one integer atomic a block per maximum, the same in any order.
+template <class F>
+__global__ void __launch_bounds__(kMaxBlock) healthKernel(
+  std::uint32_t n, unsigned long long* maxBits, F f)
+{
+  __shared__ unsigned long long blockBits[3][kMaxBlock / 32];
+  const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+  unsigned long long bits[3] = { 0, 0, 0 };
+  if (i < n)
+  {
+    const auto s = f(i);
+    for (int k = 0; k < 3; ++k)
+    {
+      bits[k] = MaskSchedule::doubleToBits(s.maxima[k]);
+    }
+  }
+  const unsigned warp = threadIdx.x / 32u, warps = (blockDim.x + 31u) / 32u;
+  for (int k = 0; k < 3; ++k)
+  {
+    bits[k] = warpMax(bits[k]);
+    if ((threadIdx.x & 31u) == 0)
+    {
+      blockBits[k][warp] = bits[k];
+    }
+  }
+  __syncthreads();
+  if (warp == 0)
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      unsigned long long b = threadIdx.x < warps ? blockBits[k][threadIdx.x] : 0ull;
+      b = warpMax(b);
+      if (threadIdx.x == 0 && b != 0)
+      {
+        atomicMax(&maxBits[k], b);
+      }
+    }
+  }
+}
+
 } // namespace cuda
 } // namespace pbf

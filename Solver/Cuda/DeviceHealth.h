@@ -1,8 +1,8 @@
 // The divergence check's scan and the automatic step's fastest particle on a GPU stepper, written
 // once for both (DeviceStepper, DeviceSubdomainStepper): three maxima over the particles, queued
-// on the executor (the largest speed^2, the largest compression, any non-finite value), as the
-// bits of doubles so that the device's integer maxima give the same answer in any order. 24
-// bytes come back.
+// on the executor in one pass (the largest speed^2, the largest compression, any non-finite
+// value), as the bits of doubles so that the device's integer maxima give the same answer in any
+// order. 24 bytes come back.
 #pragma once
 
 #include "NeighborMasks.h"
@@ -16,25 +16,30 @@ namespace pbf
 namespace cuda
 {
 
-// Queues the three maxima into bits[0..2] (zeroed first).
+// One particle's part of the scan: its speed^2, compression and non-finiteness, each a
+// non-negative double whose maximum is taken.
+struct HealthSample
+{
+  double maxima[3];
+};
+
+// Queues the three maxima into bits[0..2] (zeroed first), in one pass over the particles
+// (healthKernel: one read of x, v and density where three kernels read v twice).
 template <class Real, class Exec>
 void enqueueHealth(Exec& exec, const Vec3<Real>* x, const Vec3<Real>* v, const Real* density,
   std::uint32_t n, double inverseRestDensity, unsigned long long* bits)
 {
   exec.fillZero(bits, 3 * sizeof(unsigned long long));
-  exec.forEachMax(GatherStage{}, n, bits, [=] PBF_HD(std::uint32_t i) -> double {
-    const Vec3<Real> vi = v[i];
-    const double speed2 = double(vi.x) * vi.x + double(vi.y) * vi.y + double(vi.z) * vi.z;
-    return speed2 < 1e300 ? speed2 : 0.0; // NaN and infinity are the third maximum's
-  });
-  exec.forEachMax(GatherStage{}, n, bits + 1, [=] PBF_HD(std::uint32_t i) -> double {
-    const double e = double(density[i]) * inverseRestDensity - 1.0;
-    return e > 0.0 && e < 1e300 ? e : 0.0;
-  });
-  exec.forEachMax(GatherStage{}, n, bits + 2, [=] PBF_HD(std::uint32_t i) -> double {
+  exec.forEachHealth(n, bits, [=] PBF_HD(std::uint32_t i) -> HealthSample {
     const Vec3<Real> xi = x[i], vi = v[i];
+    const double speed2 = double(vi.x) * vi.x + double(vi.y) * vi.y + double(vi.z) * vi.z;
+    const double e = double(density[i]) * inverseRestDensity - 1.0;
     const double sum = double(xi.x) + xi.y + xi.z + vi.x + vi.y + vi.z;
-    return sum - sum == 0.0 ? 0.0 : 1.0; // finite exactly when sum - sum is 0
+    HealthSample s;
+    s.maxima[0] = speed2 < 1e300 ? speed2 : 0.0; // NaN and infinity are the third maximum's
+    s.maxima[1] = e > 0.0 && e < 1e300 ? e : 0.0;
+    s.maxima[2] = sum - sum == 0.0 ? 0.0 : 1.0;  // finite exactly when sum - sum is 0
+    return s;
   });
 }
 

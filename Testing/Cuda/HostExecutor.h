@@ -54,6 +54,19 @@ public:
     }
   }
 
+  template <class F>
+  void forEachHealth(std::uint32_t n, unsigned long long* maxBits, F f)
+  {
+    for (std::uint32_t k = 0; k < n; ++k)
+    {
+      const auto s = f(backwards_ ? n - 1 - k : k);
+      for (int m = 0; m < 3; ++m)
+      {
+        maxBits[m] = std::max(maxBits[m], MaskSchedule::doubleToBits(s.maxima[m]));
+      }
+    }
+  }
+
   // A stable sort, like CUB's radix sort; the results go to the alternate buffers.
   cuda::SortedPairs sortByKey(CellKey* keys, CellKey* keysAlt, std::uint32_t* values,
     std::uint32_t* valuesAlt, std::uint32_t n, int)
