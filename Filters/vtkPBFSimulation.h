@@ -64,18 +64,18 @@
  *
  * Output port 2 is the outline of the scene's domain (a vtkPolyData of 12 lines, field data
  * Scene) with every solid drawn where it stands at the frame and a point array `pressure` [Pa]
- * (what the particles press on it, read as a probe there reads it), on rank 0 only: shown beside
- * the particles, it makes a view frame the whole tank from frame 0 on, where frame 0's particles
- * may fill only a corner of it.
+ * (what the particles press on it, their pressure's mean over the frame's steps), on rank 0
+ * only: shown beside the particles, it makes a view frame the whole tank from frame 0 on, where
+ * frame 0's particles may fill only a corner of it.
  *
  * Probes: the points of the dataset on input port 2 (optional: a Line or Point Source, a CSV of
  * gauge positions through Table To Points; SetInputConnection(2, ...)), read at every frame's
  * time. Output port 4 is a vtkTable with a row per probe: Probe (its index), Position, velocity
- * [m/s] and pressure [Pa] interpolated from the particles, WaterHeight [m] (the wetted length
- * above the probe along +y: on the floor, a wave gauge) and FluidFraction (1 inside the fluid,
- * about 1/2 at a wall or the free surface, 0 in air); Solver/Surface/Probes.h says how. A probe
- * outside the domain reads NaN, with a warning naming it; the run goes on. Probes never change
- * the simulation.
+ * [m/s] and pressure [Pa] (the frame's mean) interpolated from the particles, WaterHeight [m]
+ * (the wetted length above the probe along +y: on the floor, a wave gauge) and FluidFraction
+ * (1 inside the fluid, about 1/2 at a wall or the free surface, 0 in air); Solver/Surface/Probes.h
+ * says how. A probe outside the domain reads NaN, with a warning naming it; the run goes on.
+ * Probes never change the simulation.
  *
  * Errors (a bad scene or parameter, an empty input, a NaN coordinate, an unavailable backend) are
  * reported with vtkErrorMacro naming the property (its GUI label) and the value as set (the

@@ -137,7 +137,8 @@ const CellKey* sortAndGather(Exec& exec, const StepBuffers<Real>& b, const StepC
   }
   Real* pressure = b.pressure;
   Real* pressureSorted = reinterpret_cast<Real*>(B);
-  exec.forEach(GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { pressureSorted[i] = pressure[perm[i]]; });
+  exec.forEach(
+    GatherStage{}, n, [=] PBF_HD(std::uint32_t i) { pressureSorted[i] = pressure[perm[i]]; });
   exec.copy(pressure, pressureSorted, static_cast<std::size_t>(n) * sizeof(Real));
   return keys;
 }

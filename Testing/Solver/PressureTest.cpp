@@ -303,5 +303,6 @@ TEST(Pressure, AFrameIsTheMeanOverItsStepsAndResumesFromACheckpoint)
   Snapshot<double> b;
   resumed.stepper().read(b);
   EXPECT_EQ(b.id, a.id);
-  EXPECT_EQ(std::memcmp(a.pressure.data(), b.pressure.data(), a.pressure.size() * sizeof(double)), 0);
+  EXPECT_EQ(
+    std::memcmp(a.pressure.data(), b.pressure.data(), a.pressure.size() * sizeof(double)), 0);
 }
