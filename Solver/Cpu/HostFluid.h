@@ -75,7 +75,7 @@ struct HostFluid
     obstacleViews.clear();
     for (const DistanceGrid& g : obstacles)
     {
-      obstacleViews.push_back(g.view<Real>(g.phi.data(), g.shapeNodes()));
+      obstacleViews.push_back(g.view<Real>(g.phi.data(), g.shapeNodes(), g.normalNodes()));
     }
     const BoundaryTableData table = makeBoundaryTable(parameters);
     boundaryValues = table.packed<Real>();

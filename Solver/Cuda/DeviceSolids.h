@@ -1,6 +1,6 @@
 // The solid obstacles (Physics/Boundary.h) of a GPU stepper in one block of device memory: the
 // grids' views, the boundary table (poly6, spiky, spiky2, tensile), the loads' sums (StepConstants'
-// loads and loadBlockSums), then each grid's nodes and its shape map. Laid
+// loads and loadBlockSums), then each grid's nodes, its shape map and its normals. Laid
 // out here once for both GPU steppers (DeviceStepperScans.h, DeviceSubdomainSolids.h), on their
 // device policy.
 #pragma once
@@ -48,13 +48,15 @@ void* replaceSolids(Device& device, void* old, const std::vector<DistanceGrid>& 
   const std::size_t blockSumsAt = loadsAt + loadBytes;
   std::size_t total = blockSumsAt +
     aligned(obstacles.size() * std::size_t(kLoadBlocks) * kLoadValues * sizeof(double));
-  std::vector<std::size_t> nodesAt, shapeAt;
+  std::vector<std::size_t> nodesAt, shapeAt, normalAt;
   for (const DistanceGrid& g : obstacles)
   {
     nodesAt.push_back(total);
     total += aligned(g.phi.size() * sizeof(float));
     shapeAt.push_back(total);
     total += aligned(g.shape.size() * sizeof(float));
+    normalAt.push_back(total);
+    total += aligned(g.normal.size() * sizeof(float));
   }
   void* block = device.allocate(total);
   char* base = static_cast<char*>(block);
@@ -70,7 +72,14 @@ void* replaceSolids(Device& device, void* old, const std::vector<DistanceGrid>& 
       device.upload(base + shapeAt[k], g.shape.data(), g.shape.size() * sizeof(float));
       shape = reinterpret_cast<const float*>(base + shapeAt[k]);
     }
-    views.push_back(g.view<Real>(reinterpret_cast<const float*>(base + nodesAt[k]), shape));
+    const float* normal = nullptr;
+    if (!g.normal.empty())
+    {
+      device.upload(base + normalAt[k], g.normal.data(), g.normal.size() * sizeof(float));
+      normal = reinterpret_cast<const float*>(base + normalAt[k]);
+    }
+    views.push_back(
+      g.view<Real>(reinterpret_cast<const float*>(base + nodesAt[k]), shape, normal));
     placedViews.push_back(poses.empty() ? views.back() : placed(views.back(), poses[k]));
   }
   device.upload(base, placedViews.data(), placedViews.size() * sizeof(DistanceGridView<Real>));

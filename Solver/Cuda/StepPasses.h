@@ -200,7 +200,7 @@ void withConfinementPass(const FluidView<Real, MaskedNeighbors<Real>>& f, Run&& 
 
 // One particle's correction (correctionPassOf): delta p_i, its mirror images' terms to onWall,
 // and the Jacobi update; returns how far the particle moved, for the masks.
-template <bool Accelerate, bool Liquids, class Real, class OnWall>
+template <bool Accelerate, bool Liquids, bool Solids, class Real, class OnWall>
 PBF_HD PBF_INLINE double correctParticle(std::uint32_t i,
   const FluidView<Real, MaskedNeighbors<Real>>& f, bool last, const AdaptiveState* state,
   Real omega, const MovedSinceSort& local, OnWall& onWall)
@@ -221,12 +221,12 @@ PBF_HD PBF_INLINE double correctParticle(std::uint32_t i,
   // delta p_i lands in the other position buffer (f.scratch), which nobody reads in this
   // pass; applyCorrection then adds p_i to it in place. IEEE addition is commutative, so
   // this is exactly x*_i + delta p_i, and no particle reads a position that moved.
-  positionCorrection<Real, MaskedNeighbors<Real>, OnWall&, Liquids>(i, f, onWall);
+  positionCorrection<Real, MaskedNeighbors<Real>, OnWall&, Liquids, Solids>(i, f, onWall);
   const Vec3<Real> delta = f.scratch[i];
-  applyCorrection(i, apply);
+  applyCorrection<Solids>(i, apply);
   if constexpr (Accelerate)
   {
-    f.scratch[i] = acceleratedCorrection(f.scratch[i], twoBack, omega, f);
+    f.scratch[i] = acceleratedCorrection<Solids>(f.scratch[i], twoBack, omega, f);
   }
   if (last)
   {
@@ -234,7 +234,7 @@ PBF_HD PBF_INLINE double correctParticle(std::uint32_t i,
   }
   // What the masks must allow for: delta p_i, or more where a solid or the blend moved the
   // particle on.
-  const Real moved = f.obstacleCount > 0 || Accelerate ? length(f.scratch[i] - f.p[i]) : Real(0);
+  const Real moved = Solids || Accelerate ? length(f.scratch[i] - f.p[i]) : Real(0);
   const double distance = static_cast<double>(length(delta) > moved ? length(delta) : moved);
   if (local.moved)
   {
@@ -251,8 +251,10 @@ PBF_HD PBF_INLINE double correctParticle(std::uint32_t i,
 // each particle reads its own before overwriting it, and no buffer is added. Accelerate false
 // compiles the blend out, as withPass does for the optional terms of other passes: its registers
 // would cost the plain projections. With Walls each warp also adds what its particles push the
-// mirror walls with (WallLoads.h) to its sums in b.wallWarps, for sumWallLoads.
-template <bool Accelerate, bool Liquids, bool Walls, class Real, class Exec, class Visit>
+// mirror walls with (WallLoads.h) to its sums in b.wallWarps, for sumWallLoads. Solids false
+// compiles the obstacles out (a scene without them).
+template <bool Accelerate, bool Liquids, bool Walls, bool Solids, class Real, class Exec,
+  class Visit>
 void correctionPassOf(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
   const AdaptiveState* state, Real omega, Visit visit)
@@ -265,7 +267,7 @@ void correctionPassOf(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
         const std::uint32_t i = visit(k);
         WallTerms<Real> terms{ part.push, f.c.boxMin };
         const double distance =
-          correctParticle<Accelerate, Liquids>(i, f, last, state, omega, local, terms);
+          correctParticle<Accelerate, Liquids, Solids>(i, f, last, state, omega, local, terms);
         if (part.push.any())
         {
           part.p = f.p[i];
@@ -281,12 +283,13 @@ void correctionPassOf(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
     exec.forEachMax(CorrectionStage{}, n, b.maxMoved + iteration,
       [=] PBF_HD(std::uint32_t k) -> double {
         NoWallTerms none;
-        return correctParticle<Accelerate, Liquids>(visit(k), f, last, state, omega, local, none);
+        return correctParticle<Accelerate, Liquids, Solids>(
+          visit(k), f, last, state, omega, local, none);
       });
   }
 }
 
-template <bool Walls, class Real, class Exec, class Visit>
+template <bool Walls, bool Solids, class Real, class Exec, class Visit>
 void correctionPassWith(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
   const AdaptiveState* state, bool accelerate, Real omega, Visit visit)
@@ -295,35 +298,53 @@ void correctionPassWith(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   const bool liquids = f.liquid != nullptr;
   if (accelerate && liquids)
   {
-    correctionPassOf<true, true, Walls>(exec, b, n, f, iteration, last, state, omega, visit);
+    correctionPassOf<true, true, Walls, Solids>(
+      exec, b, n, f, iteration, last, state, omega, visit);
   }
   else if (accelerate)
   {
-    correctionPassOf<true, false, Walls>(exec, b, n, f, iteration, last, state, omega, visit);
+    correctionPassOf<true, false, Walls, Solids>(
+      exec, b, n, f, iteration, last, state, omega, visit);
   }
   else if (liquids)
   {
-    correctionPassOf<false, true, Walls>(exec, b, n, f, iteration, last, state, omega, visit);
+    correctionPassOf<false, true, Walls, Solids>(
+      exec, b, n, f, iteration, last, state, omega, visit);
   }
   else
   {
-    correctionPassOf<false, false, Walls>(exec, b, n, f, iteration, last, state, omega, visit);
+    correctionPassOf<false, false, Walls, Solids>(
+      exec, b, n, f, iteration, last, state, omega, visit);
   }
 }
 
-// The walls' sums are compiled in where the buffers hold a place for them (TankLoads).
+// The walls' sums are compiled in where the buffers hold a place for them (TankLoads), the
+// obstacles where the scene has some.
 template <class Real, class Exec, class Visit = AllParticles>
 void correctionPass(Exec& exec, const StepBuffers<Real>& b, std::uint32_t n,
   const FluidView<Real, MaskedNeighbors<Real>>& f, int iteration, bool last,
   const AdaptiveState* state, bool accelerate, Real omega, Visit visit = Visit{})
 {
-  if (b.wallWarps.flags)
+  const bool walls = b.wallWarps.flags != nullptr, solids = f.obstacleCount > 0;
+  if (walls && solids)
   {
-    correctionPassWith<true>(exec, b, n, f, iteration, last, state, accelerate, omega, visit);
+    correctionPassWith<true, true>(
+      exec, b, n, f, iteration, last, state, accelerate, omega, visit);
+  }
+  else if (walls)
+  {
+    correctionPassWith<true, false>(
+      exec, b, n, f, iteration, last, state, accelerate, omega, visit);
+  }
+  else if (solids)
+  {
+    correctionPassWith<false, true>(
+      exec, b, n, f, iteration, last, state, accelerate, omega, visit);
   }
   else
   {
-    correctionPassWith<false>(exec, b, n, f, iteration, last, state, accelerate, omega, visit);
+    correctionPassWith<false, false>(
+      exec, b, n, f, iteration, last, state, accelerate, omega, visit);
   }
 }
 

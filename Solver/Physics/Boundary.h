@@ -55,6 +55,9 @@ struct DistanceGridView
   // The solid's shape map (Scene/ShapeMap.h), kShapeValues per node in the grid's frame; null:
   // the solid is taken as its tangent plane everywhere.
   const float* shape;
+  // Each node's outward unit normal, 3 per node in the grid's frame (DistanceGrid::normal); null:
+  // contact() reads the trilinear field alone.
+  const float* normal;
 
   // The trilinear field at q and its gradient, clamped to the grid (a particle beyond the grid is
   // farther than h from the solid, whose grid is padded by h).
@@ -68,23 +71,90 @@ struct DistanceGridView
     return value;
   }
 
+  // Whether the grid-frame point `local` lies on the grid. Written so that a NaN coordinate counts
+  // as on it, where at() clamps it.
+  PBF_HD PBF_INLINE bool onGrid(const Vec3<Real>& local) const
+  {
+    const Real u[3] = { (local.x - origin.x) * inverseCell, (local.y - origin.y) * inverseCell,
+      (local.z - origin.z) * inverseCell };
+    return !(u[0] < Real(0) || u[1] < Real(0) || u[2] < Real(0) || u[0] > Real(nx - 1) ||
+      u[1] > Real(ny - 1) || u[2] > Real(nz - 1));
+  }
+
   // The field and its gradient at q where q lies on the grid; false beyond it, where the solid is
   // farther than h (the grid is padded by h), without reading a node: a particle pays the lookup
   // of the solids near it only, however many the scene holds.
   PBF_HD PBF_INLINE bool within(const Vec3<Real>& q, Real* value, Vec3<Real>* gradient) const
   {
     const Vec3<Real> local = toGridFrame(q);
-    const Real u[3] = { (local.x - origin.x) * inverseCell, (local.y - origin.y) * inverseCell,
-      (local.z - origin.z) * inverseCell };
-    // Written so that a NaN coordinate counts as on the grid, where at() clamps it.
-    if (u[0] < Real(0) || u[1] < Real(0) || u[2] < Real(0) || u[0] > Real(nx - 1) ||
-      u[1] > Real(ny - 1) || u[2] > Real(nz - 1))
+    if (!onGrid(local))
     {
       return false;
     }
     *value = atInGridFrame(local, gradient);
     *gradient = toWorldDirection(*gradient);
     return true;
+  }
+
+  // Where the collision reads the solid: within() where the grid has no normals; with them, the
+  // lower of the trilinear field and the highest of the cell's 8 node tangent planes
+  // phi_k + n_k . (q - x_k), along that plane's normal. At a convex edge the trilinear field reads
+  // a point just inside as outside (the nodes beyond the edge average in up to about 0.3 of a
+  // cell), while every tangent plane of a convex field lies below it and the faces' planes meet
+  // exactly at the edge; at a concave edge the trilinear field is the lower one, as it was.
+  PBF_HD PBF_INLINE bool contact(const Vec3<Real>& q, Real* value, Vec3<Real>* direction) const
+  {
+    const Vec3<Real> local = toGridFrame(q);
+    if (!onGrid(local))
+    {
+      return false;
+    }
+    *value = atInGridFrame(local, direction);
+    // A cell away the trilinear field overestimates by less than a cell: nothing to read there.
+    if (normal && *value * inverseCell < Real(1))
+    {
+      lowerToNodePlanes(local, value, direction);
+    }
+    *direction = toWorldDirection(*direction);
+    return true;
+  }
+
+  // The highest of the 8 tangent planes phi_k + n_k . (q - x_k) of the nodes of the cell around
+  // the grid-frame point `local`, where it lies below *value: *value and *direction (grid frame)
+  // become that plane's. It costs the corrections 8 registers (56 to 64, out of line too): the
+  // GPU's corrections compile the solids in only where a scene has some (StepPasses.h).
+  PBF_HD PBF_INLINE void lowerToNodePlanes(
+    const Vec3<Real>& local, Real* value, Vec3<Real>* direction) const
+  {
+    int i[3];
+    Real t[3];
+    cellOf(local, i, t);
+    Real highest = Real(0);
+    Vec3<Real> along{ Real(0), Real(0), Real(0) };
+#if defined(__CUDA_ARCH__)
+#pragma unroll 1
+#endif
+    for (int corner = 0; corner < 8; ++corner)
+    {
+      const int d[3] = { corner & 1, (corner >> 1) & 1, (corner >> 2) & 1 };
+      const std::size_t node =
+        (static_cast<std::size_t>(i[2] + d[2]) * ny + (i[1] + d[1])) * nx + (i[0] + d[0]);
+      const Vec3<Real> n{ static_cast<Real>(normal[3 * node]),
+        static_cast<Real>(normal[3 * node + 1]), static_cast<Real>(normal[3 * node + 2]) };
+      const Real plane = static_cast<Real>(phi[node]) +
+        (n.x * (t[0] - Real(d[0])) + n.y * (t[1] - Real(d[1])) + n.z * (t[2] - Real(d[2]))) /
+          inverseCell;
+      if (corner == 0 || plane > highest)
+      {
+        highest = plane;
+        along = n;
+      }
+    }
+    if (highest < *value && dot(along, along) > Real(0))
+    {
+      *value = highest;
+      *direction = along;
+    }
   }
 
   // A world point in the grid's frame (itself when the solid never moves).

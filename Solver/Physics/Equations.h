@@ -131,8 +131,10 @@ struct NoWallTerms
 // enters in the step's first projection only, with this step's coefficient (StepTime::tensile).
 // onWall(term, mirrors, p_i, image, ix, iy, iz) hears each mirror image's term of delta p_i (before
 // m / rho_0) with forEachReflection's arguments: what the walls' loads are made of (wallShares).
-// Liquids false compiles the liquids' terms out, as densityAndLambda's.
-template <class Real, class Neighbors, class OnWall = NoWallTerms, bool Liquids = true>
+// Liquids false compiles the liquids' terms out, as densityAndLambda's; Solids false the solids'
+// share (a GPU pass of a scene without obstacles: their code cost every correction 8 registers).
+template <class Real, class Neighbors, class OnWall = NoWallTerms, bool Liquids = true,
+  bool Solids = true>
 PBF_HD PBF_INLINE void positionCorrection(
   std::uint32_t i, const FluidView<Real, Neighbors>& f, OnWall&& onWall = OnWall{})
 {
@@ -178,32 +180,52 @@ PBF_HD PBF_INLINE void positionCorrection(
       }
     }
   });
-  // The solid's share carries lambda_i, as a mirror image does (Boundary.h).
-  const Real tensileI = solidTensile<Liquids>(i, f);
-  forEachNearSolid(pi, f,
-    [&](const Vec3<Real>&, const SolidSample<Real>& s, const DistanceGridView<Real>&) {
-    delta += solidShare(s, lambdaI, tensileI);
-  });
+  if constexpr (Solids)
+  {
+    // The solid's share carries lambda_i, as a mirror image does (Boundary.h).
+    const Real tensileI = solidTensile<Liquids>(i, f);
+    forEachNearSolid(pi, f,
+      [&](const Vec3<Real>&, const SolidSample<Real>& s, const DistanceGridView<Real>&) {
+      delta += solidShare(s, lambdaI, tensileI);
+    });
+  }
   f.scratch[i] =
     delta * (Liquids && f.liquid ? f.c.massOverRho0 * liquidWeight(i, f) : f.c.massOverRho0);
   recordPressure(i, f, lambdaI);
 }
 
-// Algorithm 1, lines 17-19: apply delta p_i and resolve collisions (Jacobi update).
-template <class Real, class Neighbors>
+// Algorithm 1, lines 17-19: apply delta p_i and resolve collisions (Jacobi update); Solids false:
+// with the domain's walls only (a scene without obstacles).
+template <bool Solids = true, class Real, class Neighbors>
 PBF_HD PBF_INLINE void applyCorrection(std::uint32_t i, const FluidView<Real, Neighbors>& f)
 {
-  f.p[i] = collideWithObstacles(collideWithBox(f.p[i] + f.scratch[i], f.c), f);
+  const Vec3<Real> q = collideWithBox(f.p[i] + f.scratch[i], f.c);
+  if constexpr (Solids)
+  {
+    f.p[i] = collideWithObstacles(q, f);
+  }
+  else
+  {
+    f.p[i] = q;
+  }
 }
 
 // Chebyshev's acceleration of that update (Chebyshev.h): the Jacobi result `jacobi` blended with
 // the particle's positions two projections back, p^{k+1} = p^{k-1} + omega (jacobi - p^{k-1}),
 // then the collisions again (the blend may reach past a wall that jacobi was kept from).
-template <class Real, class Neighbors>
+template <bool Solids = true, class Real, class Neighbors>
 PBF_HD PBF_INLINE Vec3<Real> acceleratedCorrection(const Vec3<Real>& jacobi,
   const Vec3<Real>& twoBack, Real omega, const FluidView<Real, Neighbors>& f)
 {
-  return collideWithObstacles(collideWithBox(twoBack + (jacobi - twoBack) * omega, f.c), f);
+  const Vec3<Real> q = collideWithBox(twoBack + (jacobi - twoBack) * omega, f.c);
+  if constexpr (Solids)
+  {
+    return collideWithObstacles(q, f);
+  }
+  else
+  {
+    return q;
+  }
 }
 
 // Algorithm 1, line 21: v_i = (x*_i - x_i) / dt. The density is final now, so the volume that the

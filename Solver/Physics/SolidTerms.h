@@ -155,7 +155,8 @@ constexpr int kCollisionLooks = 3;
 // tank) leaves it outside, not on the surface a few nanometres in.
 constexpr double kCollisionMargin = 1e-4;
 
-// A particle inside an obstacle goes to its surface, along the field's gradient. Solid by solid:
+// A particle inside an obstacle goes to its surface, along the field's gradient or the node
+// tangent plane that finds it inside (DistanceGridView::contact). Solid by solid:
 // each is asked where the particle is after the ones before it moved it; a solid with a map is
 // asked again where its move left the particle, up to kCollisionLooks times, and put
 // kCollisionMargin of a cell outside. One loop for both, so that the passes inline one lookup (a
@@ -176,7 +177,7 @@ PBF_HD PBF_INLINE Vec3<Real> collideWithObstacles(Vec3<Real> q, const FluidView<
     {
       Real d;
       Vec3<Real> gradient;
-      if (!solid.within(q, &d, &gradient))
+      if (!solid.contact(q, &d, &gradient))
       {
         break;
       }

@@ -26,46 +26,45 @@ namespace pbf
 namespace
 {
 
-// Squared distance from p to the triangle abc: the closest point by the triangle's Voronoi
-// regions (Ericson, Real-Time Collision Detection, 5.1.5).
-double squaredDistanceToTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c)
+// The point of the triangle abc closest to p, by the triangle's Voronoi regions (Ericson,
+// Real-Time Collision Detection, 5.1.5).
+Vec3d closestOnTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c)
 {
   const Vec3d ab = b - a, ac = c - a, ap = p - a;
   const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  auto squared = [&](const Vec3d& q) { return dot(p - q, p - q); };
   if (d1 <= 0 && d2 <= 0)
   {
-    return squared(a);
+    return a;
   }
   const Vec3d bp = p - b;
   const double d3 = dot(ab, bp), d4 = dot(ac, bp);
   if (d3 >= 0 && d4 <= d3)
   {
-    return squared(b);
+    return b;
   }
   const double vc = d1 * d4 - d3 * d2;
   if (vc <= 0 && d1 >= 0 && d3 <= 0)
   {
-    return squared(a + ab * (d1 / (d1 - d3)));
+    return a + ab * (d1 / (d1 - d3));
   }
   const Vec3d cp = p - c;
   const double d5 = dot(ab, cp), d6 = dot(ac, cp);
   if (d6 >= 0 && d5 <= d6)
   {
-    return squared(c);
+    return c;
   }
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0 && d2 >= 0 && d6 <= 0)
   {
-    return squared(a + ac * (d2 / (d2 - d6)));
+    return a + ac * (d2 / (d2 - d6));
   }
   const double va = d3 * d6 - d5 * d4;
   if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
   {
-    return squared(b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
+    return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
   }
   const double denominator = 1.0 / (va + vb + vc);
-  return squared(a + ab * (vb * denominator) + ac * (vc * denominator));
+  return a + ab * (vb * denominator) + ac * (vc * denominator);
 }
 
 // The nodes [first, last] along one axis whose coordinates lie in [lo, hi], clamped to the grid.
@@ -76,10 +75,14 @@ std::pair<int, int> nodeRange(double lo, double hi, double origin, double cell, 
     static_cast<int>(std::min(last, static_cast<double>(n - 1))) };
 }
 
-// Pass 1: |distance| at the nodes within `band` of a triangle; the others stay infinite.
-std::vector<double> bandDistance(const TriangleMesh& mesh, const DistanceGrid& g, double band)
+// Pass 1: |distance| at the nodes within `band` of a triangle (the others stay infinite), and
+// `away`, the unit direction from each such node's nearest surface point to the node (zero where
+// the node lies on the surface or beyond the band).
+std::vector<double> bandDistance(
+  const TriangleMesh& mesh, const DistanceGrid& g, double band, std::vector<Vec3d>& away)
 {
   std::vector<double> d2(g.phi.size(), std::numeric_limits<double>::infinity());
+  away.assign(g.phi.size(), Vec3d{ 0, 0, 0 });
   struct Reach
   {
     std::pair<int, int> i, j, k;
@@ -113,18 +116,48 @@ std::vector<double> bandDistance(const TriangleMesh& mesh, const DistanceGrid& g
       {
         for (int i = r.i.first; i <= r.i.second; ++i)
         {
-          double& nearest = d2[g.index(i, j, k)];
-          nearest = std::min(nearest, squaredDistanceToTriangle(g.nodePosition(i, j, k), a, b, c));
+          const Vec3d x = g.nodePosition(i, j, k);
+          const Vec3d offset = x - closestOnTriangle(x, a, b, c);
+          const double squared = dot(offset, offset);
+          const std::size_t n = g.index(i, j, k);
+          if (squared < d2[n])
+          {
+            d2[n] = squared;
+            away[n] = squared > 0 ? offset * (1.0 / std::sqrt(squared)) : Vec3d{ 0, 0, 0 };
+          }
         }
       }
     }
   }
   const double band2 = band * band;
-  for (double& value : d2)
+  for (std::size_t n = 0; n < d2.size(); ++n)
   {
-    value = value <= band2 ? std::sqrt(value) : std::numeric_limits<double>::infinity();
+    const bool near = d2[n] <= band2;
+    d2[n] = near ? std::sqrt(d2[n]) : std::numeric_limits<double>::infinity();
+    away[n] = near ? away[n] : Vec3d{ 0, 0, 0 };
   }
   return d2;
+}
+
+// The unit gradient of phi at node (i, j, k) by central differences (one-sided at the grid's
+// faces): the normal of a node that lies on the surface or beyond the band, where no nearest
+// point gives one; (0, 0, 0) where phi is flat there.
+Vec3d differenceNormal(const DistanceGrid& g, int i, int j, int k)
+{
+  const int at[3] = { i, j, k }, n[3] = { g.nx, g.ny, g.nz };
+  double gradient[3];
+  for (int a = 0; a < 3; ++a)
+  {
+    int lo[3] = { i, j, k }, hi[3] = { i, j, k };
+    lo[a] = std::max(at[a] - 1, 0);
+    hi[a] = std::min(at[a] + 1, n[a] - 1);
+    gradient[a] = hi[a] > lo[a]
+      ? (double(g.node(hi[0], hi[1], hi[2])) - g.node(lo[0], lo[1], lo[2])) / (hi[a] - lo[a])
+      : 0.0;
+  }
+  const Vec3d v{ gradient[0], gradient[1], gradient[2] };
+  const double size = length(v);
+  return size > 0 ? v * (1.0 / size) : Vec3d{ 0, 0, 0 };
 }
 
 // Pass 2: the chamfer transform over the nodes the band left infinite (Borgefors 1984, with
@@ -345,7 +378,8 @@ DistanceGrid meshDistance(const TriangleMesh& mesh, double cell, double margin, 
   }
   DistanceGrid g = gridOver(Box{ lo, hi }, cell, margin + 0.5 * thickness, what);
   // A shell's surface lies thickness / 2 off the triangles: the band reaches past it.
-  std::vector<double> d = bandDistance(mesh, g, band + 0.5 * thickness);
+  std::vector<Vec3d> away;
+  std::vector<double> d = bandDistance(mesh, g, band + 0.5 * thickness, away);
   if (std::any_of(d.begin(), d.end(), [](double v) { return std::isinf(v); }))
   {
     chamfer(d, g);
@@ -355,6 +389,24 @@ DistanceGrid meshDistance(const TriangleMesh& mesh, double cell, double margin, 
   {
     const double value = thickness > 0 ? d[n] - 0.5 * thickness : (inside[n] ? -d[n] : d[n]);
     g.phi[n] = static_cast<float>(value);
+    // Outward: away from the surface outside (and from a shell's mid-surface), towards it inside.
+    away[n] = (thickness == 0 && inside[n]) ? away[n] * -1.0 : away[n];
+  }
+  g.normal.assign(3 * d.size(), 0.0f);
+#pragma omp parallel for schedule(dynamic)
+  for (int k = 0; k < g.nz; ++k)
+  {
+    for (int j = 0; j < g.ny; ++j)
+    {
+      for (int i = 0; i < g.nx; ++i)
+      {
+        const std::size_t n = g.index(i, j, k);
+        const Vec3d normal = dot(away[n], away[n]) > 0 ? away[n] : differenceNormal(g, i, j, k);
+        g.normal[3 * n] = static_cast<float>(normal.x);
+        g.normal[3 * n + 1] = static_cast<float>(normal.y);
+        g.normal[3 * n + 2] = static_cast<float>(normal.z);
+      }
+    }
   }
   return g;
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 namespace pbf
 {
@@ -50,10 +51,12 @@ DistanceGrid gridOver(Vec3d lo, Vec3d hi, double cell, double margin, const std:
   return g;
 }
 
-// Runs f(i, j, k) for every node, the z-slices split over threads.
+// Sets every node's value and normal from f(x) = { phi, outward unit normal }, the z-slices split
+// over threads.
 template <class F>
 void forEachNode(DistanceGrid& g, F&& f)
 {
+  g.normal.assign(3 * g.phi.size(), 0.0f);
 #pragma omp parallel for schedule(dynamic)
   for (int k = 0; k < g.nz; ++k)
   {
@@ -61,7 +64,12 @@ void forEachNode(DistanceGrid& g, F&& f)
     {
       for (int i = 0; i < g.nx; ++i)
       {
-        g.node(i, j, k) = static_cast<float>(f(g.nodePosition(i, j, k)));
+        const std::pair<double, Vec3d> value = f(g.nodePosition(i, j, k));
+        const std::size_t n = g.index(i, j, k);
+        g.phi[n] = static_cast<float>(value.first);
+        g.normal[3 * n] = static_cast<float>(value.second.x);
+        g.normal[3 * n + 1] = static_cast<float>(value.second.y);
+        g.normal[3 * n + 2] = static_cast<float>(value.second.z);
       }
     }
   }
@@ -146,7 +154,11 @@ DistanceGrid sphereDistance(const Vec3d& centre, double radius, double cell, dou
   }
   const Vec3d r{ radius, radius, radius };
   DistanceGrid g = gridOver(centre - r, centre + r, cell, margin, "sphere");
-  forEachNode(g, [&](const Vec3d& p) { return length(p - centre) - radius; });
+  forEachNode(g, [&](const Vec3d& p) {
+    const double r = length(p - centre);
+    // The centre's normal is any direction: its plane lies a radius below every point of the cell.
+    return std::make_pair(r - radius, r > 0 ? (p - centre) * (1.0 / r) : Vec3d{ 0, 0, 1 });
+  });
   return g;
 }
 
@@ -165,11 +177,23 @@ DistanceGrid boxDistanceOn(const Box& box, DistanceGrid grid)
 {
   const Vec3d centre = (box.min + box.max) * 0.5, half = (box.max - box.min) * 0.5;
   forEachNode(grid, [&](const Vec3d& p) {
-    // Outside: the distance to the box; inside: minus the distance to the nearest face.
+    // Outside: the distance to the box, along the way from its nearest point; inside: minus the
+    // distance to the nearest face, along that face's normal.
+    const Vec3d side{ p.x < centre.x ? -1.0 : 1.0, p.y < centre.y ? -1.0 : 1.0,
+      p.z < centre.z ? -1.0 : 1.0 };
     const Vec3d q{ std::abs(p.x - centre.x) - half.x, std::abs(p.y - centre.y) - half.y,
       std::abs(p.z - centre.z) - half.z };
     const Vec3d out{ std::max(q.x, 0.0), std::max(q.y, 0.0), std::max(q.z, 0.0) };
-    return length(out) + std::min(std::max({ q.x, q.y, q.z }), 0.0);
+    const double outside = length(out), deepest = std::max({ q.x, q.y, q.z });
+    if (outside > 0)
+    {
+      const Vec3d n = out * (1.0 / outside);
+      return std::make_pair(outside, Vec3d{ n.x * side.x, n.y * side.y, n.z * side.z });
+    }
+    const Vec3d n = deepest == q.x ? Vec3d{ side.x, 0, 0 }
+      : deepest == q.y             ? Vec3d{ 0, side.y, 0 }
+                                   : Vec3d{ 0, 0, side.z };
+    return std::make_pair(deepest, n);
   });
   return grid;
 }

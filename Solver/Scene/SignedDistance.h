@@ -45,6 +45,12 @@ struct DistanceGrid
   // stages take the solid as its tangent plane.
   std::vector<float> shape;
   const float* shapeNodes() const { return shape.empty() ? nullptr : shape.data(); }
+  // Each node's outward unit normal, 3 per node in the order of phi's: the direction from the
+  // node's nearest surface point (the field's exact gradient there, where the trilinear one
+  // averages across an edge). With phi it gives the node's tangent plane, which the collision
+  // reads at convex edges (DistanceGridView::contact). Empty: the collision reads phi alone.
+  std::vector<float> normal;
+  const float* normalNodes() const { return normal.empty() ? nullptr : normal.data(); }
   // Each liquid's contact angle with the solid [degrees] (SolidRegion::contactAngle); 90: neutral.
   std::array<double, kMaxLiquids> contactAngle = [] {
     std::array<double, kMaxLiquids> neutral;
@@ -70,10 +76,11 @@ struct DistanceGrid
   // The gradient of the trilinear field at x (about the outward normal near the surface); zero
   // where x is not finite.
   Vec3d gradient(const Vec3d& x) const;
-  // How the stages read this grid, its node values at `nodes` and its shape map at
-  // `shapeNodes` (host or device memory; null: none).
+  // How the stages read this grid, its node values at `nodes`, its shape map at `shapeNodes`
+  // and its normals at `normalNodes` (host or device memory; null: none).
   template <class Real>
-  DistanceGridView<Real> view(const float* nodes, const float* shapeNodes) const
+  DistanceGridView<Real> view(
+    const float* nodes, const float* shapeNodes, const float* normalNodes = nullptr) const
   {
     DistanceGridView<Real> v{};
     v.origin = Vec3<Real>::from(origin);
@@ -83,6 +90,7 @@ struct DistanceGrid
     v.nz = nz;
     v.phi = nodes;
     v.shape = shapeNodes;
+    v.normal = normalNodes;
     for (int l = 0; l < kMaxLiquids; ++l)
     {
       // Exactly 0 at 90 degrees (cos of the rounded pi / 2 is 6e-17): a neutral solid adds nothing.
@@ -103,7 +111,9 @@ struct TriangleMesh
 // The signed distance of a triangle mesh on a grid over the mesh's bounds padded by `margin`,
 // nodes `cell` apart (MeshDistance.cpp). Within `band` of the surface the magnitude is the distance
 // to the nearest triangle; beyond it, a chamfer estimate that keeps growing away from the surface
-// (infinite `band`: exact everywhere, at a cost of nodes x triangles). The sign comes from the
+// (infinite `band`: exact everywhere, at a cost of nodes x triangles); a node's normal points
+// from its nearest surface point within the band, along phi's differences beyond it and on the
+// surface. The sign comes from the
 // parity of the crossings of rays along x, so a closed mesh needs no particular orientation. A
 // mesh is closed when every edge is shared by two triangles (or an even number, where solids
 // touch along it); an open one is InvalidInput
@@ -121,10 +131,10 @@ DistanceGrid meshDistance(const TriangleMesh& mesh, double cell, double margin, 
 // when thickness is 0).
 Box meshBounds(const TriangleMesh& mesh, double thickness, const std::string& what);
 
-// Exact fields of the simple solids, on the same kind of grid.
+// Exact fields of the simple solids, on the same kind of grid, with their normals.
 DistanceGrid sphereDistance(const Vec3d& centre, double radius, double cell, double margin);
 DistanceGrid boxDistance(const Box& box, double cell, double margin);
-// The box's exact field on the nodes of `grid` (which may cover only part of the box).
+// The box's exact field and normals on the nodes of `grid` (which may cover only part of the box).
 DistanceGrid boxDistanceOn(const Box& box, DistanceGrid grid);
 // A grid of zeros over `over` padded by `margin`, nodes `cell` apart; InvalidInput naming `what`
 // for a bad cell or margin, or too many nodes.
