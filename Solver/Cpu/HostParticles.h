@@ -6,6 +6,7 @@
 #include "Outflow.h"
 #include "Parameters.h"
 #include "ParticleChecks.h"
+#include "SpeedHistogram.h"
 #include "Stepper.h"
 
 #include <algorithm>
@@ -144,16 +145,17 @@ std::size_t removeInside(const OutflowZones<Real>& zones, const HostParticles<Re
 }
 
 // The divergence check's scan (Stepper::health) of the particles held here. maxDensity, when
-// given, receives the largest density itself, for a caller that still has to combine it with
-// others' (the ranks of a decomposed run).
+// given, receives the largest density itself, and speedCounts (kSpeedBins) the speeds' histogram,
+// for a caller that still has to combine them with others' (the ranks of a decomposed run).
 template <class Real>
-Health scanHealth(
-  const Parameters& parameters, const ConstHostParticles<Real>& p, double* maxDensity)
+Health scanHealth(const Parameters& parameters, const ConstHostParticles<Real>& p,
+  double* maxDensity, std::vector<std::uint64_t>* speedCounts = nullptr)
 {
   Health h;
   const Box& d = parameters.domain;
   const double slack = parameters.particleSpacing; // as checkBatch allows
   double largest = 0.0;
+  std::vector<std::uint64_t> counts(kSpeedBins, 0);
   for (std::size_t i = 0; i < p.x.size(); ++i)
   {
     const Vec3d x = Vec3d::from(p.x[i]);
@@ -172,13 +174,20 @@ Health scanHealth(
       ++h.outside;
     }
     h.maxSpeed = std::max(h.maxSpeed, length(v));
+    // The bins of speed^2 as the GPU's scan has it (DeviceHealth.h): the same double.
+    ++counts[static_cast<std::size_t>(speedBin(v.x * v.x + v.y * v.y + v.z * v.z))];
     // NaN densities compare false and are left out; they make non-finite positions next step.
     largest = std::max(largest, static_cast<double>(p.density[i]));
   }
   h.maxDensityError = std::max(largest / parameters.restDensity - 1.0, 0.0);
+  h.robustSpeed = robustSpeed(counts.data(), h.maxSpeed);
   if (maxDensity)
   {
     *maxDensity = largest;
+  }
+  if (speedCounts)
+  {
+    *speedCounts = std::move(counts);
   }
   return h;
 }

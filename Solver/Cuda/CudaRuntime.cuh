@@ -203,15 +203,18 @@ public:
     check(cudaGetLastError(), "kernel launch");
   }
 
-  // The health scan (healthKernel): maxBits[0..2] the maxima of f(i).maxima over i in [0, n).
+  // The health scan (healthKernel): maxBits[0..2] the maxima of f(i).maxima over i in [0, n),
+  // counts[b] += 1 for every i whose f(i).bin is b, in [0, bins).
   template <class F>
-  void forEachHealth(std::uint32_t n, unsigned long long* maxBits, F f)
+  void forEachHealth(
+    std::uint32_t n, unsigned long long* maxBits, std::uint32_t* counts, int bins, F f)
   {
     if (n == 0)
     {
       return;
     }
-    healthKernel<<<(n + kMaxBlock - 1) / kMaxBlock, kMaxBlock, 0, stream_>>>(n, maxBits, f);
+    healthKernel<<<(n + kMaxBlock - 1) / kMaxBlock, kMaxBlock, bins * sizeof(std::uint32_t),
+      stream_>>>(n, maxBits, counts, bins, f);
     check(cudaGetLastError(), "kernel launch");
   }
 

@@ -221,12 +221,20 @@ __global__ void __launch_bounds__(kMaxBlock, Launch<Stage>::minBlocks) stageMaxS
 
 // The health scan in one pass (DeviceHealth.h): f(i) gives a particle's three maxima
 // (s.maxima, non-negative doubles), taken as stageMaxKernel takes them outside the neighbour
-// passes: a warp max, a block max, one integer atomic a block per maximum, the same in any order.
+// passes (a warp max, a block max, one integer atomic a block per maximum), and its bin s.bin of
+// the `bins` counts, counted in shared memory and added to `counts` once a block. Integer maxima
+// and sums: the same in any order.
 template <class F>
 __global__ void __launch_bounds__(kMaxBlock) healthKernel(
-  std::uint32_t n, unsigned long long* maxBits, F f)
+  std::uint32_t n, unsigned long long* maxBits, std::uint32_t* counts, int bins, F f)
 {
   __shared__ unsigned long long blockBits[3][kMaxBlock / 32];
+  extern __shared__ std::uint32_t blockCounts[];
+  for (int b = static_cast<int>(threadIdx.x); b < bins; b += static_cast<int>(blockDim.x))
+  {
+    blockCounts[b] = 0;
+  }
+  __syncthreads();
   const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   unsigned long long bits[3] = { 0, 0, 0 };
   if (i < n)
@@ -235,6 +243,13 @@ __global__ void __launch_bounds__(kMaxBlock) healthKernel(
     for (int k = 0; k < 3; ++k)
     {
       bits[k] = MaskSchedule::doubleToBits(s.maxima[k]);
+    }
+    // The lanes of a warp with one bin add their count once: most of a block's particles share
+    // a few bins, and one shared atomic a lane serialises on them.
+    const unsigned peers = __match_any_sync(__activemask(), s.bin);
+    if ((threadIdx.x & 31u) == static_cast<unsigned>(__ffs(peers) - 1))
+    {
+      atomicAdd(&blockCounts[s.bin], static_cast<std::uint32_t>(__popc(peers)));
     }
   }
   const unsigned warp = threadIdx.x / 32u, warps = (blockDim.x + 31u) / 32u;
@@ -257,6 +272,13 @@ __global__ void __launch_bounds__(kMaxBlock) healthKernel(
       {
         atomicMax(&maxBits[k], b);
       }
+    }
+  }
+  for (int b = static_cast<int>(threadIdx.x); b < bins; b += static_cast<int>(blockDim.x))
+  {
+    if (blockCounts[b] != 0)
+    {
+      atomicAdd(&counts[b], blockCounts[b]);
     }
   }
 }

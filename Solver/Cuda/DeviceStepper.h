@@ -138,7 +138,7 @@ private:
   StepTime<Real>* deviceTime_ = nullptr; // constants_.time, in the fixed arrays
   void* solids_ = nullptr; // constants_.obstacles and .boundary: the solids' views, table, nodes
   std::vector<DistanceGridView<Real>> solidViews_; // as sampled, for placeSolids
-  unsigned long long* healthBits_ = nullptr; // health(): three maxima as double bits
+  unsigned long long* healthBits_ = nullptr; // health(): kHealthWords (DeviceHealth.h)
   std::uint32_t* keptCount_ = nullptr;       // removeOutflow's selection count
 
   std::size_t n_ = 0;

@@ -32,7 +32,7 @@ void DeviceStepper<Real, Device>::allocateFixed()
     return at;
   };
   const std::size_t timeAt = place(sizeof(StepTime<Real>));
-  const std::size_t healthAt = place(3 * sizeof(unsigned long long));
+  const std::size_t healthAt = place(kHealthWords * sizeof(unsigned long long));
   const std::size_t offsetsAt = place((static_cast<std::size_t>(k.cellCount) + 1) * sizeof(std::uint32_t));
   const bool masks = k.schedule.enabled != 0;
   const std::size_t cellMovedAt =

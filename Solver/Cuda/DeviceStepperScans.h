@@ -58,12 +58,13 @@ Health DeviceStepper<Real, Device>::health() const
   auto exec = device_->executor();
   enqueueHealth(exec, buffers_.vec[roles_.x], buffers_.vec[roles_.v], buffers_.density,
     static_cast<std::uint32_t>(n_), 1.0 / parameters_.restDensity, healthBits_);
-  unsigned long long bits[3] = { 0, 0, 0 };
+  unsigned long long bits[kHealthWords] = {};
   device_->download(bits, healthBits_, sizeof bits);
   device_->synchronize();
   double r[3];
   decodeHealth(bits, r);
   h.maxSpeed = std::sqrt(r[0]);
+  h.robustSpeed = robustSpeed(speedCountsOf(bits), h.maxSpeed);
   h.maxDensityError = r[1];
   h.nonFinite = r[2] > 0.0 ? 1 : 0;
   return h;

@@ -30,7 +30,7 @@ void DeviceSubdomainStepper<Real, Device>::allocateFixed()
     wallLoads_ = allocateFixed<double>(kWallLoadDoubles);
     wallBlockSums_ = allocateFixed<double>(std::size_t(kLoadBlocks) * kWallLoadDoubles);
   }
-  healthBits_ = allocateFixed<unsigned long long>(3);
+  healthBits_ = allocateFixed<unsigned long long>(kHealthWords);
   listCounts_ = static_cast<std::uint32_t*>(device_->allocateHost(8 * sizeof(std::uint32_t)));
   // The owner counts' copies, then the ghosts sent to each side.
   setupCounts_ = static_cast<std::uint32_t*>(

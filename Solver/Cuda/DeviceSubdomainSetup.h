@@ -113,19 +113,28 @@ inline Health DeviceSubdomainStepper<Real, Device>::healthAlone() const
   auto exec = device_->executor();
   enqueueHealth(exec, vec_[xBuffer_], vec_[vBuffer_], density_, count(n_),
     1.0 / parameters_.restDensity, healthBits_);
-  unsigned long long bits[3] = { 0, 0, 0 };
+  unsigned long long bits[kHealthWords] = {};
   device_->download(bits, healthBits_, sizeof bits);
   device_->synchronize();
-  double mine[3];
-  decodeHealth(bits, mine);
+  double maxima[3];
+  decodeHealth(bits, maxima);
+  // The maxima, then the speeds' counts (exact as doubles), added over the ranks.
+  std::vector<double> mine(maxima, maxima + 3);
+  const std::uint32_t* counts = speedCountsOf(bits);
+  mine.insert(mine.end(), counts, counts + kSpeedBins);
   Health all;
-  for (const std::vector<double>& r :
-    distributed::allGather(communicator_, { mine[0], mine[1], mine[2] }))
+  std::vector<double> speeds(kSpeedBins, 0.0);
+  for (const std::vector<double>& r : distributed::allGather(communicator_, mine))
   {
     all.maxSpeed = std::max(all.maxSpeed, std::sqrt(r[0]));
     all.maxDensityError = std::max(all.maxDensityError, r[1]);
     all.nonFinite += r[2] > 0.0 ? 1 : 0;
+    for (int b = 0; b < kSpeedBins; ++b)
+    {
+      speeds[static_cast<std::size_t>(b)] += r[3 + static_cast<std::size_t>(b)];
+    }
   }
+  all.robustSpeed = robustSpeed(speeds.data(), all.maxSpeed);
   return all;
 }
 

@@ -551,7 +551,7 @@ private:
   Real *density_ = nullptr, *lambda_ = nullptr, *densityAlt_ = nullptr, *lambdaAlt_ = nullptr;
   Real *pressure_ = nullptr, *pressureAlt_ = nullptr;
   AdaptiveState* adaptive_ = nullptr; // adaptive mode: this rank's reduction
-  unsigned long long* healthBits_ = nullptr; // health(): three maxima as double bits
+  unsigned long long* healthBits_ = nullptr; // health(): kHealthWords (DeviceHealth.h)
   double* blockSums_ = nullptr;
   // With mirror walls: the correction's warps' sums of the walls' loads and the step's loads.
   std::uint32_t* wallFlags_ = nullptr;

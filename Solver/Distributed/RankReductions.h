@@ -7,6 +7,7 @@
 #include "Communicator.h"
 #include "HostParticles.h"
 #include "ParticleChecks.h"
+#include "SpeedHistogram.h"
 
 #include <algorithm>
 #include <cmath>
@@ -66,13 +67,21 @@ Health reduceHealth(
   Communicator& communicator, const Parameters& parameters, const ConstHostParticles<Real>& p)
 {
   double maxDensity = 0.0;
-  const Health h = scanHealth(parameters, p, &maxDensity);
+  std::vector<std::uint64_t> speeds;
+  const Health h = scanHealth(parameters, p, &maxDensity, &speeds);
   // Every rank must reach the same verdict, or one would stop while the others wait for it.
+  // The speeds' histograms travel along (exact as doubles) and add into the ranks' robust speed.
+  std::vector<double> mine = { double(h.nonFinite), double(h.outside), h.maxSpeed, maxDensity,
+    double(h.firstBadId) };
+  mine.insert(mine.end(), speeds.begin(), speeds.end());
   Health all;
-  for (const std::vector<double>& r : allGather(communicator,
-         { double(h.nonFinite), double(h.outside), h.maxSpeed, maxDensity,
-           double(h.firstBadId) }))
+  std::vector<double> counts(kSpeedBins, 0.0);
+  for (const std::vector<double>& r : allGather(communicator, mine))
   {
+    for (int b = 0; b < kSpeedBins; ++b)
+    {
+      counts[static_cast<std::size_t>(b)] += r[5 + static_cast<std::size_t>(b)];
+    }
     all.nonFinite += static_cast<std::size_t>(r[0]);
     all.outside += static_cast<std::size_t>(r[1]);
     all.maxSpeed = std::max(all.maxSpeed, r[2]);
@@ -83,6 +92,7 @@ Health reduceHealth(
     }
   }
   all.maxDensityError = std::max(all.maxDensityError, 0.0);
+  all.robustSpeed = robustSpeed(counts.data(), all.maxSpeed);
   return all;
 }
 

@@ -162,9 +162,9 @@ struct Parameters
   TimeStepping timeStepping = TimeStepping::Automatic;
   // Fixed: every solver step dt [s]. Automatic: the largest step (MaxTimeStep in the plugin).
   double timeStep = 1.0 / 240.0;
-  // Automatic: dt = cflNumber s / v, v the larger of the fastest particle's speed and the scene's
-  // fall speed (Simulation::nextTimeStep says why); also dt <= cflNumber sqrt(s / |g|) and the
-  // XSPH diffusion limit.
+  // Automatic: dt = cflNumber s / v, v the larger of the speeds' 99.9th percentile and the
+  // scene's fall speed (Simulation::nextTimeStep says why); also dt <= s / v_max, dt <=
+  // cflNumber sqrt(s / |g|) and the XSPH diffusion limit.
   double cflNumber = 0.4;
 
   Box domain;

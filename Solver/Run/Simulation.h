@@ -170,13 +170,19 @@ public:
   // The size of the next step [s] when nothing has to be landed on: Parameters::timeStep when
   // fixed; when automatic, the smallest of
   //   timeStep (the largest step),
-  //   cflNumber s / max(v_max, v_scene): no particle moves more than cflNumber spacings. v_scene
+  //   kFastestStepSpacings s / v_max: the fastest particle moves at most a spacing,
+  //   cflNumber s / max(v_robust, v_scene): all but a thousandth of the particles move at most
+  //     cflNumber spacings (Health::robustSpeed, the 99.9th percentile: a few fast spray
+  //     particles no longer set the step of the whole fluid; Performance.md measures it). v_scene
   //     = sqrt(v0^2 + 2 |g| L), the speed of a fall across the domain (DivergenceLimits), is a
   //     floor, as weakly compressible SPH bounds its step by a speed of sound: PBF's compression
   //     in a column of depth H after k projections grows as |g| dt^2 H / (k s^2), and with dt
   //     proportional to s / v_scene it is the same at every spacing and depth,
   //   cflNumber sqrt(s / |g|): gravity moves a resting particle at most cflNumber^2 spacings,
   //   kMaxXsphBlend beta h^2 / (nu + nu_4): explicit XSPH smoothing stays stable.
+  // The spacings the fastest particle may move in a step: h / 2 at the default ratio, so that it
+  // crosses at most half a neighbour's reach while the rest move cflNumber spacings.
+  static constexpr double kFastestStepSpacings = 1.0;
   // The smallest step it may choose [s]: below it single precision's 1 / dt and dt^2 lose their
   // meaning, and no physical scene needs it. At construction a smaller step is InvalidInput
   // naming the parameter that forces it; later, SimulationDiverged.

@@ -44,11 +44,16 @@ double Simulation::nextTimeStep() const
   }
   const double s = p.particleSpacing;
   const double v = std::max(
-    { healthValid_ ? health_.maxSpeed : 0.0, limits_.sceneSpeed, fastestSolidPoint() });
+    { healthValid_ ? health_.robustSpeed : 0.0, limits_.sceneSpeed, fastestSolidPoint() });
   double dt = std::min({ p.timeStep, xsphStepLimit_, capillaryStepLimit_ });
   if (v > 0)
   {
     dt = std::min(dt, p.cflNumber * s / v);
+  }
+  const double fastest = healthValid_ ? health_.maxSpeed : 0.0;
+  if (fastest > 0)
+  {
+    dt = std::min(dt, kFastestStepSpacings * s / fastest);
   }
   const double g = length(p.gravity);
   if (g > 0)

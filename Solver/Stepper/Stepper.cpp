@@ -102,6 +102,7 @@ Health Stepper::health() const
   Health h;
   h.nonFinite = s.finite ? 0 : 1;
   h.maxSpeed = s.maxSpeed;
+  h.robustSpeed = s.maxSpeed; // no histogram here: the fastest, the safe side
   h.maxDensityError = s.maxDensityError;
   return h;
 }

@@ -50,6 +50,9 @@ struct Health
   std::size_t nonFinite = 0;   // particles with a NaN or infinite position or velocity
   std::size_t outside = 0;     // particles farther than one spacing outside the domain
   double maxSpeed = 0;         // over the particles with finite velocities [m/s]
+  // kRobustSpeedQuantile of the finite speeds (SpeedHistogram.h: rounded up to its bin, at most
+  // 6.1 % above, never above maxSpeed) [m/s]: the automatic step's speed (nextTimeStep)
+  double robustSpeed = 0;
   double maxDensityError = 0;  // max of rho_i / rho_0 - 1 at the last constraint evaluation
   std::int64_t firstBadId = -1; // the id of a particle counted above; -1: none, or not known
 };

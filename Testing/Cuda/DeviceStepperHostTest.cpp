@@ -420,6 +420,9 @@ TEST(DeviceStepperOnHost, ScansAgreeWithTheSerialBackend)
   const Health h = device->health();
   const Health reference = serial->health();
   EXPECT_EQ(h.maxSpeed, reference.maxSpeed);
+  // The same speeds binned alike (the bits of the same speed^2): the same percentile.
+  EXPECT_EQ(h.robustSpeed, reference.robustSpeed);
+  EXPECT_GT(h.robustSpeed, 0.1);
   EXPECT_EQ(h.nonFinite, 0u);
   EXPECT_NEAR(h.maxDensityError, std::max(reference.maxDensityError, 0.0), 1e-15);
 }

@@ -10,6 +10,7 @@
 #include "Distributed/FluidPieces.h"
 #include "Distributed/SubdomainStepper.h"
 #include "SignedDistance.h"
+#include "SpeedHistogram.h"
 #include "TestScenes.h"
 
 #include <gtest/gtest.h>
@@ -250,9 +251,10 @@ TEST(DeviceSubdomainOnHost, AdaptiveIterationsMatchTheSerialBackend)
 
 TEST(DeviceSubdomainOnHost, HealthIsTheRanksReducedScanOfTheState)
 {
-  // health() runs every automatic step, so it scans on the device and sends 24 bytes a rank. It
-  // must give every rank what a scan of the whole state gives: the fastest particle (the next
-  // step's size) and the largest compression, to the bit (maxima, no sums).
+  // health() runs every automatic step, so it scans on the device and sends 4 KB a rank. It
+  // must give every rank what a scan of the whole state gives: the fastest particle, the speeds'
+  // 99.9th percentile (the next step's size) and the largest compression, to the bit (maxima
+  // and integer counts, no sums of reals).
   const PresetFluid setup = presetFluid("dam_break", 0.08);
   std::vector<Health> seen(3);
   std::vector<Snapshot<double>> parts(3);
@@ -267,18 +269,21 @@ TEST(DeviceSubdomainOnHost, HealthIsTheRanksReducedScanOfTheState)
     stepper->read(parts[r]);
   });
   double speed = 0, error = 0;
+  std::vector<std::uint64_t> counts(kSpeedBins, 0);
   for (const Snapshot<double>& part : parts)
   {
     for (std::size_t i = 0; i < part.id.size(); ++i)
     {
       speed = std::max(speed, std::sqrt(dot(part.velocity[i], part.velocity[i])));
       error = std::max(error, part.density[i] / setup.parameters.restDensity - 1.0);
+      ++counts[static_cast<std::size_t>(speedBin(dot(part.velocity[i], part.velocity[i])))];
     }
   }
   ASSERT_GT(speed, 0.0); // the column is falling
   for (const Health& h : seen)
   {
     EXPECT_EQ(h.maxSpeed, speed);
+    EXPECT_EQ(h.robustSpeed, robustSpeed(counts.data(), speed));
     EXPECT_EQ(h.maxDensityError, std::max(error, 0.0));
     EXPECT_EQ(h.nonFinite, 0u);
   }

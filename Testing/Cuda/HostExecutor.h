@@ -55,7 +55,7 @@ public:
   }
 
   template <class F>
-  void forEachHealth(std::uint32_t n, unsigned long long* maxBits, F f)
+  void forEachHealth(std::uint32_t n, unsigned long long* maxBits, std::uint32_t* counts, int, F f)
   {
     for (std::uint32_t k = 0; k < n; ++k)
     {
@@ -64,6 +64,7 @@ public:
       {
         maxBits[m] = std::max(maxBits[m], MaskSchedule::doubleToBits(s.maxima[m]));
       }
+      ++counts[s.bin];
     }
   }
 
