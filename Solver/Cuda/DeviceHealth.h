@@ -54,8 +54,9 @@ void enqueueHealth(Exec& exec, const Vec3<Real>* x, const Vec3<Real>* v, const R
     s.maxima[0] = speed2 < 1e300 ? speed2 : 0.0; // NaN and infinity are the third maximum's
     s.maxima[1] = e > 0.0 && e < 1e300 ? e : 0.0;
     s.maxima[2] = sum - sum == 0.0 ? 0.0 : 1.0;  // finite exactly when sum - sum is 0
-    // speed^2 as the maximum has it, the same double the CPU's scan bins (HostParticles.h); a
-    // non-finite one is counted in bin 0 here and not at all there: a blow-up stops the run.
+    // speed^2 as the maximum has it, the same double the CPU's scan bins (HostParticles.h).
+    // NaN is counted in bin 0 here and infinity in the last, neither there: a blow-up stops the
+    // run, so the counts differ only in a step that ends it.
     s.bin = speedBin(speed2);
     return s;
   });

@@ -214,7 +214,8 @@ std::vector<ParameterSpec> timeRows()
       0.05, 1.0, false, "visibility TimeStepping 1",
       "a particle may move at most that fraction of a spacing per step",
       "With automatic time stepping: the most spacings a particle may move in one solver step "
-      "(all but the fastest thousandth of them; the fastest at most one spacing). Smaller is "
+      "(all but the fastest thousandth of them; the fastest at most one spacing, or this many "
+      "with solids). Smaller is "
       "more accurate and costs time linearly.",
       PBF_SCALAR(cflNumber) },
     { "timeStep", "MaxTimeStep", "dt", "Max Time Step", "Time", "s", T::Real, positive, 0.00001,

@@ -170,7 +170,8 @@ public:
   // The size of the next step [s] when nothing has to be landed on: Parameters::timeStep when
   // fixed; when automatic, the smallest of
   //   timeStep (the largest step),
-  //   kFastestStepSpacings s / v_max: the fastest particle moves at most a spacing,
+  //   kFastestStepSpacings s / v_max: the fastest particle moves at most a spacing (cflNumber
+  //     spacings in a scene with solids, which a prediction could otherwise cross),
   //   cflNumber s / max(v_robust, v_scene): all but a thousandth of the particles move at most
   //     cflNumber spacings (Health::robustSpeed, the 99.9th percentile: a few fast spray
   //     particles no longer set the step of the whole fluid; Performance.md measures it). v_scene

@@ -75,9 +75,14 @@ std::pair<int, int> nodeRange(double lo, double hi, double origin, double cell, 
     static_cast<int>(std::min(last, static_cast<double>(n - 1))) };
 }
 
+// A node this share of a cell from its nearest surface point lies on the surface, for its normal:
+// the nearest point of a face through the node is off by rounding (1e-16 m on a 1 m mesh).
+constexpr double kOnSurface = 1e-6;
+
 // Pass 1: |distance| at the nodes within `band` of a triangle (the others stay infinite), and
-// `away`, the unit direction from each such node's nearest surface point to the node (zero where
-// the node lies on the surface or beyond the band).
+// `away`, the unit direction from each such node's nearest surface point to the node (zero beyond
+// the band and where the node lies on the surface: closer than kOnSurface cells, where the offset
+// is the rounding of the nearest point, whose direction can lie in the face).
 std::vector<double> bandDistance(
   const TriangleMesh& mesh, const DistanceGrid& g, double band, std::vector<Vec3d>& away)
 {
@@ -99,6 +104,7 @@ std::vector<double> bandDistance(
     reach[t] = { range(&Vec3d::x, g.origin.x, g.nx), range(&Vec3d::y, g.origin.y, g.ny),
       range(&Vec3d::z, g.origin.z, g.nz) };
   }
+  const double onSurface2 = (kOnSurface * g.cell) * (kOnSurface * g.cell);
   // One z-slice per thread: every node is written by one thread only.
 #pragma omp parallel for schedule(dynamic)
   for (int k = 0; k < g.nz; ++k)
@@ -123,7 +129,7 @@ std::vector<double> bandDistance(
           if (squared < d2[n])
           {
             d2[n] = squared;
-            away[n] = squared > 0 ? offset * (1.0 / std::sqrt(squared)) : Vec3d{ 0, 0, 0 };
+            away[n] = squared > onSurface2 ? offset * (1.0 / std::sqrt(squared)) : Vec3d{ 0, 0, 0 };
           }
         }
       }

@@ -191,7 +191,7 @@ std::vector<DistanceGrid> solidFields(const std::vector<SolidRegion>& solids, co
       throw InvalidInput(text.str());
     }
     // Nodes s/2 apart, or coarser for solids so large that all of them together would pass 2^24
-    // nodes (64 MiB of floats).
+    // nodes (64 MiB of distances and 192 MiB of normals).
     const Vec3d size = reach.max - reach.min + Vec3d{ 2 * h, 2 * h, 2 * h };
     const double budget = 16777216.0 / static_cast<double>(solids.size());
     const double cell =

@@ -136,3 +136,36 @@ TEST(TimeStep, OneSprayParticleNoLongerSetsTheStepButTheFastestIsBounded)
     EXPECT_GT(simulation.nextTimeStep(), 1.5 * p.cflNumber * s / spray) << spray << " m/s";
   }
 }
+
+// The same block with a sphere in a corner of the box, away from the fluid: with a solid in the
+// scene the spray particle at 8 m/s sets the step again, cflNumber s / 8 m/s (a prediction
+// collides only where it lands, so no particle may cross a thin solid in one step).
+TEST(TimeStep, WithSolidsTheFastestMovesAtMostTheCflNumber)
+{
+  constexpr double s = 0.05, spray = 8.0;
+  Scene scene = test::restingBlock(10, s);
+  SolidRegion ball;
+  ball.kind = SolidRegion::Kind::Sphere;
+  ball.center = { 0.45, 0.95, 0.45 };
+  ball.radius = 0.04;
+  scene.solids.push_back(ball);
+  test::PresetFluid fluid = test::sceneFluid(scene, s);
+  fluid.fluid.position.push_back({ 0.25, 0.8, 0.25 });
+  fluid.fluid.velocity.push_back({ 0, 0, 0 });
+  fluid.fluid.id.push_back(static_cast<std::int64_t>(fluid.fluid.id.size()));
+  Parameters p = fluid.parameters;
+  p.timeStepping = TimeStepping::Automatic;
+  Simulation simulation(scene, p, Backend::Serial, Precision::Double, fluid.fluid);
+  Snapshot<double> state;
+  simulation.stepper().read(state);
+  for (std::size_t i = 0; i < state.id.size(); ++i)
+  {
+    if (state.id[i] == static_cast<std::int64_t>(state.id.size()) - 1)
+    {
+      state.velocity[i] = { spray, 0, 0 };
+    }
+  }
+  simulation.stepper().load(state);
+  simulation.checkDivergence();
+  EXPECT_DOUBLE_EQ(simulation.nextTimeStep(), p.cflNumber * s / spray);
+}
