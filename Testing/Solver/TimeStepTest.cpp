@@ -99,57 +99,17 @@ TEST(SpeedHistogram, TheRobustSpeedIsTheSameOnSerialOpenMpAndTwoRanks)
   }
 }
 
-// A block of 10 x 10 x 10 particles at rest and one spray particle above it at 8 m/s: the step
-// is no longer cflNumber s / 8 m/s, which one particle of 1,001 set, but the largest step, below
-// the scene's (cflNumber s / v_scene, v_scene the fall across the box, 4.4 m/s); at 60 m/s the
-// spray particle is bounded by kFastestStepSpacings: it moves a spacing in the step.
-TEST(TimeStep, OneSprayParticleNoLongerSetsTheStepButTheFastestIsBounded)
+namespace
 {
-  constexpr double s = 0.05;
-  const Scene scene = test::restingBlock(10, s);
-  for (double spray : { 8.0, 60.0 })
-  {
-    test::PresetFluid fluid = test::sceneFluid(scene, s);
-    fluid.fluid.position.push_back({ 0.25, 0.8, 0.25 });
-    fluid.fluid.velocity.push_back({ 0, 0, 0 });
-    fluid.fluid.id.push_back(static_cast<std::int64_t>(fluid.fluid.id.size()));
-    Parameters p = fluid.parameters;
-    p.timeStepping = TimeStepping::Automatic;
-    Simulation simulation(scene, p, Backend::Serial, Precision::Double, fluid.fluid);
-    // The spray particle's speed set in the state (an initial speed would raise v_scene).
-    Snapshot<double> state;
-    simulation.stepper().read(state);
-    for (std::size_t i = 0; i < state.id.size(); ++i)
-    {
-      if (state.id[i] == static_cast<std::int64_t>(state.id.size()) - 1)
-      {
-        state.velocity[i] = { spray, 0, 0 };
-      }
-    }
-    simulation.stepper().load(state);
-    simulation.checkDivergence(); // the scan that the next step's size reads
-    const double sceneSpeed = simulation.divergenceLimits().sceneSpeed;
-    ASSERT_LT(sceneSpeed, spray) << "the scene's fall speed would hide the spray particle";
-    const double expected = std::min({ p.timeStep, p.cflNumber * s / sceneSpeed,
-      Simulation::kFastestStepSpacings * s / spray, p.cflNumber * std::sqrt(s / length(p.gravity)) });
-    EXPECT_DOUBLE_EQ(simulation.nextTimeStep(), expected) << spray << " m/s";
-    EXPECT_GT(simulation.nextTimeStep(), 1.5 * p.cflNumber * s / spray) << spray << " m/s";
-  }
-}
 
-// The same block with a sphere in a corner of the box, away from the fluid: with a solid in the
-// scene the spray particle at 8 m/s sets the step again, cflNumber s / 8 m/s (a prediction
-// collides only where it lands, so no particle may cross a thin solid in one step).
-TEST(TimeStep, WithSolidsTheFastestMovesAtMostTheCflNumber)
+constexpr double kSpraySpacing = 0.05;
+
+// The scene's fluid and one spray particle above it at (0.25, 0.8, 0.25), moving at `spray` m/s
+// along x (set in the state: an initial speed would raise v_scene), in an automatic-step serial
+// simulation whose divergence scan (which the next step's size reads) has run.
+Simulation withSprayParticle(const Scene& scene, double spray)
 {
-  constexpr double s = 0.05, spray = 8.0;
-  Scene scene = test::restingBlock(10, s);
-  SolidRegion ball;
-  ball.kind = SolidRegion::Kind::Sphere;
-  ball.center = { 0.45, 0.95, 0.45 };
-  ball.radius = 0.04;
-  scene.solids.push_back(ball);
-  test::PresetFluid fluid = test::sceneFluid(scene, s);
+  test::PresetFluid fluid = test::sceneFluid(scene, kSpraySpacing);
   fluid.fluid.position.push_back({ 0.25, 0.8, 0.25 });
   fluid.fluid.velocity.push_back({ 0, 0, 0 });
   fluid.fluid.id.push_back(static_cast<std::int64_t>(fluid.fluid.id.size()));
@@ -167,5 +127,44 @@ TEST(TimeStep, WithSolidsTheFastestMovesAtMostTheCflNumber)
   }
   simulation.stepper().load(state);
   simulation.checkDivergence();
-  EXPECT_DOUBLE_EQ(simulation.nextTimeStep(), p.cflNumber * s / spray);
+  return simulation;
+}
+
+} // namespace
+
+// A block of 10 x 10 x 10 particles at rest and one spray particle above it at 8 m/s: the step
+// is no longer cflNumber s / 8 m/s, which one particle of 1,001 set, but the largest step, below
+// the scene's (cflNumber s / v_scene, v_scene the fall across the box, 4.4 m/s); at 60 m/s the
+// spray particle is bounded by kFastestStepSpacings: it moves a spacing in the step.
+TEST(TimeStep, OneSprayParticleNoLongerSetsTheStepButTheFastestIsBounded)
+{
+  constexpr double s = kSpraySpacing;
+  const Scene scene = test::restingBlock(10, s);
+  for (double spray : { 8.0, 60.0 })
+  {
+    const Simulation simulation = withSprayParticle(scene, spray);
+    const Parameters& p = simulation.parameters();
+    const double sceneSpeed = simulation.divergenceLimits().sceneSpeed;
+    ASSERT_LT(sceneSpeed, spray) << "the scene's fall speed would hide the spray particle";
+    const double expected = std::min({ p.timeStep, p.cflNumber * s / sceneSpeed,
+      Simulation::kFastestStepSpacings * s / spray, p.cflNumber * std::sqrt(s / length(p.gravity)) });
+    EXPECT_DOUBLE_EQ(simulation.nextTimeStep(), expected) << spray << " m/s";
+    EXPECT_GT(simulation.nextTimeStep(), 1.5 * p.cflNumber * s / spray) << spray << " m/s";
+  }
+}
+
+// The same block with a sphere in a corner of the box, away from the fluid: with a solid in the
+// scene the spray particle at 8 m/s sets the step again, cflNumber s / 8 m/s (a prediction
+// collides only where it lands, so no particle may cross a thin solid in one step).
+TEST(TimeStep, WithSolidsTheFastestMovesAtMostTheCflNumber)
+{
+  constexpr double s = kSpraySpacing, spray = 8.0;
+  Scene scene = test::restingBlock(10, s);
+  SolidRegion ball;
+  ball.kind = SolidRegion::Kind::Sphere;
+  ball.center = { 0.45, 0.95, 0.45 };
+  ball.radius = 0.04;
+  scene.solids.push_back(ball);
+  const Simulation simulation = withSprayParticle(scene, spray);
+  EXPECT_DOUBLE_EQ(simulation.nextTimeStep(), simulation.parameters().cflNumber * s / spray);
 }
